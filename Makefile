@@ -1,0 +1,120 @@
+# SPDX-License-Identifier: MIT
+# avatargw - plain, non-recursive Makefile.
+#
+#   make            build everything into $(BUILD)
+#   make test       build and run every test (add SAN=1 for ASan + UBSan)
+#   make bench      run the IK benchmark on ../shared/bench
+#   make install    install under $(DESTDIR)$(PREFIX)
+#   make clean
+
+PREFIX ?= /usr/local
+DESTDIR ?=
+SHARED ?= ../shared
+CC ?= cc
+CXX ?= c++
+
+ifeq ($(SAN),1)
+BUILD ?= build-san
+SANFLAGS = -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+OPT ?= -O1
+else
+BUILD ?= build
+SANFLAGS =
+OPT ?= -O2
+endif
+
+WARN = -Wall -Wextra -Werror
+CFLAGS ?= $(OPT) -g
+ALL_CFLAGS = -std=c11 $(WARN) $(CFLAGS) $(SANFLAGS) -Iinclude -MMD -MP
+ALL_CXXFLAGS = -std=c++17 $(WARN) $(CFLAGS) $(SANFLAGS) -Iinclude -MMD -MP
+LDFLAGS += $(SANFLAGS)
+# The IK core is pure: no errno from libm, no contraction differences between targets.
+CORE_CFLAGS = -fno-math-errno -ffp-contract=off
+
+CMOCKA_LIBS = $(shell pkg-config --libs cmocka 2>/dev/null || echo -lcmocka)
+
+# ---- the IK core, once per scalar type ------------------------------------
+CORE_SRC = $(wildcard src/ik/*.c)
+CORE_TYPES = d f
+CORE_OBJ = $(foreach t,$(CORE_TYPES),$(patsubst src/%.c,$(BUILD)/obj/%.$(t).o,$(CORE_SRC)))
+LIBIK = $(BUILD)/libavatargw-ik.a
+
+SC_d = -DSC_TYPE=SC_DOUBLE
+SC_f = -DSC_TYPE=SC_FLOAT
+
+$(BUILD)/obj/ik/%.d.o: src/ik/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(CORE_CFLAGS) $(SC_d) -c $< -o $@
+$(BUILD)/obj/ik/%.f.o: src/ik/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(CORE_CFLAGS) $(SC_f) -c $< -o $@
+
+$(LIBIK): $(CORE_OBJ)
+	@rm -f $@
+	$(AR) rcs $@ $^
+
+# ---- tools ------------------------------------------------------------------
+# every tools/avatargw-*.c is one program linked with the core
+TOOL_SRC = $(wildcard tools/avatargw-*.c)
+TOOLS = $(patsubst tools/%.c,$(BUILD)/%,$(TOOL_SRC))
+
+$(BUILD)/obj/tools/%.o: tools/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -c $< -o $@
+
+$(BUILD)/avatargw-%: $(BUILD)/obj/tools/avatargw-%.o $(LIBIK)
+	$(CC) $(LDFLAGS) -o $@ $^ -lm
+
+# ---- tests --------------------------------------------------------------------
+TEST_C = $(wildcard tests/test_*.c)
+TEST_CXX = $(wildcard tests/test_*.cpp)
+TEST_BIN = $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_C)) $(patsubst tests/%.cpp,$(BUILD)/tests/%,$(TEST_CXX))
+# helpers linked into every test binary (built once per type where named *.tmpl.c)
+TEST_LIB_SRC = $(wildcard tests/lib/*.c)
+TEST_LIB_OBJ = $(patsubst tests/lib/%.c,$(BUILD)/obj/tests/lib/%.d.o,$(TEST_LIB_SRC)) \
+	$(patsubst tests/lib/%.c,$(BUILD)/obj/tests/lib/%.f.o,$(TEST_LIB_SRC))
+
+$(BUILD)/obj/tests/lib/%.d.o: tests/lib/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(SC_d) -Itests -c $< -o $@
+$(BUILD)/obj/tests/lib/%.f.o: tests/lib/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(SC_f) -Itests -c $< -o $@
+$(BUILD)/obj/tests/%.o: tests/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -Itests -DSHARED_DIR='"$(SHARED)"' -c $< -o $@
+$(BUILD)/obj/tests/%.o: tests/%.cpp
+	@mkdir -p $(dir $@)
+	$(CXX) $(ALL_CXXFLAGS) -Itests -DSHARED_DIR='"$(SHARED)"' -c $< -o $@
+$(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_LIB_OBJ) $(LIBIK)
+	@mkdir -p $(dir $@)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) -lm
+
+# ---- top-level targets --------------------------------------------------------
+.PHONY: all test check-core bench install clean run
+all: $(LIBIK) $(TOOLS)
+
+# The core may reference nothing from libc but memcpy/memset and libm's own functions.
+CORE_ALLOWED = memcpy memset sin cos sincos atan2 sqrt sinf cosf sincosf atan2f sqrtf
+check-core: $(LIBIK)
+	@bad=$$(nm -u $(LIBIK) | awk '/ U /{print $$2}' | sed 's/@.*//' | sort -u | \
+		grep -v -x -E '$(subst $() $(),|,$(CORE_ALLOWED))|__asan.*|__ubsan.*|_GLOBAL_OFFSET_TABLE_|__stack_chk_fail' || true); \
+	if [ -n "$$bad" ]; then echo "check-core: the IK core references: $$bad"; exit 1; fi; \
+	echo "check-core: the IK core references only $(CORE_ALLOWED) (or fewer)"
+
+test: all $(TEST_BIN) check-core
+	@tests/run.sh $(TEST_BIN)
+
+bench: $(BUILD)/avatargw-ikbench
+	@tools/bench.sh $(BUILD) $(SHARED)
+
+run: bench
+
+install: all
+	install -d $(DESTDIR)$(PREFIX)/bin
+	install -m 0755 $(TOOLS) $(DESTDIR)$(PREFIX)/bin/
+
+clean:
+	rm -rf build build-san
+
+-include $(shell find $(BUILD) -name '*.d' 2>/dev/null)

@@ -1,0 +1,150 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * dq.h - vectors, quaternions and unit dual quaternions (rigid transforms).
+ *
+ * Conventions (the same everywhere in avatargw):
+ *   - quaternions are Hamilton, scalar first: q = w + xi + yj + zk; a unit
+ *     quaternion maps body vectors into the parent frame: v' = q v q*;
+ *   - a unit dual quaternion Q = r + eps d stands for x' = R x + t with
+ *     r the rotation and d = 1/2 t r (the paper's eq. 1 and its dual part);
+ *   - products compose like 4x4 matrices: dq_mul(A, B) applies B first, in
+ *     A's frame (base-first; the paper writes the reverse);
+ *   - 4x4 matrices are row-major m[row][col], acting on column vectors;
+ *   - lengths in metres, angles in radians.
+ * Every function is pure: inputs first, result last, no allocation; results
+ * may alias inputs unless a function says otherwise.
+ */
+#ifndef IK_DQ_H
+#define IK_DQ_H
+
+#include "ik/scalar.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+struct vec3 {
+	sc_t x, y, z;
+};
+
+struct quat {
+	sc_t w, x, y, z;
+};
+
+struct dq {
+	struct quat r; /* rotation */
+	struct quat d; /* dual part: 1/2 t r */
+};
+
+/* A screw (Chasles): rotation angle about a line and translation along it. */
+struct screw {
+	struct vec3 l; /* unit direction of the axis */
+	struct vec3 m; /* moment of the axis: p x l for any point p on it */
+	sc_t angle;    /* rotation about l, radians, in [0, pi] */
+	sc_t d;        /* translation along l, metres */
+};
+
+/* A twist: angular and linear velocity (the paper's V = {av, lv}). */
+struct twist {
+	struct vec3 w; /* angle times axis */
+	struct vec3 v; /* linear part: velocity of the point at the origin */
+};
+
+/* A Pluecker line: unit direction and moment. */
+struct line {
+	struct vec3 l;
+	struct vec3 m;
+};
+
+#define v3_dot SCN(v3_dot)
+#define v3_cross SCN(v3_cross)
+#define v3_norm SCN(v3_norm)
+#define quat_mul SCN(quat_mul)
+#define quat_conj SCN(quat_conj)
+#define quat_norm SCN(quat_norm)
+#define quat_normalize SCN(quat_normalize)
+#define quat_rotate SCN(quat_rotate)
+#define quat_from_axis_angle SCN(quat_from_axis_angle)
+#define quat_to_mat3 SCN(quat_to_mat3)
+#define quat_from_mat3 SCN(quat_from_mat3)
+#define quat_angle_between SCN(quat_angle_between)
+#define dq_identity SCN(dq_identity)
+#define dq_mul SCN(dq_mul)
+#define dq_conj SCN(dq_conj)
+#define dq_normalize SCN(dq_normalize)
+#define dq_from_rt SCN(dq_from_rt)
+#define dq_from_axis_angle_t SCN(dq_from_axis_angle_t)
+#define dq_translation SCN(dq_translation)
+#define dq_transform_point SCN(dq_transform_point)
+#define dq_transform_line SCN(dq_transform_line)
+#define dq_to_mat4 SCN(dq_to_mat4)
+#define dq_from_mat4 SCN(dq_from_mat4)
+#define dq_log SCN(dq_log)
+#define dq_exp SCN(dq_exp)
+#define dq_log_twist SCN(dq_log_twist)
+#define dq_exp_twist SCN(dq_exp_twist)
+#define dq_is_finite SCN(dq_is_finite)
+
+sc_t v3_dot(const struct vec3 *a, const struct vec3 *b);
+void v3_cross(const struct vec3 *a, const struct vec3 *b, struct vec3 *out);
+sc_t v3_norm(const struct vec3 *a);
+
+/* out = a b (Hamilton) */
+void quat_mul(const struct quat *a, const struct quat *b, struct quat *out);
+void quat_conj(const struct quat *a, struct quat *out);
+sc_t quat_norm(const struct quat *a);
+/* Returns false (and writes the identity) if |a| is zero or not finite. */
+bool quat_normalize(const struct quat *a, struct quat *out);
+/* out = q v q*, q a unit quaternion */
+void quat_rotate(const struct quat *q, const struct vec3 *v, struct vec3 *out);
+/* axis must be a unit vector */
+void quat_from_axis_angle(const struct vec3 *axis, sc_t angle, struct quat *out);
+/* rotation matrix m[row][col] of a unit quaternion, and back (out has w >= 0) */
+void quat_to_mat3(const struct quat *q, sc_t m[3][3]);
+void quat_from_mat3(const sc_t m[3][3], struct quat *out);
+/* angle in [0, pi] of the rotation a* b, sign-insensitive */
+sc_t quat_angle_between(const struct quat *a, const struct quat *b);
+
+void dq_identity(struct dq *out);
+/* out = a b: b first, then a. out must not alias a or b. */
+void dq_mul(const struct dq *a, const struct dq *b, struct dq *out);
+/* quaternion conjugate of both parts: the inverse of a unit dual quaternion */
+void dq_conj(const struct dq *a, struct dq *out);
+/*
+ * Makes a unit dual quaternion: r <- r/|r|, d <- d/|r|, then removes the
+ * part of d along r so that r.d = 0. Returns false (identity written) for a
+ * zero or non-finite real part.
+ */
+bool dq_normalize(const struct dq *a, struct dq *out);
+/* x' = R x + t from a unit rotation r and a translation t */
+void dq_from_rt(const struct quat *r, const struct vec3 *t, struct dq *out);
+/* the paper's Q(R, theta, T): rotation about the unit axis, then translation t in the parent frame */
+void dq_from_axis_angle_t(const struct vec3 *axis, sc_t angle, const struct vec3 *t, struct dq *out);
+void dq_translation(const struct dq *a, struct vec3 *out);
+void dq_transform_point(const struct dq *a, const struct vec3 *p, struct vec3 *out);
+/* the line moved by the transform: l' = R l, m' = R m + t x R l */
+void dq_transform_line(const struct dq *a, const struct line *in, struct line *out);
+void dq_to_mat4(const struct dq *a, sc_t m[4][4]);
+/* m must hold a rotation and a translation (last row 0 0 0 1 ignored) */
+void dq_from_mat4(const sc_t m[4][4], struct dq *out);
+/*
+ * Screw logarithm of a unit dual quaternion (the paper's section 5.2). For a
+ * pure translation the axis is the direction of travel and the moment is zero;
+ * for the identity the axis is x. The shortest path is taken (angle <= pi).
+ */
+void dq_log(const struct dq *a, struct screw *out);
+void dq_exp(const struct screw *s, struct dq *out);
+/*
+ * Twist (angle times axis, linear velocity of the origin) whose exponential
+ * is a; the paper's V = {theta R, t R + theta M}. Stable near zero angle and
+ * for pure translations; shortest path.
+ */
+void dq_log_twist(const struct dq *a, struct twist *out);
+void dq_exp_twist(const struct twist *tw, struct dq *out);
+bool dq_is_finite(const struct dq *a);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* IK_DQ_H */

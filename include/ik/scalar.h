@@ -1,0 +1,186 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * scalar.h - the one scalar type of an IK core build.
+ *
+ * Every source of the IK core is compiled once per scalar type. The type is
+ * chosen with -DSC_TYPE=SC_DOUBLE (default) or -DSC_TYPE=SC_FLOAT; a fixed
+ * point back end (int32 Q5.26, SC_FIXQ) plugs in here later. Generic code
+ * never touches the representation:
+ *   - constants go through SC_C(1.5);
+ *   - products, quotients, roots and trig go through sc_mul(), sc_div(),
+ *     sc_sqrt(), sc_sincos(), sc_atan2();
+ *   - dot products go through an accumulator (sc_acc0/sc_mac/sc_acc_get) so a
+ *     fixed back end can accumulate in int64 and round once;
+ *   - +, -, unary minus and comparisons are allowed on sc_t directly (they
+ *     are exact on a Q-format int32 too).
+ * SCN(name) appends the type suffix (_d, _f) so several builds of the core
+ * link into one binary.
+ */
+#ifndef IK_SCALAR_H
+#define IK_SCALAR_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#define SC_DOUBLE 1
+#define SC_FLOAT 2
+#define SC_FIXQ 3
+
+#ifndef SC_TYPE
+#define SC_TYPE SC_DOUBLE
+#endif
+
+#define SC_CAT_(a, b) a##b
+#define SC_CAT(a, b) SC_CAT_(a, b)
+
+#if SC_TYPE == SC_DOUBLE
+typedef double sc_t;
+typedef double sc_acc_t;
+#define SC_SUFFIX _d
+#define SC_C(x) ((double)(x))
+#define SC_NAME "double"
+/* smallest step worth taking and the solver's default tolerances */
+#define SC_EPS SC_C(1e-12)
+#define SC_TOL_POS SC_C(1e-9)
+#define SC_TOL_ROT SC_C(1e-9)
+#define sc_builtin_sqrt __builtin_sqrt
+#define sc_builtin_sin __builtin_sin
+#define sc_builtin_cos __builtin_cos
+#define sc_builtin_atan2 __builtin_atan2
+#define sc_builtin_fabs __builtin_fabs
+#elif SC_TYPE == SC_FLOAT
+typedef float sc_t;
+typedef float sc_acc_t;
+#define SC_SUFFIX _f
+#define SC_C(x) ((float)(x))
+#define SC_NAME "float"
+#define SC_EPS SC_C(1e-6)
+#define SC_TOL_POS SC_C(2e-6)
+#define SC_TOL_ROT SC_C(4e-6)
+#define sc_builtin_sqrt __builtin_sqrtf
+#define sc_builtin_sin __builtin_sinf
+#define sc_builtin_cos __builtin_cosf
+#define sc_builtin_atan2 __builtin_atan2f
+#define sc_builtin_fabs __builtin_fabsf
+#else
+#error "SC_TYPE: fixed point is not implemented yet (SC_DOUBLE or SC_FLOAT)"
+#endif
+
+#define SCN(name) SC_CAT(name, SC_SUFFIX)
+
+#define SC_PI SC_C(3.14159265358979323846)
+#define SC_HALF_PI SC_C(1.57079632679489661923)
+
+static inline sc_t sc_mul(sc_t a, sc_t b)
+{
+	return a * b;
+}
+
+/* a / b; callers guarantee b != 0 */
+static inline sc_t sc_div(sc_t a, sc_t b)
+{
+	return a / b;
+}
+
+static inline sc_t sc_abs(sc_t a)
+{
+	return sc_builtin_fabs(a);
+}
+
+/* sqrt of a non-negative value; negative input (rounding) gives 0 */
+static inline sc_t sc_sqrt(sc_t a)
+{
+	return a > 0 ? sc_builtin_sqrt(a) : SC_C(0);
+}
+
+static inline void sc_sincos(sc_t a, sc_t *s, sc_t *c)
+{
+	*s = sc_builtin_sin(a);
+	*c = sc_builtin_cos(a);
+}
+
+static inline sc_t sc_atan2(sc_t y, sc_t x)
+{
+	return sc_builtin_atan2(y, x);
+}
+
+static inline sc_t sc_min(sc_t a, sc_t b)
+{
+	return a < b ? a : b;
+}
+
+static inline sc_t sc_max(sc_t a, sc_t b)
+{
+	return a > b ? a : b;
+}
+
+static inline sc_t sc_clamp(sc_t a, sc_t lo, sc_t hi)
+{
+	return a < lo ? lo : (a > hi ? hi : a);
+}
+
+/* false for NaN and +-inf (a fixed back end is always finite) */
+static inline bool sc_isfinite(sc_t a)
+{
+	return __builtin_isfinite(a);
+}
+
+/* accumulators: one rounding per dot product in fixed point */
+static inline sc_acc_t sc_acc0(void)
+{
+	return 0;
+}
+
+static inline sc_acc_t sc_mac(sc_acc_t s, sc_t a, sc_t b)
+{
+	return s + a * b;
+}
+
+static inline sc_acc_t sc_msb(sc_acc_t s, sc_t a, sc_t b)
+{
+	return s - a * b;
+}
+
+static inline sc_t sc_acc_get(sc_acc_t s)
+{
+	return s;
+}
+
+/* host-side conversions (tests, tools, the daemon) */
+static inline sc_t sc_from_double(double x)
+{
+	return (sc_t)x;
+}
+
+static inline double sc_to_double(sc_t a)
+{
+	return (double)a;
+}
+
+/* asin and acos through atan2 and sqrt, so a fixed back end needs only those */
+static inline sc_t sc_asin(sc_t x)
+{
+	x = sc_clamp(x, SC_C(-1), SC_C(1));
+	return sc_atan2(x, sc_sqrt(SC_C(1) - sc_mul(x, x)));
+}
+
+static inline sc_t sc_acos(sc_t x)
+{
+	x = sc_clamp(x, SC_C(-1), SC_C(1));
+	return sc_atan2(sc_sqrt(SC_C(1) - sc_mul(x, x)), x);
+}
+
+/* wrap an angle to [-pi, pi); garbage (non-finite or huge) becomes 0 */
+static inline sc_t sc_wrap_pi(sc_t a)
+{
+	if (!sc_isfinite(a) || a > SC_C(30) || a < SC_C(-30))
+		return SC_C(0);
+	while (a >= SC_PI)
+		a -= 2 * SC_PI;
+	while (a < -SC_PI)
+		a += 2 * SC_PI;
+	return a;
+}
+
+#endif /* IK_SCALAR_H */

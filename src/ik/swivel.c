@@ -1,0 +1,367 @@
+// SPDX-License-Identifier: MIT
+/*
+ * swivel.c - the arm's redundancy in closed form.
+ *
+ * J6..J8 turn about axes through one point (the wrist centre), so the wrist
+ * centre w = p - R (0, H, 0) depends on J1..J5 alone. For a given J1 the
+ * shoulder s is fixed, the elbow angle follows from |w - s| (law of cosines)
+ * and the elbow lies on a circle about the shoulder-wrist line: its angle on
+ * that circle is the swivel. Given (J1, swivel) every joint follows in closed
+ * form: the upper-arm frame from the elbow position and the bend plane,
+ * J2..J4 from it (Y-X-Z angles), J6..J8 from the remaining rotation (Y-X-Z).
+ * The posture reaches the target exactly; what is left is to choose
+ * (J1, swivel) inside the joint limits and close to a preferred posture.
+ *
+ * All work is in the right arm's frame: a left-arm target is mirrored first
+ * (the left chain is the mirror image, with the same angles).
+ */
+#include "ik/ik.h"
+
+/* 3x3 helpers, row-major m[row][col] */
+static void m3_mul(const sc_t a[3][3], const sc_t b[3][3], sc_t out[3][3])
+{
+	int i, j;
+
+	for (i = 0; i < 3; i++)
+		for (j = 0; j < 3; j++)
+			out[i][j] = sc_acc_get(
+				sc_mac(sc_mac(sc_mac(sc_acc0(), a[i][0], b[0][j]), a[i][1], b[1][j]), a[i][2], b[2][j]));
+}
+
+/* out = a^T b */
+static void m3_tmul(const sc_t a[3][3], const sc_t b[3][3], sc_t out[3][3])
+{
+	int i, j;
+
+	for (i = 0; i < 3; i++)
+		for (j = 0; j < 3; j++)
+			out[i][j] = sc_acc_get(
+				sc_mac(sc_mac(sc_mac(sc_acc0(), a[0][i], b[0][j]), a[1][i], b[1][j]), a[2][i], b[2][j]));
+}
+
+static sc_t v3_normalize(struct vec3 *v)
+{
+	sc_t n = v3_norm(v);
+
+	if (n > SC_EPS) {
+		sc_t k = sc_div(SC_C(1), n);
+
+		v->x = sc_mul(v->x, k);
+		v->y = sc_mul(v->y, k);
+		v->z = sc_mul(v->z, k);
+	}
+	return n;
+}
+
+static sc_t violation(sc_t v, sc_t lo, sc_t hi)
+{
+	return v < lo ? lo - v : (v > hi ? v - hi : SC_C(0));
+}
+
+/*
+ * M = Ry(a) Rx(b) Rz(c): both angle triples, the one inside the limits
+ * [i0, i0+2] chosen (else the one violating them least). Returns the violation.
+ */
+static sc_t euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, sc_t out[3])
+{
+	sc_t b = sc_asin(-m[1][2]);
+	sc_t a = sc_atan2(m[0][2], m[2][2]);
+	sc_t c = sc_atan2(m[1][0], m[1][1]);
+	sc_t alt[3], v0, v1;
+	int k;
+
+	out[0] = a;
+	out[1] = b;
+	out[2] = c;
+	alt[0] = sc_wrap_pi(a + SC_PI);
+	alt[1] = sc_wrap_pi(SC_PI - b);
+	alt[2] = sc_wrap_pi(c + SC_PI);
+	v0 = v1 = 0;
+	for (k = 0; k < 3; k++) {
+		v0 += violation(out[k], lim->lo[i0 + k], lim->hi[i0 + k]);
+		v1 += violation(alt[k], lim->lo[i0 + k], lim->hi[i0 + k]);
+	}
+	if (v1 < v0) {
+		for (k = 0; k < 3; k++)
+			out[k] = alt[k];
+		return v1;
+	}
+	return v0;
+}
+
+/* what stays fixed while the swivel moves: one target, one J1 */
+struct swivel_ctx {
+	const struct arm *a;
+	sc_t rt1[3][3]; /* target rotation in the J1 frame */
+	struct vec3 u;  /* shoulder -> wrist centre, J1 frame */
+	struct vec3 uh; /* u / |u| */
+	struct vec3 n1, n2; /* basis of the swivel circle's plane */
+	struct vec3 c;  /* centre of the circle (from the shoulder) */
+	sc_t r;         /* radius of the circle */
+	sc_t q1, q5, s5, c5;
+	sc_t viol15;    /* limit violation of J1 and J5 */
+};
+
+/* Sets up the circle for one J1; false if the wrist is out of reach there. */
+static bool ctx_init(struct swivel_ctx *x, const struct arm *a, const struct vec3 *w, const sc_t rt[3][3], sc_t q1)
+{
+	sc_t A = a->dims.arm, F = a->dims.forearm, S = a->dims.shoulder;
+	sc_t s1, c1, d, d2, ca, sa, sq5;
+	struct vec3 dw, g;
+	int j;
+
+	x->a = a;
+	x->q1 = q1;
+	sc_sincos(q1, &s1, &c1);
+	dw = (struct vec3){ w->x - sc_mul(S, c1), w->y - sc_mul(S, s1), w->z };
+	x->u = (struct vec3){ sc_mul(c1, dw.x) + sc_mul(s1, dw.y), sc_mul(c1, dw.y) - sc_mul(s1, dw.x), dw.z };
+	for (j = 0; j < 3; j++) {
+		/* Rz(-q1) rt */
+		x->rt1[0][j] = sc_mul(c1, rt[0][j]) + sc_mul(s1, rt[1][j]);
+		x->rt1[1][j] = sc_mul(c1, rt[1][j]) - sc_mul(s1, rt[0][j]);
+		x->rt1[2][j] = rt[2][j];
+	}
+	d2 = v3_dot(&x->u, &x->u);
+	d = sc_sqrt(d2);
+	if (d < SC_C(1e-6))
+		return false;
+	/* |u|^2 = A^2 + F^2 - 2 A F sin q5 */
+	sq5 = sc_div(sc_mul(A, A) + sc_mul(F, F) - d2, 2 * sc_mul(A, F));
+	if (sq5 > SC_C(1) || sq5 < SC_C(-1))
+		return false;
+	x->q5 = sc_asin(sq5);
+	x->s5 = sq5;
+	x->c5 = sc_sqrt(SC_C(1) - sc_mul(sq5, sq5));
+	x->viol15 = violation(q1, a->lim.lo[0], a->lim.hi[0]) + violation(x->q5, a->lim.lo[4], a->lim.hi[4]);
+	x->uh = x->u;
+	v3_normalize(&x->uh);
+	/* angle at the shoulder between the upper arm and u */
+	ca = sc_div(sc_mul(A, A) + d2 - sc_mul(F, F), 2 * sc_mul(A, d));
+	ca = sc_clamp(ca, SC_C(-1), SC_C(1));
+	sa = sc_sqrt(SC_C(1) - sc_mul(ca, ca));
+	x->c = (struct vec3){ sc_mul(sc_mul(A, ca), x->uh.x), sc_mul(sc_mul(A, ca), x->uh.y),
+			      sc_mul(sc_mul(A, ca), x->uh.z) };
+	x->r = sc_mul(A, sa);
+	/* n1: "down" projected on the plane (forward when u is vertical) */
+	g = sc_abs(x->uh.z) < SC_C(0.9) ? (struct vec3){ 0, 0, SC_C(-1) } : (struct vec3){ 0, SC_C(1), 0 };
+	{
+		sc_t k = v3_dot(&g, &x->uh);
+
+		x->n1 = (struct vec3){ g.x - sc_mul(k, x->uh.x), g.y - sc_mul(k, x->uh.y), g.z - sc_mul(k, x->uh.z) };
+	}
+	v3_normalize(&x->n1);
+	v3_cross(&x->uh, &x->n1, &x->n2);
+	return true;
+}
+
+/* swivel angle whose bend plane is closest to an elbow axis x4 (J1 frame) */
+static sc_t ctx_swivel_of(const struct swivel_ctx *x, const struct vec3 *x4)
+{
+	/* the elbow sits at n = u^ x x4 from the shoulder-wrist line */
+	struct vec3 n;
+
+	v3_cross(&x->uh, x4, &n);
+	return sc_atan2(v3_dot(&n, &x->n2), v3_dot(&n, &x->n1));
+}
+
+/* the posture at swivel phi; returns its limit violation (0: inside) */
+static sc_t ctx_eval(const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF])
+{
+	const struct arm *a = x->a;
+	sc_t sp, cp, R[3][3], R5[3][3], R15[3][3], M[3][3], v;
+	struct vec3 n, e, x4, y4, z4;
+	sc_t inv_a = sc_div(SC_C(1), a->dims.arm);
+
+	sc_sincos(phi, &sp, &cp);
+	n.x = sc_mul(cp, x->n1.x) + sc_mul(sp, x->n2.x);
+	n.y = sc_mul(cp, x->n1.y) + sc_mul(sp, x->n2.y);
+	n.z = sc_mul(cp, x->n1.z) + sc_mul(sp, x->n2.z);
+	e.x = x->c.x + sc_mul(x->r, n.x);
+	e.y = x->c.y + sc_mul(x->r, n.y);
+	e.z = x->c.z + sc_mul(x->r, n.z);
+	/* upper-arm frame: -z along the upper arm, x the elbow axis */
+	z4 = (struct vec3){ -sc_mul(e.x, inv_a), -sc_mul(e.y, inv_a), -sc_mul(e.z, inv_a) };
+	v3_normalize(&z4);
+	v3_cross(&n, &x->uh, &x4);
+	{
+		/* make x4 exactly orthogonal to z4 (they are, up to rounding) */
+		sc_t k = v3_dot(&x4, &z4);
+
+		x4 = (struct vec3){ x4.x - sc_mul(k, z4.x), x4.y - sc_mul(k, z4.y), x4.z - sc_mul(k, z4.z) };
+		v3_normalize(&x4);
+	}
+	v3_cross(&z4, &x4, &y4);
+	R[0][0] = x4.x, R[0][1] = y4.x, R[0][2] = z4.x;
+	R[1][0] = x4.y, R[1][1] = y4.y, R[1][2] = z4.y;
+	R[2][0] = x4.z, R[2][1] = y4.z, R[2][2] = z4.z;
+	v = euler_yxz((const sc_t(*)[3])R, &a->lim, 1, &q[1]);
+	q[0] = x->q1;
+	q[4] = x->q5;
+	/* R15 = R Rx(q5), in the J1 frame; the wrist turns the rest */
+	R5[0][0] = SC_C(1), R5[0][1] = 0, R5[0][2] = 0;
+	R5[1][0] = 0, R5[1][1] = x->c5, R5[1][2] = -x->s5;
+	R5[2][0] = 0, R5[2][1] = x->s5, R5[2][2] = x->c5;
+	m3_mul((const sc_t(*)[3])R, (const sc_t(*)[3])R5, R15);
+	m3_tmul((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, M);
+	v += euler_yxz((const sc_t(*)[3])M, &a->lim, 5, &q[5]);
+	return v + x->viol15;
+}
+
+/* squared distance between postures, angle differences wrapped */
+static sc_t posture_dist(const sc_t a[ARM_DOF], const sc_t b[ARM_DOF])
+{
+	sc_acc_t s = sc_acc0();
+	int i;
+
+	for (i = 0; i < ARM_DOF; i++) {
+		sc_t d = sc_wrap_pi(a[i] - b[i]);
+
+		s = sc_mac(s, d, d);
+	}
+	return sc_acc_get(s);
+}
+
+/*
+ * Feasible swivel closest to phi0 at this J1: phi0 itself, else the nearest
+ * feasible sample on either side, refined by bisection toward phi0.
+ */
+static bool ctx_search(const struct swivel_ctx *x, sc_t phi0, int samples, sc_t q[ARM_DOF], int *evals,
+		       sc_t best_q[ARM_DOF], sc_t *best_v)
+{
+	sc_t step = sc_div(2 * SC_PI, SC_C(samples)), v, t[ARM_DOF];
+	int k, side, it;
+
+	v = ctx_eval(x, phi0, q);
+	(*evals)++;
+	if (v < *best_v) {
+		*best_v = v;
+		for (it = 0; it < ARM_DOF; it++)
+			best_q[it] = q[it];
+	}
+	if (v == 0)
+		return true;
+	for (k = 1; 2 * k <= samples; k++) {
+		for (side = -1; side <= 1; side += 2) {
+			sc_t lo, hi = phi0 + sc_mul(SC_C(side * k), step);
+
+			v = ctx_eval(x, hi, t);
+			(*evals)++;
+			if (v < *best_v) {
+				*best_v = v;
+				for (it = 0; it < ARM_DOF; it++)
+					best_q[it] = t[it];
+			}
+			if (v > 0)
+				continue;
+			for (it = 0; it < ARM_DOF; it++)
+				q[it] = t[it];
+			/* feasible at hi, not at lo: move hi toward lo */
+			lo = hi - sc_mul(SC_C(side), step);
+			for (it = 0; it < 8; it++) {
+				sc_t mid = sc_mul(lo + hi, SC_C(0.5));
+
+				v = ctx_eval(x, mid, t);
+				(*evals)++;
+				if (v > 0) {
+					lo = mid;
+				} else {
+					int i;
+
+					hi = mid;
+					for (i = 0; i < ARM_DOF; i++)
+						q[i] = t[i];
+				}
+			}
+			return true;
+		}
+	}
+	return false;
+}
+
+bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t pref[ARM_DOF],
+		     const struct ik_opts *o, sc_t q[ARM_DOF], int *evals)
+{
+	struct swivel_ctx x;
+	struct dq d;
+	struct quat r;
+	struct vec3 p, w, x4p;
+	sc_t rt[3][3], H = a->dims.hand, q1p, best_q[ARM_DOF], best_v = SC_C(1e3), cand[ARM_DOF];
+	sc_t best_cost = SC_C(1e3);
+	int k, i, n1 = o->yaw_samples > 1 ? o->yaw_samples : 2;
+	bool found = false;
+
+	*evals = 0;
+	d = t->d;
+	if (a->side == ARM_LEFT)
+		arm_mirror_dq(&t->d, &d);
+	r = d.r;
+	dq_translation(&d, &p);
+	quat_to_mat3(&r, rt);
+	w = (struct vec3){ p.x - sc_mul(H, rt[0][1]), p.y - sc_mul(H, rt[1][1]), p.z - sc_mul(H, rt[2][1]) };
+
+	/* the preferred elbow axis, in the J1 frame: Ry(q2) Rx(q3) Rz(q4) x */
+	{
+		sc_t s2, c2, s3, c3, s4, c4;
+
+		sc_sincos(pref[1], &s2, &c2);
+		sc_sincos(pref[2], &s3, &c3);
+		sc_sincos(pref[3], &s4, &c4);
+		/* Rz(q4) x = (c4, s4, 0); Rx(q3): (c4, c3 s4, s3 s4); Ry(q2) */
+		x4p.x = sc_mul(c2, c4) + sc_mul(s2, sc_mul(s3, s4));
+		x4p.y = sc_mul(c3, s4);
+		x4p.z = -sc_mul(s2, c4) + sc_mul(c2, sc_mul(s3, s4));
+	}
+	q1p = sc_clamp(pref[0], a->lim.lo[0], a->lim.hi[0]);
+	for (i = 0; i < ARM_DOF; i++)
+		best_q[i] = pref[i];
+
+	/* J1 candidates: the preferred one, then a grid ordered by distance from it */
+	for (k = -1; k < n1; k++) {
+		sc_t q1, cost;
+
+		if (k < 0) {
+			q1 = q1p;
+		} else {
+			/* k-th grid point, in order of distance from q1p */
+			sc_t span = a->lim.hi[0] - a->lim.lo[0];
+			sc_t stepq = sc_div(span, SC_C(n1 - 1));
+			int j = (k + 2) / 2;
+
+			q1 = q1p + sc_mul(SC_C((k & 1) ? -j : j), stepq);
+			if (q1 > a->lim.hi[0] || q1 < a->lim.lo[0])
+				continue;
+			/* once a candidate is found, farther J1 can only cost more */
+			if (found && sc_mul(q1 - q1p, q1 - q1p) >= best_cost)
+				break;
+		}
+		if (!ctx_init(&x, a, &w, (const sc_t(*)[3])rt, q1))
+			continue;
+		if (x.viol15 > 0) {
+			/* J1 or the elbow out of limits: keep the least bad posture for the fallback */
+			sc_t v = ctx_eval(&x, ctx_swivel_of(&x, &x4p), cand);
+
+			(*evals)++;
+			if (v < best_v) {
+				best_v = v;
+				for (i = 0; i < ARM_DOF; i++)
+					best_q[i] = cand[i];
+			}
+			continue;
+		}
+		if (!ctx_search(&x, ctx_swivel_of(&x, &x4p), o->swivel_samples, cand, evals, best_q, &best_v))
+			continue;
+		cost = posture_dist(cand, pref);
+		if (!found || cost < best_cost) {
+			found = true;
+			best_cost = cost;
+			for (i = 0; i < ARM_DOF; i++)
+				q[i] = cand[i];
+		}
+		if (k < 0)
+			break; /* the preferred J1 works */
+	}
+	if (!found)
+		for (i = 0; i < ARM_DOF; i++)
+			q[i] = best_q[i];
+	return found;
+}
