@@ -170,7 +170,7 @@ int main(int argc, char **argv)
 	const struct ik_kin *kin;
 	struct row *rows;
 	size_t n, i, strict = 0, loose = 0, inlim = 0, jumps = 0, reached = 0;
-	double *us, iters = 0, evals = 0, prev[ARM_DOF] = { 0 }, (*sol)[ARM_DOF];
+	double *us, *ev, iters = 0, evals = 0, prev[ARM_DOF] = { 0 }, (*sol)[ARM_DOF];
 	bool warm, newton, quiet = false;
 	int c;
 
@@ -243,8 +243,9 @@ int main(int argc, char **argv)
 		opts.max_iter = 100;
 	}
 	us = calloc(n, sizeof(*us));
+	ev = calloc(n, sizeof(*ev));
 	sol = calloc(n, sizeof(*sol));
-	if (!us || !sol)
+	if (!us || !ev || !sol)
 		return 1;
 
 	for (int pass = 0; pass < 2; pass++) {
@@ -273,6 +274,7 @@ int main(int argc, char **argv)
 			memcpy(sol[i], q, sizeof(q));
 			iters += res.iters;
 			evals += res.evals;
+			ev[i] = res.evals;
 			if (res.flags & IK_REACHED)
 				reached++;
 		}
@@ -357,6 +359,9 @@ int main(int argc, char **argv)
 			printf("reached      %.4f %% (solver's own flag)\n", 100.0 * reached / n);
 			printf("iterations   %.3f mean Newton, %.2f mean closed-form postures\n", iters / n, evals / n);
 			printf("time         median %.3f us, p99 %.3f us, max %.3f us\n", med, p99, max);
+			qsort(ev, n, sizeof(*ev), cmp_double);
+			printf("postures     p50 %.0f, p90 %.0f, p99 %.0f, max %.0f closed-form postures per solve\n",
+			       ev[n / 2], ev[(size_t)((n - 1) * 0.9)], ev[(size_t)((n - 1) * 0.99)], ev[n - 1]);
 		}
 		printf("{\"solver\":\"%s\",\"mode\":\"%s\",\"n\":%zu,\"strict\":%.6f,\"loose\":%.6f,\"in_limits\":%.6f,"
 		       "\"jumps\":%zu,\"iters_mean\":%.4f,\"median_us\":%.4f,\"p99_us\":%.4f,\"max_us\":%.4f}\n",
@@ -366,6 +371,7 @@ int main(int argc, char **argv)
 	}
 	free(rows);
 	free(us);
+	free(ev);
 	free(sol);
 	return 0;
 }

@@ -72,7 +72,7 @@ struct ik_opts {
 	sc_t max_step;      /* largest joint step per iteration, radians (0: none) */
 	int swivel_samples; /* closed-form search: samples of the swivel circle */
 	int yaw_samples;    /* closed-form search: samples of J1 */
-	sc_t rest_weight;   /* pull toward the rest posture when the seed is a previous solution */
+	int warm_iter;      /* Newton iterations tried from a seed before the closed-form search */
 };
 
 struct ik_result {
@@ -119,10 +119,13 @@ unsigned ik_solve(const struct arm *a, const struct ik_kin *kin, const struct ik
 void ik_rest_posture(const struct arm *a, sc_t q[ARM_DOF]);
 /*
  * The closed-form part on its own: searches J1 and the swivel for a posture
- * inside the limits that reaches t exactly, closest to pref. Returns true and
- * writes q if one was found; evals counts the postures tried.
+ * inside the limits that reaches t exactly. With seeded, the search starts at
+ * pref's J1 and elbow plane (continuity with the previous frame); without,
+ * at pref's J1 and the swivel that keeps the wrist nearest neutral. Returns
+ * true and writes q if one was found, else writes the least violating
+ * posture seen; evals counts the postures tried.
  */
-bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t pref[ARM_DOF],
+bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t pref[ARM_DOF], bool seeded,
 		     const struct ik_opts *o, sc_t q[ARM_DOF], int *evals);
 
 #ifdef __cplusplus

@@ -100,9 +100,53 @@ static inline void sc_sincos(sc_t a, sc_t *s, sc_t *c)
 	*c = sc_builtin_cos(a);
 }
 
+/*
+ * atan on [-1, 1]: one reduction by pi/6 brings |t| below tan(pi/12), where
+ * the odd series to t^19 is accurate to 1e-12 (libm's atan2 costs several
+ * times more, and the closed-form IK calls it in its inner loop).
+ */
+static inline sc_t sc_atan_unit(sc_t t)
+{
+	sc_t off = 0, t2, p;
+	bool neg = t < 0;
+
+	if (neg)
+		t = -t;
+	if (t > SC_C(0.26794919243112270)) {
+		t = (SC_C(1.7320508075688772) * t - SC_C(1)) / (SC_C(1.7320508075688772) + t);
+		off = SC_C(0.52359877559829887);
+	}
+	t2 = t * t;
+	/* atan t = t - t^3 (1/3 - t^2 (1/5 - t^2 (1/7 - ...))) */
+	p = SC_C(1.0 / 19);
+	p = SC_C(1.0 / 17) - t2 * p;
+	p = SC_C(1.0 / 15) - t2 * p;
+	p = SC_C(1.0 / 13) - t2 * p;
+	p = SC_C(1.0 / 11) - t2 * p;
+	p = SC_C(1.0 / 9) - t2 * p;
+	p = SC_C(1.0 / 7) - t2 * p;
+	p = SC_C(1.0 / 5) - t2 * p;
+	p = SC_C(1.0 / 3) - t2 * p;
+	p = off + t - t * t2 * p;
+	return neg ? -p : p;
+}
+
+/* atan2 in (-pi, pi]; atan2(0, 0) = 0 */
 static inline sc_t sc_atan2(sc_t y, sc_t x)
 {
-	return sc_builtin_atan2(y, x);
+	sc_t ax = sc_builtin_fabs(x), ay = sc_builtin_fabs(y), a;
+
+	if (ax == 0 && ay == 0)
+		return 0;
+	if (!(ax < SC_C(1e300)) || !(ay < SC_C(1e300)))
+		return sc_builtin_atan2(y, x); /* inf and NaN: the library's rules */
+	if (ay <= ax)
+		a = sc_atan_unit(ay / ax);
+	else
+		a = SC_HALF_PI - sc_atan_unit(ax / ay);
+	if (x < 0)
+		a = SC_PI - a;
+	return y < 0 ? -a : a;
 }
 
 static inline sc_t sc_min(sc_t a, sc_t b)
@@ -156,6 +200,15 @@ static inline sc_t sc_from_double(double x)
 static inline double sc_to_double(sc_t a)
 {
 	return (double)a;
+}
+
+/* sin of a limit angle (setup work, not the inner loop) */
+static inline sc_t sc_sin_lim(sc_t a)
+{
+	sc_t s, c;
+
+	sc_sincos(a, &s, &c);
+	return s;
 }
 
 /* asin and acos through atan2 and sqrt, so a fixed back end needs only those */

@@ -13,7 +13,7 @@ void ik_default_opts(struct ik_opts *o)
 	o->max_step = SC_C(0.5);
 	o->swivel_samples = 16;
 	o->yaw_samples = 7;
-	o->rest_weight = 0;
+	o->warm_iter = 6;
 }
 
 void ik_target_set(struct ik_target *t, const struct vec3 *p, const struct quat *r)
@@ -324,10 +324,22 @@ unsigned ik_solve(const struct arm *a, const struct ik_kin *kin, const struct ik
 		res->flags |= IK_BAD_TARGET;
 		return res->flags;
 	}
-	if (ik_swivel_solve(a, t, pref, o, q, &res->evals))
+	if (seed && !(res->flags & IK_BAD_TARGET) && o->warm_iter > 0) {
+		/* tracking: a few limited Newton steps from the previous posture move the arm least */
+		struct ik_opts wo = *o;
+
+		wo.max_iter = o->warm_iter;
+		for (i = 0; i < ARM_DOF; i++)
+			q[i] = pref[i];
+		newton_limited(a, kin, t, &wo, q, res);
+		if (err_ok(&res->err, o))
+			goto done;
+	}
+	if (ik_swivel_solve(a, t, pref, seed != NULL, o, q, &res->evals))
 		res->flags |= IK_ANALYTIC;
 	arm_clamp(a, q);
 	newton_limited(a, kin, t, o, q, res);
+done:
 	if (err_ok(&res->err, o))
 		res->flags |= IK_REACHED;
 	else

@@ -164,8 +164,15 @@ static sc_t ctx_swivel_of(const struct swivel_ctx *x, const struct vec3 *x4)
 	return sc_atan2(v3_dot(&n, &x->n2), v3_dot(&n, &x->n1));
 }
 
-/* the posture at swivel phi; returns its limit violation (0: inside) */
-static sc_t ctx_eval(const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF])
+/* added to the violation when the upper arm is already outside its limits */
+#define UPPER_PENALTY SC_C(4)
+
+/*
+ * The posture at swivel phi; returns its limit violation (0: inside). With
+ * full false the wrist is skipped when the upper arm is already outside its
+ * limits (the result is then only a bound, and q[5..7] are not written).
+ */
+static sc_t ctx_eval(const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF], bool full)
 {
 	const struct arm *a = x->a;
 	sc_t sp, cp, R[3][3], R5[3][3], R15[3][3], M[3][3], v;
@@ -197,6 +204,8 @@ static sc_t ctx_eval(const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF])
 	v = euler_yxz((const sc_t(*)[3])R, &a->lim, 1, &q[1]);
 	q[0] = x->q1;
 	q[4] = x->q5;
+	if (v > 0 && !full)
+		return v + x->viol15 + UPPER_PENALTY;
 	/* R15 = R Rx(q5), in the J1 frame; the wrist turns the rest */
 	R5[0][0] = SC_C(1), R5[0][1] = 0, R5[0][2] = 0;
 	R5[1][0] = 0, R5[1][1] = x->c5, R5[1][2] = -x->s5;
@@ -205,6 +214,23 @@ static sc_t ctx_eval(const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF])
 	m3_tmul((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, M);
 	v += euler_yxz((const sc_t(*)[3])M, &a->lim, 5, &q[5]);
 	return v + x->viol15;
+}
+
+/* swivel that points the forearm as close as possible along the hand (wrist nearest neutral) */
+static sc_t ctx_swivel_hand(const struct swivel_ctx *x)
+{
+	/* forearm = (w - c - r n) / F: closest to the hand's y axis h when n is along -h */
+	struct vec3 h = { x->rt1[0][1], x->rt1[1][1], x->rt1[2][1] };
+
+	return sc_atan2(-v3_dot(&h, &x->n2), -v3_dot(&h, &x->n1));
+}
+
+static void q_copy(sc_t dst[ARM_DOF], const sc_t src[ARM_DOF])
+{
+	int i;
+
+	for (i = 0; i < ARM_DOF; i++)
+		dst[i] = src[i];
 }
 
 /* squared distance between postures, angle differences wrapped */
@@ -221,55 +247,58 @@ static sc_t posture_dist(const sc_t a[ARM_DOF], const sc_t b[ARM_DOF])
 	return sc_acc_get(s);
 }
 
+struct search {
+	const struct ik_opts *o;
+	int evals;
+	sc_t best_v; /* least violation seen, and its posture: the fallback */
+	sc_t best_q[ARM_DOF];
+	sc_t best_q1, best_phi;
+};
+
+static sc_t search_eval(struct search *s, const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF], bool full)
+{
+	sc_t v = ctx_eval(x, phi, q, full);
+
+	s->evals++;
+	if (v < s->best_v) {
+		s->best_v = v;
+		s->best_q1 = x->q1;
+		s->best_phi = phi;
+		q_copy(s->best_q, q);
+	}
+	return v;
+}
+
 /*
  * Feasible swivel closest to phi0 at this J1: phi0 itself, else the nearest
- * feasible sample on either side, refined by bisection toward phi0.
+ * feasible sample on either side, refined by bisection toward phi0 (so that
+ * a posture held against a limit follows the limit smoothly).
  */
-static bool ctx_search(const struct swivel_ctx *x, sc_t phi0, int samples, sc_t q[ARM_DOF], int *evals,
-		       sc_t best_q[ARM_DOF], sc_t *best_v)
+static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, sc_t q[ARM_DOF])
 {
-	sc_t step = sc_div(2 * SC_PI, SC_C(samples)), v, t[ARM_DOF];
+	int samples = s->o->swivel_samples > 2 ? s->o->swivel_samples : 2;
+	sc_t step = sc_div(2 * SC_PI, SC_C(samples)), t[ARM_DOF];
 	int k, side, it;
 
-	v = ctx_eval(x, phi0, q);
-	(*evals)++;
-	if (v < *best_v) {
-		*best_v = v;
-		for (it = 0; it < ARM_DOF; it++)
-			best_q[it] = q[it];
-	}
-	if (v == 0)
+	if (search_eval(s, x, phi0, q, false) == 0)
 		return true;
 	for (k = 1; 2 * k <= samples; k++) {
 		for (side = -1; side <= 1; side += 2) {
 			sc_t lo, hi = phi0 + sc_mul(SC_C(side * k), step);
 
-			v = ctx_eval(x, hi, t);
-			(*evals)++;
-			if (v < *best_v) {
-				*best_v = v;
-				for (it = 0; it < ARM_DOF; it++)
-					best_q[it] = t[it];
-			}
-			if (v > 0)
+			if (search_eval(s, x, hi, t, false) > 0)
 				continue;
-			for (it = 0; it < ARM_DOF; it++)
-				q[it] = t[it];
+			q_copy(q, t);
 			/* feasible at hi, not at lo: move hi toward lo */
 			lo = hi - sc_mul(SC_C(side), step);
 			for (it = 0; it < 8; it++) {
 				sc_t mid = sc_mul(lo + hi, SC_C(0.5));
 
-				v = ctx_eval(x, mid, t);
-				(*evals)++;
-				if (v > 0) {
+				if (search_eval(s, x, mid, t, false) > 0) {
 					lo = mid;
 				} else {
-					int i;
-
 					hi = mid;
-					for (i = 0; i < ARM_DOF; i++)
-						q[i] = t[i];
+					q_copy(q, t);
 				}
 			}
 			return true;
@@ -278,90 +307,257 @@ static bool ctx_search(const struct swivel_ctx *x, sc_t phi0, int samples, sc_t 
 	return false;
 }
 
-bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t pref[ARM_DOF],
+/* what does not change while J1 and the swivel are searched */
+struct swivel_target {
+	const struct arm *a;
+	struct vec3 w;   /* wrist centre, right-arm chest frame */
+	sc_t rt[3][3];   /* target rotation, right-arm chest frame */
+	struct vec3 x4p; /* preferred elbow axis, J1 frame */
+	bool seeded;     /* prefer the seed's swivel (else: wrist nearest neutral) */
+};
+
+static sc_t preferred_swivel(const struct swivel_target *st, const struct swivel_ctx *x)
+{
+	return (st->seeded || 1) ? ctx_swivel_of(x, &st->x4p) : ctx_swivel_hand(x);
+}
+
+static int yaw_candidates(const struct swivel_target *st, sc_t q1p, int samples, sc_t out[], int max);
+
+/*
+ * Last resort for targets whose feasible region is narrow: a fine grid over
+ * J1 and the swivel for the least violation, then a pattern search on it.
+ */
+static bool rescue(struct search *s, const struct swivel_target *st, sc_t q[ARM_DOF])
+{
+	const struct arm *a = st->a;
+	struct swivel_ctx x;
+	sc_t t[ARM_DOF], q1, phi, dq1, dphi, v;
+	int i, j, n1 = 13, n2 = 48, round;
+
+	sc_t q1s[24];
+	int nq = yaw_candidates(st, a->lim.lo[0], n1, q1s, 24);
+
+	s->best_v = SC_C(1e3);
+	for (i = 0; i < nq; i++) {
+		if (!ctx_init(&x, a, &st->w, (const sc_t(*)[3])st->rt, q1s[i]))
+			continue;
+		for (j = 0; j < n2; j++)
+			search_eval(s, &x, sc_div(sc_mul(2 * SC_PI, SC_C(j)), SC_C(n2)), t, true);
+	}
+	if (s->best_v >= SC_C(1e3))
+		return false;
+	q1 = s->best_q1;
+	phi = s->best_phi;
+	v = s->best_v;
+	dq1 = sc_div(a->lim.hi[0] - a->lim.lo[0], SC_C(2 * (n1 - 1)));
+	dphi = sc_div(SC_PI, SC_C(n2));
+	for (round = 0; round < 200 && v > 0 && dphi > SC_C(1e-5); round++) {
+		static const signed char dir[4][2] = { { 1, 0 }, { -1, 0 }, { 0, 1 }, { 0, -1 } };
+		bool moved = false;
+		int d;
+
+		for (d = 0; d < 4 && !moved; d++) {
+			sc_t nq1 = sc_clamp(q1 + sc_mul(SC_C(dir[d][0]), dq1), a->lim.lo[0], a->lim.hi[0]);
+			sc_t nphi = phi + sc_mul(SC_C(dir[d][1]), dphi), nv;
+
+			if (!ctx_init(&x, a, &st->w, (const sc_t(*)[3])st->rt, nq1))
+				continue;
+			nv = search_eval(s, &x, nphi, t, true);
+			if (nv < v) {
+				v = nv;
+				q1 = nq1;
+				phi = nphi;
+				moved = true;
+			}
+		}
+		if (!moved) {
+			dq1 = sc_mul(dq1, SC_C(0.5));
+			dphi = sc_mul(dphi, SC_C(0.5));
+		}
+	}
+	if (v > 0)
+		return false;
+	q_copy(q, s->best_q);
+	return true;
+}
+
+/*
+ * J1 values at which the wrist centre is within reach with the elbow inside
+ * its limits: |w - s(q1)|^2 = |w|^2 + S^2 - 2 S rho cos(q1 - beta) must lie
+ * between the squared shoulder-wrist distances of the elbow's limits. Up to
+ * two intervals inside J1's limits; returns their count.
+ */
+static int reach_intervals(const struct swivel_target *st, sc_t lo[2], sc_t hi[2])
+{
+	const struct arm *a = st->a;
+	sc_t A = a->dims.arm, F = a->dims.forearm, S = a->dims.shoulder;
+	sc_t l1 = a->lim.lo[0], h1 = a->lim.hi[0];
+	sc_t s5lo = sc_sin_lim(sc_max(a->lim.lo[4], -SC_HALF_PI)), s5hi = sc_sin_lim(sc_min(a->lim.hi[4], SC_HALF_PI));
+	sc_t base = sc_mul(A, A) + sc_mul(F, F), af2 = 2 * sc_mul(A, F);
+	sc_t dmax2 = base - sc_mul(af2, s5lo), dmin2 = base - sc_mul(af2, s5hi);
+	sc_t rho = sc_sqrt(sc_mul(st->w.x, st->w.x) + sc_mul(st->w.y, st->w.y));
+	sc_t k = v3_dot(&st->w, &st->w) + sc_mul(S, S), srho = 2 * sc_mul(S, rho);
+	sc_t beta, cl, ch, amin, amax, cand[2][2];
+	int n = 0, i;
+
+	if (srho < SC_C(1e-9)) {
+		/* the distance does not depend on J1 */
+		if (k > dmax2 || k < dmin2)
+			return 0;
+		lo[0] = l1;
+		hi[0] = h1;
+		return 1;
+	}
+	cl = sc_div(k - dmax2, srho);
+	ch = sc_div(k - dmin2, srho);
+	if (cl > SC_C(1) || ch < SC_C(-1))
+		return 0;
+	/* cos(q1 - beta) in [cl, ch]: |q1 - beta| in [acos(ch), acos(cl)] */
+	amin = sc_acos(sc_min(ch, SC_C(1)));
+	amax = sc_acos(sc_max(cl, SC_C(-1)));
+	beta = sc_atan2(st->w.y, st->w.x);
+	cand[0][0] = beta + amin, cand[0][1] = beta + amax;
+	cand[1][0] = beta - amax, cand[1][1] = beta - amin;
+	for (i = 0; i < 2; i++) {
+		/* bring the interval next to J1's range (which lies inside [-pi, pi]) */
+		sc_t c0 = cand[i][0], c1 = cand[i][1];
+
+		if (sc_mul(c0 + c1, SC_C(0.5)) > SC_PI)
+			c0 -= 2 * SC_PI, c1 -= 2 * SC_PI;
+		else if (sc_mul(c0 + c1, SC_C(0.5)) < -SC_PI)
+			c0 += 2 * SC_PI, c1 += 2 * SC_PI;
+		c0 = sc_max(c0, l1);
+		c1 = sc_min(c1, h1);
+		if (c0 <= c1) {
+			lo[n] = c0;
+			hi[n] = c1;
+			n++;
+		}
+	}
+	if (n == 2 && lo[1] < lo[0]) {
+		sc_t t = lo[0];
+
+		lo[0] = lo[1], lo[1] = t;
+		t = hi[0], hi[0] = hi[1], hi[1] = t;
+	}
+	if (n == 2 && lo[1] <= hi[0]) {
+		/* overlapping: merge */
+		hi[0] = sc_max(hi[0], hi[1]);
+		n = 1;
+	}
+	return n;
+}
+
+/*
+ * J1 values to try, best first: the reachable one nearest the preferred,
+ * then samples spread over the reachable intervals by distance from it.
+ */
+static int yaw_candidates(const struct swivel_target *st, sc_t q1p, int samples, sc_t out[], int max)
+{
+	sc_t lo[2], hi[2], margin = SC_C(0.01);
+	int n = reach_intervals(st, lo, hi), m = 0, i, j;
+
+	if (n == 0)
+		return 0;
+	/* the reachable J1 nearest q1p, a little inside the interval */
+	{
+		sc_t best = 0, bd = SC_C(1e3);
+
+		for (i = 0; i < n; i++) {
+			sc_t mg = sc_min(margin, sc_mul(hi[i] - lo[i], SC_C(0.5)));
+			sc_t c = sc_clamp(q1p, lo[i] + mg, hi[i] - mg), dd = sc_abs(c - q1p);
+
+			if (dd < bd)
+				bd = dd, best = c;
+		}
+		out[m++] = best;
+	}
+	for (i = 0; i < n && m < max; i++) {
+		sc_t mg = sc_min(margin, sc_mul(hi[i] - lo[i], SC_C(0.5)));
+		sc_t a0 = lo[i] + mg, a1 = hi[i] - mg;
+
+		for (j = 0; j < samples && m < max; j++) {
+			out[m++] = samples > 1 ? a0 + sc_div(sc_mul(a1 - a0, SC_C(j)), SC_C(samples - 1))
+					       : sc_mul(a0 + a1, SC_C(0.5));
+		}
+	}
+	/* insertion sort by distance from the first (keeps it first) */
+	for (i = 2; i < m; i++) {
+		sc_t v = out[i];
+
+		for (j = i; j > 1 && sc_abs(out[j - 1] - out[0]) > sc_abs(v - out[0]); j--)
+			out[j] = out[j - 1];
+		out[j] = v;
+	}
+	return m;
+}
+
+bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t pref[ARM_DOF], bool seeded,
 		     const struct ik_opts *o, sc_t q[ARM_DOF], int *evals)
 {
+	struct swivel_target st;
 	struct swivel_ctx x;
+	struct search s;
 	struct dq d;
-	struct quat r;
-	struct vec3 p, w, x4p;
-	sc_t rt[3][3], H = a->dims.hand, q1p, best_q[ARM_DOF], best_v = SC_C(1e3), cand[ARM_DOF];
-	sc_t best_cost = SC_C(1e3);
-	int k, i, n1 = o->yaw_samples > 1 ? o->yaw_samples : 2;
+	struct vec3 p;
+	sc_t H = a->dims.hand, q1p, cand[ARM_DOF], best_cost = SC_C(1e3), q1c[24];
+	int k, nc, n1 = o->yaw_samples > 1 ? o->yaw_samples : 2;
 	bool found = false;
 
-	*evals = 0;
+	s.o = o;
+	s.evals = 0;
+	s.best_v = SC_C(1e3);
+	s.best_q1 = s.best_phi = 0;
+	q_copy(s.best_q, pref);
+	st.a = a;
+	st.seeded = seeded;
 	d = t->d;
 	if (a->side == ARM_LEFT)
 		arm_mirror_dq(&t->d, &d);
-	r = d.r;
 	dq_translation(&d, &p);
-	quat_to_mat3(&r, rt);
-	w = (struct vec3){ p.x - sc_mul(H, rt[0][1]), p.y - sc_mul(H, rt[1][1]), p.z - sc_mul(H, rt[2][1]) };
-
-	/* the preferred elbow axis, in the J1 frame: Ry(q2) Rx(q3) Rz(q4) x */
+	quat_to_mat3(&d.r, st.rt);
+	st.w = (struct vec3){ p.x - sc_mul(H, st.rt[0][1]), p.y - sc_mul(H, st.rt[1][1]), p.z - sc_mul(H, st.rt[2][1]) };
 	{
+		/* the preferred elbow axis in the J1 frame: Ry(q2) Rx(q3) Rz(q4) x */
 		sc_t s2, c2, s3, c3, s4, c4;
 
 		sc_sincos(pref[1], &s2, &c2);
 		sc_sincos(pref[2], &s3, &c3);
 		sc_sincos(pref[3], &s4, &c4);
-		/* Rz(q4) x = (c4, s4, 0); Rx(q3): (c4, c3 s4, s3 s4); Ry(q2) */
-		x4p.x = sc_mul(c2, c4) + sc_mul(s2, sc_mul(s3, s4));
-		x4p.y = sc_mul(c3, s4);
-		x4p.z = -sc_mul(s2, c4) + sc_mul(c2, sc_mul(s3, s4));
+		st.x4p.x = sc_mul(c2, c4) + sc_mul(s2, sc_mul(s3, s4));
+		st.x4p.y = sc_mul(c3, s4);
+		st.x4p.z = -sc_mul(s2, c4) + sc_mul(c2, sc_mul(s3, s4));
 	}
 	q1p = sc_clamp(pref[0], a->lim.lo[0], a->lim.hi[0]);
-	for (i = 0; i < ARM_DOF; i++)
-		best_q[i] = pref[i];
+	nc = yaw_candidates(&st, q1p, n1, q1c, (int)(sizeof(q1c) / sizeof(q1c[0])));
+	for (k = 0; k < nc; k++) {
+		sc_t cost;
 
-	/* J1 candidates: the preferred one, then a grid ordered by distance from it */
-	for (k = -1; k < n1; k++) {
-		sc_t q1, cost;
-
-		if (k < 0) {
-			q1 = q1p;
-		} else {
-			/* k-th grid point, in order of distance from q1p */
-			sc_t span = a->lim.hi[0] - a->lim.lo[0];
-			sc_t stepq = sc_div(span, SC_C(n1 - 1));
-			int j = (k + 2) / 2;
-
-			q1 = q1p + sc_mul(SC_C((k & 1) ? -j : j), stepq);
-			if (q1 > a->lim.hi[0] || q1 < a->lim.lo[0])
-				continue;
-			/* once a candidate is found, farther J1 can only cost more */
-			if (found && sc_mul(q1 - q1p, q1 - q1p) >= best_cost)
-				break;
-		}
-		if (!ctx_init(&x, a, &w, (const sc_t(*)[3])rt, q1))
+		/* once a candidate is found, a farther J1 can only cost more */
+		if (found && sc_mul(q1c[k] - q1p, q1c[k] - q1p) >= best_cost)
+			break;
+		if (!ctx_init(&x, a, &st.w, (const sc_t(*)[3])st.rt, q1c[k]))
 			continue;
 		if (x.viol15 > 0) {
-			/* J1 or the elbow out of limits: keep the least bad posture for the fallback */
-			sc_t v = ctx_eval(&x, ctx_swivel_of(&x, &x4p), cand);
-
-			(*evals)++;
-			if (v < best_v) {
-				best_v = v;
-				for (i = 0; i < ARM_DOF; i++)
-					best_q[i] = cand[i];
-			}
+			/* rounding at the edge of reach: only the fallback may use it */
+			search_eval(&s, &x, preferred_swivel(&st, &x), cand, true);
 			continue;
 		}
-		if (!ctx_search(&x, ctx_swivel_of(&x, &x4p), o->swivel_samples, cand, evals, best_q, &best_v))
+		if (!ctx_search(&s, &x, preferred_swivel(&st, &x), cand))
 			continue;
 		cost = posture_dist(cand, pref);
 		if (!found || cost < best_cost) {
 			found = true;
 			best_cost = cost;
-			for (i = 0; i < ARM_DOF; i++)
-				q[i] = cand[i];
+			q_copy(q, cand);
 		}
-		if (k < 0)
-			break; /* the preferred J1 works */
+		if (k == 0)
+			break; /* the J1 nearest the preferred works */
 	}
 	if (!found)
-		for (i = 0; i < ARM_DOF; i++)
-			q[i] = best_q[i];
+		found = rescue(&s, &st, q);
+	if (!found)
+		q_copy(q, s.best_q);
+	*evals = s.evals;
 	return found;
 }
