@@ -12,8 +12,10 @@ void ik_default_opts(struct ik_opts *o)
 	o->tol_rot = SC_TOL_ROT;
 	o->max_step = SC_C(0.5);
 	o->swivel_samples = 16;
+	o->max_evals = 800;
 	o->yaw_samples = 7;
 	o->warm_iter = 6;
+	o->center_gain = SC_C(0.15);
 }
 
 void ik_target_set(struct ik_target *t, const struct vec3 *p, const struct quat *r)
@@ -259,14 +261,17 @@ unsigned ik_newton(const struct arm *a, const struct ik_kin *kin, const struct i
 /*
  * Newton with the limits: a step that would push joints past their limits
  * is re-solved with those joints held at the limit (at most 3 rounds), and
- * the posture is clamped after every step.
+ * the posture is clamped after every step. With center > 0 the redundancy
+ * drifts the free joints toward the middle of their ranges: the step is the
+ * least-squares one closest to z = -center (q - mid), x = z + J+ (V - J z),
+ * so that tracking does not wander into a corner of the limits.
  */
 static void newton_limited(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t,
-			   const struct ik_opts *o, sc_t q[ARM_DOF], struct ik_result *res)
+			   const struct ik_opts *o, sc_t center, sc_t q[ARM_DOF], struct ik_result *res)
 {
-	sc_t J[6][ARM_DOF], V[6], x[ARM_DOF];
+	sc_t J[6][ARM_DOF], V[6], W[6], x[ARM_DOF], z[ARM_DOF];
 	bool free[ARM_DOF];
-	int i, it, round;
+	int i, j, it, round;
 
 	for (it = 0;; it++) {
 		kin->eval(a, q, t, J, V, &res->err);
@@ -277,7 +282,23 @@ static void newton_limited(const struct arm *a, const struct ik_kin *kin, const 
 		for (round = 0; round < 3; round++) {
 			bool again = false;
 
-			ik_lsq_step((const sc_t(*)[ARM_DOF])J, V, free, x);
+			for (i = 0; i < ARM_DOF; i++) {
+				/* u in [-1, 1] across the range; push back hardest near the limits */
+				sc_t half = sc_mul(a->lim.hi[i] - a->lim.lo[i], SC_C(0.5));
+				sc_t u = half > 0 ? sc_div(q[i] - a->lim.lo[i] - half, half) : SC_C(0);
+
+				z[i] = free[i] && it == 0 ? -sc_mul(sc_mul(center, half), sc_mul(u, sc_mul(u, u))) : SC_C(0);
+			}
+			for (j = 0; j < 6; j++) {
+				sc_acc_t acc = sc_acc0();
+
+				for (i = 0; i < ARM_DOF; i++)
+					acc = sc_mac(acc, J[j][i], z[i]);
+				W[j] = V[j] - sc_acc_get(acc);
+			}
+			ik_lsq_step((const sc_t(*)[ARM_DOF])J, W, free, x);
+			for (i = 0; i < ARM_DOF; i++)
+				x[i] += z[i];
 			limit_step(x, o->max_step);
 			for (i = 0; i < ARM_DOF; i++) {
 				sc_t n = q[i] + x[i];
@@ -331,14 +352,14 @@ unsigned ik_solve(const struct arm *a, const struct ik_kin *kin, const struct ik
 		wo.max_iter = o->warm_iter;
 		for (i = 0; i < ARM_DOF; i++)
 			q[i] = pref[i];
-		newton_limited(a, kin, t, &wo, q, res);
+		newton_limited(a, kin, t, &wo, o->center_gain, q, res);
 		if (err_ok(&res->err, o))
 			goto done;
 	}
 	if (ik_swivel_solve(a, t, pref, seed != NULL, o, q, &res->evals))
 		res->flags |= IK_ANALYTIC;
 	arm_clamp(a, q);
-	newton_limited(a, kin, t, o, q, res);
+	newton_limited(a, kin, t, o, 0, q, res);
 done:
 	if (err_ok(&res->err, o))
 		res->flags |= IK_REACHED;

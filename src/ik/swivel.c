@@ -233,20 +233,6 @@ static void q_copy(sc_t dst[ARM_DOF], const sc_t src[ARM_DOF])
 		dst[i] = src[i];
 }
 
-/* squared distance between postures, angle differences wrapped */
-static sc_t posture_dist(const sc_t a[ARM_DOF], const sc_t b[ARM_DOF])
-{
-	sc_acc_t s = sc_acc0();
-	int i;
-
-	for (i = 0; i < ARM_DOF; i++) {
-		sc_t d = sc_wrap_pi(a[i] - b[i]);
-
-		s = sc_mac(s, d, d);
-	}
-	return sc_acc_get(s);
-}
-
 struct search {
 	const struct ik_opts *o;
 	int evals;
@@ -257,7 +243,11 @@ struct search {
 
 static sc_t search_eval(struct search *s, const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF], bool full)
 {
-	sc_t v = ctx_eval(x, phi, q, full);
+	sc_t v;
+
+	if (s->evals >= s->o->max_evals)
+		return SC_C(1e3); /* budget spent: nothing more is feasible */
+	v = ctx_eval(x, phi, q, full);
 
 	s->evals++;
 	if (v < s->best_v) {
@@ -270,24 +260,69 @@ static sc_t search_eval(struct search *s, const struct swivel_ctx *x, sc_t phi, 
 }
 
 /*
+ * Least violation on [lo, hi] by golden section (the violation is a sum of
+ * hinges of smooth functions of the swivel); stops as soon as it reaches 0.
+ */
+static bool ctx_refine(struct search *s, const struct swivel_ctx *x, sc_t lo, sc_t hi, sc_t q[ARM_DOF])
+{
+	const sc_t g = SC_C(0.38196601125010515);
+	sc_t m1 = lo + sc_mul(g, hi - lo), m2 = hi - sc_mul(g, hi - lo), t[ARM_DOF];
+	sc_t v1 = search_eval(s, x, m1, q, true), v2;
+	int it;
+
+	if (v1 == 0)
+		return true;
+	v2 = search_eval(s, x, m2, t, true);
+	for (it = 0; it < 12; it++) {
+		if (v2 == 0) {
+			q_copy(q, t);
+			return true;
+		}
+		if (v1 <= v2) {
+			hi = m2;
+			m2 = m1, v2 = v1;
+			m1 = lo + sc_mul(g, hi - lo);
+			v1 = search_eval(s, x, m1, t, true);
+			if (v1 == 0) {
+				q_copy(q, t);
+				return true;
+			}
+		} else {
+			lo = m1;
+			m1 = m2, v1 = v2;
+			m2 = hi - sc_mul(g, hi - lo);
+			v2 = search_eval(s, x, m2, t, true);
+		}
+	}
+	return false;
+}
+
+/*
  * Feasible swivel closest to phi0 at this J1: phi0 itself, else the nearest
  * feasible sample on either side, refined by bisection toward phi0 (so that
- * a posture held against a limit follows the limit smoothly).
+ * a posture held against a limit follows the limit smoothly). If no sample
+ * is feasible, the neighbourhood of the least violating one is searched.
  */
 static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, sc_t q[ARM_DOF])
 {
 	int samples = s->o->swivel_samples > 2 ? s->o->swivel_samples : 2;
-	sc_t step = sc_div(2 * SC_PI, SC_C(samples)), t[ARM_DOF];
+	sc_t step = sc_div(2 * SC_PI, SC_C(samples)), t[ARM_DOF], v, bv, bphi;
 	int k, side, it;
 
-	if (search_eval(s, x, phi0, q, false) == 0)
+	bv = search_eval(s, x, phi0, q, false);
+	if (bv == 0)
 		return true;
+	bphi = phi0;
 	for (k = 1; 2 * k <= samples; k++) {
 		for (side = -1; side <= 1; side += 2) {
 			sc_t lo, hi = phi0 + sc_mul(SC_C(side * k), step);
 
-			if (search_eval(s, x, hi, t, false) > 0)
+			v = search_eval(s, x, hi, t, false);
+			if (v > 0) {
+				if (v < bv)
+					bv = v, bphi = hi;
 				continue;
+			}
 			q_copy(q, t);
 			/* feasible at hi, not at lo: move hi toward lo */
 			lo = hi - sc_mul(SC_C(side), step);
@@ -304,7 +339,7 @@ static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, 
 			return true;
 		}
 	}
-	return false;
+	return ctx_refine(s, x, bphi - step, bphi + step, q);
 }
 
 /* what does not change while J1 and the swivel are searched */
@@ -332,7 +367,7 @@ static bool rescue(struct search *s, const struct swivel_target *st, sc_t q[ARM_
 	const struct arm *a = st->a;
 	struct swivel_ctx x;
 	sc_t t[ARM_DOF], q1, phi, dq1, dphi, v;
-	int i, j, n1 = 13, n2 = 48, round;
+	int i, j, n1 = 9, n2 = 32, round;
 
 	sc_t q1s[24];
 	int nq = yaw_candidates(st, a->lim.lo[0], n1, q1s, 24);
@@ -351,7 +386,7 @@ static bool rescue(struct search *s, const struct swivel_target *st, sc_t q[ARM_
 	v = s->best_v;
 	dq1 = sc_div(a->lim.hi[0] - a->lim.lo[0], SC_C(2 * (n1 - 1)));
 	dphi = sc_div(SC_PI, SC_C(n2));
-	for (round = 0; round < 200 && v > 0 && dphi > SC_C(1e-5); round++) {
+	for (round = 0; round < 100 && v > 0 && dphi > SC_C(1e-5) && s->evals < s->o->max_evals; round++) {
 		static const signed char dir[4][2] = { { 1, 0 }, { -1, 0 }, { 0, 1 }, { 0, -1 } };
 		bool moved = false;
 		int d;
@@ -500,7 +535,7 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 	struct search s;
 	struct dq d;
 	struct vec3 p;
-	sc_t H = a->dims.hand, q1p, cand[ARM_DOF], best_cost = SC_C(1e3), q1c[24];
+	sc_t H = a->dims.hand, q1p, cand[ARM_DOF], q1c[24];
 	int k, nc, n1 = o->yaw_samples > 1 ? o->yaw_samples : 2;
 	bool found = false;
 
@@ -531,11 +566,6 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 	q1p = sc_clamp(pref[0], a->lim.lo[0], a->lim.hi[0]);
 	nc = yaw_candidates(&st, q1p, n1, q1c, (int)(sizeof(q1c) / sizeof(q1c[0])));
 	for (k = 0; k < nc; k++) {
-		sc_t cost;
-
-		/* once a candidate is found, a farther J1 can only cost more */
-		if (found && sc_mul(q1c[k] - q1p, q1c[k] - q1p) >= best_cost)
-			break;
 		if (!ctx_init(&x, a, &st.w, (const sc_t(*)[3])st.rt, q1c[k]))
 			continue;
 		if (x.viol15 > 0) {
@@ -545,14 +575,10 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 		}
 		if (!ctx_search(&s, &x, preferred_swivel(&st, &x), cand))
 			continue;
-		cost = posture_dist(cand, pref);
-		if (!found || cost < best_cost) {
-			found = true;
-			best_cost = cost;
-			q_copy(q, cand);
-		}
-		if (k == 0)
-			break; /* the J1 nearest the preferred works */
+		/* the J1 nearest the preferred that works */
+		found = true;
+		q_copy(q, cand);
+		break;
 	}
 	if (!found)
 		found = rescue(&s, &st, q);
