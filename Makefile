@@ -91,6 +91,7 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_LIB_OBJ) $(LIBIK)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) -lm
 
 # ---- top-level targets --------------------------------------------------------
+.SECONDARY:
 .PHONY: all test check-core bench install clean run
 all: $(LIBIK) $(TOOLS)
 

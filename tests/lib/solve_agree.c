@@ -1,0 +1,43 @@
+// SPDX-License-Identifier: MIT
+/*
+ * solve_agree.c - one IK solve through plain doubles, built once per scalar
+ * type (solve_agree_d, solve_agree_f) so a test can compare the builds.
+ */
+#include "ik/ik.h"
+
+unsigned SCN(solve_agree)(const double dims[4], const double p[3], const double r[4], double q_out[ARM_DOF],
+			  double fk_out[7]);
+
+unsigned SCN(solve_agree)(const double dims[4], const double p[3], const double r[4], double q_out[ARM_DOF],
+			  double fk_out[7])
+{
+	struct arm_dims d = { sc_from_double(dims[0]), sc_from_double(dims[1]), sc_from_double(dims[2]),
+			      sc_from_double(dims[3]) };
+	struct vec3 pp = { sc_from_double(p[0]), sc_from_double(p[1]), sc_from_double(p[2]) };
+	struct quat rr = { sc_from_double(r[0]), sc_from_double(r[1]), sc_from_double(r[2]), sc_from_double(r[3]) };
+	struct arm a;
+	struct ik_opts o;
+	struct ik_target t;
+	struct ik_result res;
+	struct dq fk;
+	struct vec3 pc;
+	sc_t q[ARM_DOF];
+	int i;
+
+	arm_init(&a, ARM_RIGHT, &d, NULL);
+	ik_default_opts(&o);
+	ik_target_set(&t, &pp, &rr);
+	ik_solve(&a, &ik_kin_dq, &t, NULL, &o, q, &res);
+	arm_fk(&a, q, &fk);
+	dq_translation(&fk, &pc);
+	for (i = 0; i < ARM_DOF; i++)
+		q_out[i] = sc_to_double(q[i]);
+	fk_out[0] = sc_to_double(pc.x);
+	fk_out[1] = sc_to_double(pc.y);
+	fk_out[2] = sc_to_double(pc.z);
+	fk_out[3] = sc_to_double(fk.r.w);
+	fk_out[4] = sc_to_double(fk.r.x);
+	fk_out[5] = sc_to_double(fk.r.y);
+	fk_out[6] = sc_to_double(fk.r.z);
+	return res.flags;
+}
