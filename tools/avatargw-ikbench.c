@@ -32,7 +32,7 @@ static void usage(FILE *f)
 {
 	fprintf(f, "usage: avatargw-ikbench --targets FILE [--mode reset|warm] [--dims S,A,F,H]\n"
 		   "       [--limits FILE] [--solver dq|matrix|newton-dq|newton-matrix]\n"
-		   "       [--solutions OUT.csv] [--quiet]\n"
+		   "       [--solutions OUT.csv] [--quiet] [--iteration-cost]\n"
 		   "--limits FILE: 8 lines 'lo hi' in degrees (J1..J8); '#' starts a comment\n");
 }
 
@@ -153,6 +153,39 @@ static double wrap_deg(double a)
 	return a - 180.0;
 }
 
+/*
+ * The cost of one Newton iteration alone (kinematics, Jacobian, error twist
+ * and the least-squares step) at the generating postures of the file, each
+ * against the next row's target: the median of 21 passes, in ns.
+ */
+static int iteration_cost(const struct arm *arm, const struct ik_kin *kin, const struct row *rows, size_t n)
+{
+	double pass_ns[21], sink = 0;
+	size_t i, m = n < 2000 ? n : 2000;
+	int p;
+
+	for (p = 0; p < 21; p++) {
+		double t0 = now_ns();
+
+		for (i = 0; i + 1 < m; i++) {
+			struct ik_target t;
+			struct ik_err err;
+			struct vec3 pp = { rows[i + 1].p[0], rows[i + 1].p[1], rows[i + 1].p[2] };
+			struct quat r = { rows[i + 1].r[0], rows[i + 1].r[1], rows[i + 1].r[2], rows[i + 1].r[3] };
+			double J[6][ARM_DOF], V[6], x[ARM_DOF];
+
+			ik_target_set(&t, &pp, &r);
+			kin->eval(arm, rows[i].q, &t, J, V, &err);
+			ik_lsq_step((const double(*)[ARM_DOF])J, V, NULL, x);
+			sink += x[0] + err.pos;
+		}
+		pass_ns[p] = (now_ns() - t0) / (double)(m - 1);
+	}
+	qsort(pass_ns, 21, sizeof(pass_ns[0]), cmp_double);
+	printf("{\"kinematics\":\"%s\",\"iteration_ns\":%.1f,\"check\":%.3g}\n", kin->name, pass_ns[10], sink);
+	return 0;
+}
+
 int main(int argc, char **argv)
 {
 	static const struct option longopts[] = {
@@ -160,6 +193,7 @@ int main(int argc, char **argv)
 		{ "dims", required_argument, NULL, 'd' },    { "limits", required_argument, NULL, 'l' },
 		{ "solver", required_argument, NULL, 's' },  { "solutions", required_argument, NULL, 'o' },
 		{ "quiet", no_argument, NULL, 'q' },         { "help", no_argument, NULL, 'h' },
+		{ "iteration-cost", no_argument, NULL, 'i' },
 		{ NULL, 0, NULL, 0 },
 	};
 	const char *targets = NULL, *mode = "reset", *solver = "dq", *solutions = NULL, *limits = NULL;
@@ -171,11 +205,11 @@ int main(int argc, char **argv)
 	struct row *rows;
 	size_t n, i, strict = 0, loose = 0, inlim = 0, jumps = 0, reached = 0;
 	double *us, *ev, iters = 0, evals = 0, prev[ARM_DOF] = { 0 }, (*sol)[ARM_DOF];
-	bool warm, newton, quiet = false;
+	bool warm, newton, quiet = false, iter_cost = false;
 	int c;
 
 	arm_default_limits(&lim);
-	while ((c = getopt_long(argc, argv, "t:m:d:l:s:o:qh", longopts, NULL)) != -1) {
+	while ((c = getopt_long(argc, argv, "t:m:d:l:s:o:qhi", longopts, NULL)) != -1) {
 		switch (c) {
 		case 't':
 			targets = optarg;
@@ -201,6 +235,9 @@ int main(int argc, char **argv)
 			break;
 		case 'q':
 			quiet = true;
+			break;
+		case 'i':
+			iter_cost = true;
 			break;
 		case 'h':
 			usage(stdout);
@@ -242,6 +279,8 @@ int main(int argc, char **argv)
 		opts.max_step = 0; /* the paper's plain step */
 		opts.max_iter = 100;
 	}
+	if (iter_cost)
+		return iteration_cost(&arm, kin, rows, n);
 	us = calloc(n, sizeof(*us));
 	ev = calloc(n, sizeof(*ev));
 	sol = calloc(n, sizeof(*sol));
