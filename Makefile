@@ -112,8 +112,12 @@ bench: $(BUILD)/avatargw-ikbench
 run: bench
 
 install: all
-	install -d $(DESTDIR)$(PREFIX)/bin
+	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib $(DESTDIR)$(PREFIX)/include/avatargw/ik
+	install -d $(DESTDIR)$(PREFIX)/share/avatargw
 	install -m 0755 $(TOOLS) $(DESTDIR)$(PREFIX)/bin/
+	install -m 0644 $(LIBIK) $(DESTDIR)$(PREFIX)/lib/
+	install -m 0644 include/ik/*.h $(DESTDIR)$(PREFIX)/include/avatargw/ik/
+	install -m 0644 config/limits-human.txt $(DESTDIR)$(PREFIX)/share/avatargw/
 
 clean:
 	rm -rf build build-san
