@@ -6,14 +6,16 @@
  */
 #include "ik/calib.h"
 
-/* unknowns of calib_poses(), in this order */
+/*
+ * Unknowns of calib_poses(), in this order. The lateral offset of the head
+ * sensor is not one of them: it is eliminated per reading (see obs_eqs()).
+ */
 enum {
 	U_S,     /* Shoulder */
 	U_A,     /* Arm */
 	U_L,     /* Forearm + Hand: straight arms cannot tell them apart */
 	U_NECK,  /* head sensor height above the chain origin */
-	U_HR,    /* head sensor offset along chest x */
-	U_HF,    /* ... along chest y */
+	U_HF,    /* head sensor offset along chest y */
 	U_N
 };
 
@@ -97,6 +99,9 @@ int calib_paper(const struct vec3 *head, const struct vec3 *rhand, const struct 
 		return CALIB_EINVAL;
 	if (!head || !rhand || !v3_finite(head) || !v3_finite(rhand))
 		return fail(out, CALIB_EINVAL);
+	if (head_q && (!sc_isfinite(head_q->w) || !sc_isfinite(head_q->x) || !sc_isfinite(head_q->y) ||
+		       !sc_isfinite(head_q->z)))
+		return fail(out, CALIB_EINVAL);
 	if (mode != CALIB_HAND_RATIO && mode != CALIB_HAND_WRIST)
 		return fail(out, CALIB_EINVAL);
 	v3_sub(rhand, head, &d);
@@ -137,27 +142,44 @@ int calib_paper(const struct vec3 *head, const struct vec3 *rhand, const struct 
 }
 
 /*
- * The three equations (x, y, z) one hand gives: rows of the design matrix
- * over the unknowns U_*, and the measured hand - head in the reading's
- * upright frame.
+ * The six equations of one reading: rows over the unknowns U_*, measured
+ * values (hand - head in the reading's upright frame, r right, l left) and
+ * the head's lateral offset c of this reading.
+ *
+ * The heading of a reading comes from its two hands, so a hand that is a
+ * little ahead of the other turns the frame and shifts both hands sideways
+ * by the angle times their forward distance: with arms forward, 2 mm of
+ * noise over a 20 cm shoulder width moves them 6 mm. A lateral offset per
+ * reading takes that up; it is eliminated by using the half difference
+ * (r.x - l.x) / 2 = S + cx (A + L) for both x equations, and
+ * c = -(r.x + l.x) / 2 is the offset. The y and z equations are one per hand.
  */
-static void obs_rows(const struct pose_coef *c, sc_t side, sc_t row[3][U_N])
+static void obs_eqs(const struct pose_coef *pc, const struct vec3 *r, const struct vec3 *l, sc_t row[6][U_N],
+		    sc_t val[6], sc_t *c)
 {
+	sc_t hx = sc_mul(r->x - l->x, SC_C(0.5));
 	int k, j;
 
-	for (k = 0; k < 3; k++)
+	for (k = 0; k < 6; k++)
 		for (j = 0; j < U_N; j++)
 			row[k][j] = 0;
-	row[0][U_S] = side;
-	row[0][U_A] = sc_mul(side, SC_C(c->cx));
-	row[0][U_L] = sc_mul(side, SC_C(c->cx));
-	row[0][U_HR] = SC_C(-1);
-	row[1][U_A] = SC_C(c->ya);
-	row[1][U_L] = SC_C(c->yl);
-	row[1][U_HF] = SC_C(-1);
-	row[2][U_A] = SC_C(c->za);
-	row[2][U_L] = SC_C(c->zl);
-	row[2][U_NECK] = SC_C(-1);
+	for (k = 0; k < 2; k++) {
+		row[k][U_S] = SC_C(1);
+		row[k][U_A] = SC_C(pc->cx);
+		row[k][U_L] = SC_C(pc->cx);
+		val[k] = hx;
+		row[2 + k][U_A] = SC_C(pc->ya);
+		row[2 + k][U_L] = SC_C(pc->yl);
+		row[2 + k][U_HF] = SC_C(-1);
+		row[4 + k][U_A] = SC_C(pc->za);
+		row[4 + k][U_L] = SC_C(pc->zl);
+		row[4 + k][U_NECK] = SC_C(-1);
+	}
+	val[2] = r->y;
+	val[3] = l->y;
+	val[4] = r->z;
+	val[5] = l->z;
+	*c = -sc_mul(r->x + l->x, SC_C(0.5));
 }
 
 /* hand - head of one reading in its upright frame (x from the left to the right hand) */
@@ -242,6 +264,7 @@ static bool chol_solve(sc_t N[U_N][U_N], sc_t b[U_N], sc_t u[U_N])
 int calib_poses(const struct calib_obs *obs, size_t n, sc_t hand, struct calib_body *out)
 {
 	sc_t N[U_N][U_N] = { { 0 } }, b[U_N] = { 0 }, u[U_N];
+	sc_t csum = 0;
 	sc_acc_t ss = sc_acc0();
 	size_t i;
 	int j, k, m, err;
@@ -258,28 +281,24 @@ int calib_poses(const struct calib_obs *obs, size_t n, sc_t hand, struct calib_b
 			return fail(out, CALIB_EINVAL);
 	}
 
-	/* normal equations: N = sum row row^T, b = sum row v */
+	/* normal equations: N = sum row row^T, b = sum row val */
 	for (i = 0; i < n; i++) {
-		struct vec3 hv[2];
-		int s;
+		struct vec3 r, l;
+		sc_t row[6][U_N], val[6], c;
 
-		err = obs_local(&obs[i], &hv[0], &hv[1]);
+		err = obs_local(&obs[i], &r, &l);
 		if (err)
 			return fail(out, err);
-		for (s = 0; s < 2; s++) {
-			sc_t row[3][U_N];
-			sc_t v[3] = { hv[s].x, hv[s].y, hv[s].z };
-
-			obs_rows(&pose_coef[obs[i].pose], s ? SC_C(-1) : SC_C(1), row);
-			for (k = 0; k < 3; k++)
-				for (j = 0; j < U_N; j++) {
-					if (row[k][j] == 0)
-						continue;
-					b[j] += sc_mul(row[k][j], v[k]);
-					for (m = 0; m < U_N; m++)
-						N[j][m] += sc_mul(row[k][j], row[k][m]);
-				}
-		}
+		obs_eqs(&pose_coef[obs[i].pose], &r, &l, row, val, &c);
+		csum += c;
+		for (k = 0; k < 6; k++)
+			for (j = 0; j < U_N; j++) {
+				if (row[k][j] == 0)
+					continue;
+				b[j] += sc_mul(row[k][j], val[k]);
+				for (m = 0; m < U_N; m++)
+					N[j][m] += sc_mul(row[k][j], row[k][m]);
+			}
 	}
 	if (!chol_solve(N, b, u))
 		return fail(out, CALIB_EUNDERDET);
@@ -292,7 +311,7 @@ int calib_poses(const struct calib_obs *obs, size_t n, sc_t hand, struct calib_b
 	out->dims.forearm = u[U_L] - hand;
 	out->dims.hand = hand;
 	out->neck = u[U_NECK];
-	out->head_right = u[U_HR];
+	out->head_right = sc_div(csum, SC_C(n));
 	out->head_fwd = u[U_HF];
 	if (!len_ok(out->dims.shoulder) || !len_ok(out->dims.arm) || !len_ok(out->dims.forearm) || !len_ok(out->neck) ||
 	    !(sc_abs(out->head_right) <= CALIB_MAX_LEN) || !(sc_abs(out->head_fwd) <= CALIB_MAX_LEN))
@@ -300,24 +319,19 @@ int calib_poses(const struct calib_obs *obs, size_t n, sc_t hand, struct calib_b
 
 	/* residual: a second pass, exact rather than from the normal equations */
 	for (i = 0; i < n; i++) {
-		struct vec3 hv[2];
-		int s;
+		struct vec3 r, l;
+		sc_t row[6][U_N], val[6], c;
 
-		obs_local(&obs[i], &hv[0], &hv[1]);
-		for (s = 0; s < 2; s++) {
-			sc_t row[3][U_N];
-			sc_t v[3] = { hv[s].x, hv[s].y, hv[s].z };
+		obs_local(&obs[i], &r, &l);
+		obs_eqs(&pose_coef[obs[i].pose], &r, &l, row, val, &c);
+		for (k = 0; k < 6; k++) {
+			sc_acc_t e = sc_acc0();
+			sc_t res;
 
-			obs_rows(&pose_coef[obs[i].pose], s ? SC_C(-1) : SC_C(1), row);
-			for (k = 0; k < 3; k++) {
-				sc_acc_t e = sc_acc0();
-				sc_t r;
-
-				for (j = 0; j < U_N; j++)
-					e = sc_mac(e, row[k][j], u[j]);
-				r = sc_acc_get(e) - v[k];
-				ss = sc_mac(ss, r, r);
-			}
+			for (j = 0; j < U_N; j++)
+				e = sc_mac(e, row[k][j], u[j]);
+			res = sc_acc_get(e) - val[k];
+			ss = sc_mac(ss, res, res);
 		}
 	}
 	out->rms = sc_sqrt(sc_div(sc_acc_get(ss), SC_C(6 * n)));

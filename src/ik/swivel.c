@@ -60,32 +60,39 @@ static sc_t violation(sc_t v, sc_t lo, sc_t hi)
 
 /*
  * M = Ry(a) Rx(b) Rz(c): both angle triples, the one inside the limits
- * [i0, i0+2] chosen (else the one violating them least). Returns the violation.
+ * [i0, i0+2] chosen (else the one violating them least). Returns the
+ * violation. Without full it stops as soon as both triples are known to
+ * violate (the cheap middle angle first); out is then incomplete.
  */
-static sc_t euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, sc_t out[3])
+static sc_t euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, bool full, sc_t out[3])
 {
-	sc_t b = sc_asin(-m[1][2]);
-	sc_t a = sc_atan2(m[0][2], m[2][2]);
-	sc_t c = sc_atan2(m[1][0], m[1][1]);
-	sc_t alt[3], v0, v1;
-	int k;
+	const sc_t *lo = &lim->lo[i0], *hi = &lim->hi[i0];
+	sc_t b = sc_asin(-m[1][2]), a, c, b1, a1, c1, v0, v1;
 
-	out[0] = a;
+	b1 = sc_wrap_pi(SC_PI - b);
+	v0 = violation(b, lo[1], hi[1]);
+	v1 = violation(b1, lo[1], hi[1]);
 	out[1] = b;
-	out[2] = c;
-	alt[0] = sc_wrap_pi(a + SC_PI);
-	alt[1] = sc_wrap_pi(SC_PI - b);
-	alt[2] = sc_wrap_pi(c + SC_PI);
-	v0 = v1 = 0;
-	for (k = 0; k < 3; k++) {
-		v0 += violation(out[k], lim->lo[i0 + k], lim->hi[i0 + k]);
-		v1 += violation(alt[k], lim->lo[i0 + k], lim->hi[i0 + k]);
-	}
+	if (!full && v0 > 0 && v1 > 0)
+		return sc_min(v0, v1);
+	a = sc_atan2(m[0][2], m[2][2]);
+	a1 = sc_wrap_pi(a + SC_PI);
+	v0 += violation(a, lo[0], hi[0]);
+	v1 += violation(a1, lo[0], hi[0]);
+	out[0] = a;
+	if (!full && v0 > 0 && v1 > 0)
+		return sc_min(v0, v1);
+	c = sc_atan2(m[1][0], m[1][1]);
+	c1 = sc_wrap_pi(c + SC_PI);
+	v0 += violation(c, lo[2], hi[2]);
+	v1 += violation(c1, lo[2], hi[2]);
 	if (v1 < v0) {
-		for (k = 0; k < 3; k++)
-			out[k] = alt[k];
+		out[0] = a1;
+		out[1] = b1;
+		out[2] = c1;
 		return v1;
 	}
+	out[2] = c;
 	return v0;
 }
 
@@ -201,7 +208,7 @@ static sc_t ctx_eval(const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF], bool
 	R[0][0] = x4.x, R[0][1] = y4.x, R[0][2] = z4.x;
 	R[1][0] = x4.y, R[1][1] = y4.y, R[1][2] = z4.y;
 	R[2][0] = x4.z, R[2][1] = y4.z, R[2][2] = z4.z;
-	v = euler_yxz((const sc_t(*)[3])R, &a->lim, 1, &q[1]);
+	v = euler_yxz((const sc_t(*)[3])R, &a->lim, 1, full, &q[1]);
 	q[0] = x->q1;
 	q[4] = x->q5;
 	if (v > 0 && !full)
@@ -212,7 +219,7 @@ static sc_t ctx_eval(const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF], bool
 	R5[2][0] = 0, R5[2][1] = x->s5, R5[2][2] = x->c5;
 	m3_mul((const sc_t(*)[3])R, (const sc_t(*)[3])R5, R15);
 	m3_tmul((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, M);
-	v += euler_yxz((const sc_t(*)[3])M, &a->lim, 5, &q[5]);
+	v += euler_yxz((const sc_t(*)[3])M, &a->lim, 5, full, &q[5]);
 	return v + x->viol15;
 }
 
@@ -301,9 +308,10 @@ static bool ctx_refine(struct search *s, const struct swivel_ctx *x, sc_t lo, sc
  * Feasible swivel closest to phi0 at this J1: phi0 itself, else the nearest
  * feasible sample on either side, refined by bisection toward phi0 (so that
  * a posture held against a limit follows the limit smoothly). If no sample
- * is feasible, the neighbourhood of the least violating one is searched.
+ * is feasible and refine is set, the neighbourhood of the least violating
+ * one is searched.
  */
-static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, sc_t q[ARM_DOF])
+static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, bool refine, sc_t q[ARM_DOF])
 {
 	int samples = s->o->swivel_samples > 2 ? s->o->swivel_samples : 2;
 	sc_t step = sc_div(2 * SC_PI, SC_C(samples)), t[ARM_DOF], v, bv, bphi;
@@ -339,7 +347,7 @@ static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, 
 			return true;
 		}
 	}
-	return ctx_refine(s, x, bphi - step, bphi + step, q);
+	return refine && ctx_refine(s, x, bphi - step, bphi + step, q);
 }
 
 /* what does not change while J1 and the swivel are searched */
@@ -573,12 +581,18 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 			search_eval(&s, &x, preferred_swivel(&st, &x), cand, true);
 			continue;
 		}
-		if (!ctx_search(&s, &x, preferred_swivel(&st, &x), cand))
+		/* the nearest J1 is searched closely, the others coarsely first */
+		if (!ctx_search(&s, &x, preferred_swivel(&st, &x), k == 0, cand))
 			continue;
-		/* the J1 nearest the preferred that works */
 		found = true;
 		q_copy(q, cand);
 		break;
+	}
+	if (!found && nc > 1 && ctx_init(&x, a, &st.w, (const sc_t(*)[3])st.rt, s.best_q1) && x.viol15 == 0) {
+		/* around the least violating sample of the coarse scans */
+		sc_t step = sc_div(2 * SC_PI, SC_C(o->swivel_samples > 2 ? o->swivel_samples : 2));
+
+		found = ctx_refine(&s, &x, s.best_phi - step, s.best_phi + step, q);
 	}
 	if (!found)
 		found = rescue(&s, &st, q);
