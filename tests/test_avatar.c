@@ -1,0 +1,217 @@
+// SPDX-License-Identifier: MIT
+/*
+ * test_avatar.c - the whole upper body on real motion capture: the chest
+ * placed from the head, both arms solved toward the hand sensors of a CMU
+ * clip (../shared/mocap), tracking frame to frame.
+ */
+#define _DEFAULT_SOURCE
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "ik/avatar.h"
+
+#define MAXF 1400
+
+struct frame {
+	double head[7], lhand[7], rhand[7]; /* x y z qw qx qy qz */
+};
+
+static struct frame frames[MAXF];
+
+static int col(char *hdr, const char *name)
+{
+	char buf[4096], *tok, *save;
+	int i = 0;
+
+	snprintf(buf, sizeof(buf), "%s", hdr);
+	for (tok = strtok_r(buf, ",\r\n", &save); tok; tok = strtok_r(NULL, ",\r\n", &save), i++)
+		if (!strcmp(tok, name))
+			return i;
+	return -1;
+}
+
+static size_t load_clip(const char *clip)
+{
+	static const char *part[7] = { "_x", "_y", "_z", "_qw", "_qx", "_qy", "_qz" };
+	static const char *who[3] = { "head", "lhand", "rhand" };
+	char path[512], hdr[4096], line[4096];
+	int idx[3][7];
+	size_t n = 0;
+	FILE *f;
+
+	snprintf(path, sizeof(path), "%s/mocap/csv/%s.csv", SHARED_DIR, clip);
+	f = fopen(path, "r");
+	if (!f) {
+		fail_msg("cannot open %s (the shared mocap files are needed)", path);
+		return 0;
+	}
+	assert_non_null(fgets(hdr, sizeof(hdr), f));
+	for (int w = 0; w < 3; w++)
+		for (int k = 0; k < 7; k++) {
+			char name[32];
+
+			snprintf(name, sizeof(name), "%s%s", who[w], part[k]);
+			idx[w][k] = col(hdr, name);
+			assert_true(idx[w][k] >= 0);
+		}
+	while (n < MAXF && fgets(line, sizeof(line), f)) {
+		double v[80];
+		char *s = line;
+		int j = 0;
+
+		while (j < 80 && *s && *s != '\n') {
+			v[j++] = strtod(s, &s);
+			if (*s == ',')
+				s++;
+		}
+		for (int k = 0; k < 7; k++) {
+			frames[n].head[k] = v[idx[0][k]];
+			frames[n].lhand[k] = v[idx[1][k]];
+			frames[n].rhand[k] = v[idx[2][k]];
+		}
+		n++;
+	}
+	fclose(f);
+	return n;
+}
+
+static void pose_dq(const double p[7], struct dq *out)
+{
+	struct quat r = { p[3], p[4], p[5], p[6] };
+	struct vec3 t = { p[0], p[1], p[2] };
+
+	quat_normalize(&r, &r);
+	dq_from_rt(&r, &t, out);
+}
+
+/*
+ * cmu_141_16 ("wave hello") with the clip's own segment lengths (its JSON:
+ * paper_model_m and in_chest_frame_median_m; the hand sensor sits at the
+ * wrist, so H = 0).
+ */
+static void test_wave_clip(void **state)
+{
+	const struct arm_dims dims = { 0.1732, 0.2886, 0.1955, 0.0 };
+	const struct vec3 head_off = { 0.008, -0.0386, 0.0967 };
+	struct avatar av;
+	struct ik_opts o;
+	struct avatar_pose pose[2];
+	size_t n = load_clip("cmu_141_16"), i, reached[2] = { 0, 0 };
+
+	(void)state;
+	assert_true(n > 200);
+	avatar_init(&av, &dims, &head_off, NULL);
+	ik_default_opts(&o);
+	for (i = 0; i < n; i++) {
+		struct avatar_pose *cur = &pose[i & 1], *prev = i ? &pose[(i - 1) & 1] : NULL;
+		struct dq head, hand[2];
+
+		pose_dq(frames[i].head, &head);
+		pose_dq(frames[i].rhand, &hand[ARM_RIGHT]);
+		pose_dq(frames[i].lhand, &hand[ARM_LEFT]);
+		avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], prev, cur);
+		for (int side = 0; side < 2; side++) {
+			struct dq fk, world;
+			struct vec3 p, s;
+
+			assert_true(arm_in_limits(&av.arm[side], cur->q[side]));
+			assert_false(cur->res[side].flags & IK_BAD_TARGET);
+			arm_fk(&av.arm[side], cur->q[side], &fk);
+			dq_mul(&cur->chest, &fk, &world);
+			dq_translation(&world, &p);
+			dq_translation(&hand[side], &s);
+			assert_true(isfinite(p.x) && isfinite(p.y) && isfinite(p.z));
+			if (cur->res[side].flags & IK_REACHED) {
+				reached[side]++;
+				assert_true(fabs(p.x - s.x) < 1e-3 && fabs(p.y - s.y) < 1e-3 && fabs(p.z - s.z) < 1e-3);
+			} else {
+				assert_true(cur->res[side].flags & IK_UNREACHABLE);
+			}
+		}
+	}
+	/* the clip's own lengths: almost every frame is reachable inside the limits */
+	print_message("reached: right %zu/%zu, left %zu/%zu\n", reached[ARM_RIGHT], n, reached[ARM_LEFT], n);
+	assert_true(reached[ARM_RIGHT] >= n * 9 / 10);
+	assert_true(reached[ARM_LEFT] >= n * 9 / 10);
+}
+
+/* the chest follows the head's yaw only, and sits head_offset below it */
+static void test_chest_from_head(void **state)
+{
+	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.08 };
+	const struct vec3 off = { 0.0, -0.05, 0.25 };
+	struct avatar av;
+	struct dq head, chest;
+	struct quat yaw, pitch, r;
+	struct vec3 t = { 1.0, 2.0, 1.6 }, co, expect;
+	sc_t y;
+
+	(void)state;
+	avatar_init(&av, &dims, &off, NULL);
+	quat_from_axis_angle(&(struct vec3){ 0, 0, 1 }, 0.7, &yaw);
+	quat_from_axis_angle(&(struct vec3){ 1, 0, 0 }, -0.4, &pitch); /* looking down */
+	quat_mul(&yaw, &pitch, &r);
+	dq_from_rt(&r, &t, &head);
+	assert_true(avatar_chest(&av, &head, &chest, &y));
+	assert_true(fabs(y - 0.7) < 1e-12);
+	assert_true(quat_angle_between(&chest.r, &yaw) < 1e-12);
+	dq_translation(&chest, &co);
+	quat_rotate(&yaw, &off, &expect);
+	assert_true(fabs(co.x - (t.x - expect.x)) < 1e-12);
+	assert_true(fabs(co.y - (t.y - expect.y)) < 1e-12);
+	assert_true(fabs(co.z - (t.z - expect.z)) < 1e-12);
+	/* yaw past pi wraps; upside down has no yaw */
+	quat_from_axis_angle(&(struct vec3){ 0, 0, 1 }, 3.5, &yaw);
+	assert_true(fabs(avatar_head_yaw(&yaw) - (3.5 - 2 * M_PI)) < 1e-12);
+	assert_true(avatar_head_yaw(&(struct quat){ 0, 1, 0, 0 }) == 0);
+	/* a NaN head: no chest, previous frame kept */
+	head.r.w = NAN;
+	assert_false(avatar_chest(&av, &head, &chest, &y));
+}
+
+/* a hand sensor lost (NaN): that arm keeps its posture, flagged; the other arm is solved */
+static void test_lost_hand(void **state)
+{
+	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.08 };
+	const struct vec3 off = { 0, 0, 0.25 };
+	struct avatar av;
+	struct ik_opts o;
+	struct avatar_pose p0, p1;
+	struct dq head, lh, rh;
+	struct quat id = { 1, 0, 0, 0 };
+
+	(void)state;
+	avatar_init(&av, &dims, &off, NULL);
+	ik_default_opts(&o);
+	dq_from_rt(&id, &(struct vec3){ 0, 0, 1.6 }, &head);
+	dq_from_rt(&id, &(struct vec3){ -0.18, 0.34, 1.6 - 0.25 - 0.30 }, &lh);
+	dq_from_rt(&id, &(struct vec3){ 0.18, 0.34, 1.6 - 0.25 - 0.30 }, &rh);
+	avatar_solve(&av, &ik_kin_dq, &o, &head, &lh, &rh, NULL, &p0);
+	assert_true(p0.res[ARM_LEFT].flags & IK_REACHED);
+	assert_true(p0.res[ARM_RIGHT].flags & IK_REACHED);
+	for (int i = 0; i < ARM_DOF; i++)
+		assert_true(fabs(p0.q[ARM_LEFT][i]) < 1e-6 && fabs(p0.q[ARM_RIGHT][i]) < 1e-6);
+	rh.r.x = NAN;
+	avatar_solve(&av, &ik_kin_dq, &o, &head, &lh, &rh, &p0, &p1);
+	assert_true(p1.res[ARM_RIGHT].flags & IK_BAD_TARGET);
+	assert_memory_equal(p1.q[ARM_RIGHT], p0.q[ARM_RIGHT], sizeof(p0.q[ARM_RIGHT]));
+	assert_true(p1.res[ARM_LEFT].flags & IK_REACHED);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_chest_from_head),
+		cmocka_unit_test(test_lost_hand),
+		cmocka_unit_test(test_wave_clip),
+	};
+
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}
