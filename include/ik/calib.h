@@ -141,10 +141,12 @@ int calib_paper(const struct vec3 *head, const struct vec3 *rhand, const struct 
  * alike make it the person's right), y = z x x. So the person may face any
  * way and turn or step between poses; only hand - head differences are
  * used. In that frame the model says, for the right hand (left: x mirrored),
- *   hand - head = p_pose(S, A, F + H) - (head_right, head_fwd, Neck),
- * with p_pose the positions listed at enum calib_pose: linear in the six
- * unknowns S, A, F + H, Neck, head_right, head_fwd, solved by least squares
- * (normal equations, Cholesky). Assumes the shoulders symmetric about the
+ *   hand - head = p_pose(S, A, F + H) - (c, head_fwd, Neck),
+ * with p_pose the positions listed at enum calib_pose. The lateral offset c
+ * is taken per reading (it also absorbs the small turn of the frame when
+ * one hand is ahead of the other) and head_right is its mean; the rest is
+ * linear in the five unknowns S, A, F + H, Neck, head_fwd, solved by least
+ * squares (normal equations, Cholesky). Assumes the shoulders symmetric about the
  * chain origin and fixed while posing, both arms of the same lengths (the
  * fit averages them), straight arms where the pose says straight, and the
  * trunk upright. rms tells how well the readings fit the model: a few

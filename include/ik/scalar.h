@@ -42,8 +42,8 @@ typedef double sc_acc_t;
 #define SC_NAME "double"
 /* smallest step worth taking and the solver's default tolerances */
 #define SC_EPS SC_C(1e-12)
-#define SC_TOL_POS SC_C(1e-9)
-#define SC_TOL_ROT SC_C(1e-9)
+#define SC_TOL_POS SC_C(1e-7)
+#define SC_TOL_ROT SC_C(1e-7)
 #define sc_builtin_sqrt __builtin_sqrt
 #define sc_builtin_sin __builtin_sin
 #define sc_builtin_cos __builtin_cos
