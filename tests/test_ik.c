@@ -333,6 +333,27 @@ static void test_bad_targets(void **state)
 	}
 }
 
+/* large angles wrap before they are judged or clamped */
+static void test_wrap_and_clamp(void **state)
+{
+	struct arm a;
+	double q[ARM_DOF] = { 40.0, 0, 0, 0, 0, 0, 0, 0 }; /* 40 rad = 131.8 deg after wrapping */
+
+	(void)state;
+	arm_init(&a, ARM_RIGHT, &bench_dims, NULL);
+	assert_false(arm_in_limits(&a, q));
+	assert_true(arm_clamp(&a, q));
+	assert_true(fabs(q[0] - 30 * DEG) < 1e-12);
+	q[0] = -40.0; /* -131.8 deg */
+	arm_clamp(&a, q);
+	assert_true(fabs(q[0] + 30 * DEG) < 1e-12);
+	q[0] = 2 * M_PI + 0.1;
+	arm_clamp(&a, q);
+	assert_true(fabs(q[0] - 0.1) < 1e-12);
+	q[0] = NAN;
+	assert_false(arm_in_limits(&a, q));
+}
+
 /* extreme but finite input: never a NaN, always within the caps */
 static void test_garbage_fuzz(void **state)
 {
@@ -494,6 +515,7 @@ int main(void)
 		cmocka_unit_test(test_left_arm),
 		cmocka_unit_test(test_unreachable),
 		cmocka_unit_test(test_bad_targets),
+		cmocka_unit_test(test_wrap_and_clamp),
 		cmocka_unit_test(test_garbage_fuzz),
 		cmocka_unit_test(test_lsq_step),
 		cmocka_unit_test(test_float_agrees),

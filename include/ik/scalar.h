@@ -224,14 +224,24 @@ static inline sc_t sc_acos(sc_t x)
 	return sc_atan2(sc_sqrt(SC_C(1) - sc_mul(x, x)), x);
 }
 
-/* wrap an angle to [-pi, pi); garbage (non-finite or huge) becomes 0 */
+/* wrap an angle to [-pi, pi); non-finite or absurd (|a| > 1e6) input becomes 0 */
 static inline sc_t sc_wrap_pi(sc_t a)
 {
-	if (!sc_isfinite(a) || a > SC_C(30) || a < SC_C(-30))
+	if (!sc_isfinite(a) || a > SC_C(1e6) || a < SC_C(-1e6))
 		return SC_C(0);
-	while (a >= SC_PI)
+	if (a >= SC_PI || a < -SC_PI) {
+		/* a - 2 pi floor((a + pi) / 2 pi) */
+		sc_t n = (a + SC_PI) / (2 * SC_PI);
+		long k = (long)n;
+
+		if (n < 0 && (sc_t)k != n)
+			k--;
+		a -= (sc_t)k * (2 * SC_PI);
+	}
+	/* rounding at the edges */
+	if (a >= SC_PI)
 		a -= 2 * SC_PI;
-	while (a < -SC_PI)
+	if (a < -SC_PI)
 		a += 2 * SC_PI;
 	return a;
 }

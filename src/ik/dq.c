@@ -400,7 +400,7 @@ void dq_log(const struct dq *a, struct screw *out)
 	if (th > 16 * SC_EPS) {
 		sc_t k = sc_div(SC_C(1), th);
 
-		out->angle = th;
+		out->angle = sc_min(th, SC_PI);
 		out->l = (struct vec3){ sc_mul(tw.w.x, k), sc_mul(tw.w.y, k), sc_mul(tw.w.z, k) };
 		out->d = v3_dot(&out->l, &tw.v);
 		/* v = angle m + d l */

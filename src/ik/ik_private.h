@@ -13,8 +13,8 @@ static inline sc_t ik_log_k(sc_t x, sc_t s, sc_t c)
 {
 	sc_t x2 = sc_mul(x, x);
 
-	if (x < SC_C(0.25)) {
-		/* series: 1/12 + x^2/180 + x^4/1890 + x^6/18900 */
+	if (x < SC_C(0.05)) {
+		/* series: 1/12 + x^2/180 + x^4/1890 + x^6/18900 (next term below 1e-16 here) */
 		sc_t p = SC_C(1.0 / 18900);
 
 		p = sc_mul(p, x2) + SC_C(1.0 / 1890);

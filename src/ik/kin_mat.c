@@ -76,17 +76,23 @@ static void rot_log(const sc_t R[3][3], struct vec3 *w, sc_t *angle)
 	} else if (th < SC_PI - SC_C(1e-3)) {
 		f = sc_div(th, s2);
 	} else {
-		/* near pi: the axis from the symmetric part, R + I = 2 n n^T + O(pi - th) */
+		/* near pi: the axis from the symmetric part, n n^T = (R + R^T - 2 c I) / (2 (1 - c)) */
 		struct vec3 n;
-		int m = R[0][0] >= R[1][1] && R[0][0] >= R[2][2] ? 0 : (R[1][1] >= R[2][2] ? 1 : 2);
-		sc_t d = sc_sqrt(sc_mul(R[m][m] + SC_C(1), SC_C(0.5))), h = sc_div(SC_C(0.25), d);
+		sc_t inv = sc_div(SC_C(1), 2 * (SC_C(1) - cth)), d2[3], h;
+		int i2, m;
 
-		if (m == 0)
-			n = (struct vec3){ d, sc_mul(R[0][1] + R[1][0], h), sc_mul(R[0][2] + R[2][0], h) };
-		else if (m == 1)
-			n = (struct vec3){ sc_mul(R[0][1] + R[1][0], h), d, sc_mul(R[1][2] + R[2][1], h) };
-		else
-			n = (struct vec3){ sc_mul(R[0][2] + R[2][0], h), sc_mul(R[1][2] + R[2][1], h), d };
+		for (i2 = 0; i2 < 3; i2++)
+			d2[i2] = sc_mul(2 * R[i2][i2] - 2 * cth, inv);
+		m = d2[0] >= d2[1] && d2[0] >= d2[2] ? 0 : (d2[1] >= d2[2] ? 1 : 2);
+		h = sc_sqrt(d2[m]);
+		/* off-diagonal: n_m n_j = (R_mj + R_jm) inv */
+		{
+			sc_t k2 = sc_div(inv, h), nn[3];
+
+			for (i2 = 0; i2 < 3; i2++)
+				nn[i2] = i2 == m ? h : sc_mul(R[m][i2] + R[i2][m], k2);
+			n = (struct vec3){ nn[0], nn[1], nn[2] };
+		}
 		if (v3_dot(&n, &k) < 0)
 			n = (struct vec3){ -n.x, -n.y, -n.z };
 		*w = (struct vec3){ sc_mul(th, n.x), sc_mul(th, n.y), sc_mul(th, n.z) };
