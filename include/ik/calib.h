@@ -43,21 +43,25 @@ extern "C" {
 
 /* return codes */
 #define CALIB_OK 0
-#define CALIB_EINVAL (-1)       /* NULL, NaN or inf input, negative hand length, no observation */
-#define CALIB_EDEGENERATE (-2)  /* coincident sensors, no usable heading, tilted head sensor */
-#define CALIB_EUNDERDET (-3)    /* the poses given do not determine every dimension */
-#define CALIB_ERANGE (-4)       /* a dimension came out <= 0 or absurdly large: wrong pose or sensors swapped */
+#define CALIB_EINVAL (-1)      /* NULL, NaN or inf input, negative hand length, no observation */
+#define CALIB_EDEGENERATE (-2) /* coincident sensors, no usable heading, tilted head sensor */
+#define CALIB_EUNDERDET (-3)   /* the poses given do not determine every dimension */
+#define CALIB_ERANGE (-4)      /* a dimension came out <= 0 or absurdly large: wrong pose or sensors swapped */
 
 /* Upper bound on any estimated length, metres; larger means garbage in. */
 #define CALIB_MAX_LEN SC_C(3)
 
-/* Result of a calibration. */
+/*
+ * Result of a calibration. dims and head_offset are what avatar_init()
+ * takes. head_offset is the head sensor's position relative to the chain
+ * origin in the chest frame, with the head looking straight ahead:
+ * x = sideways (+ right), y = forward (+ ahead of the shoulder line),
+ * z = the paper's Neck. The paper's model has x = y = 0.
+ */
 struct calib_body {
-	struct arm_dims dims; /* S, A, F, H, metres, shared by both arms */
-	sc_t neck;            /* Neck: head sensor height above the chain origin */
-	sc_t head_right;      /* head sensor offset from the chain origin along chest x (0 in the paper) */
-	sc_t head_fwd;        /* the same along chest y, + = ahead of the shoulder line (0 in the paper) */
-	sc_t rms;             /* rms residual of the fit per coordinate, metres (0: exact or not a fit) */
+	struct arm_dims dims;	 /* S, A, F, H, metres, shared by both arms */
+	struct vec3 head_offset; /* (head_right, head_fwd, Neck) */
+	sc_t rms;		 /* rms residual of the fit per coordinate, metres (0: exact or not a fit) */
 };
 
 /* How the paper's heuristic splits the forward distance of the hand sensor. */
@@ -114,7 +118,7 @@ struct calib_obs {
  * F = 0.7 |dy| and H = 0.3 |dy| (RATIO) or F = |dy| and H = 0 (WRIST).
  * Assumes the head sensor straight above the chain origin, Neck = A (the
  * paper's "heuristic ergonomic" ratios), both arms alike. rms = 0,
- * head_right = head_fwd = 0.
+ * head_offset = (0, 0, Neck).
  *
  * Returns CALIB_OK; CALIB_EINVAL for NULL or non-finite input or an unknown
  * mode; CALIB_EDEGENERATE if the two sensors are less than 1 cm apart or
@@ -141,11 +145,11 @@ int calib_paper(const struct vec3 *head, const struct vec3 *rhand, const struct 
  * alike make it the person's right), y = z x x. So the person may face any
  * way and turn or step between poses; only hand - head differences are
  * used. In that frame the model says, for the right hand (left: x mirrored),
- *   hand - head = p_pose(S, A, F + H) - (c, head_fwd, Neck),
+ *   hand - head = p_pose(S, A, F + H) - (c, head_offset.y, head_offset.z),
  * with p_pose the positions listed at enum calib_pose. The lateral offset c
  * is taken per reading (it also absorbs the small turn of the frame when
- * one hand is ahead of the other) and head_right is its mean; the rest is
- * linear in the five unknowns S, A, F + H, Neck, head_fwd, solved by least
+ * one hand is ahead of the other) and head_offset.x is its mean; the rest
+ * is linear in the five unknowns S, A, F + H, Neck, head_fwd, solved by least
  * squares (normal equations, Cholesky). Assumes the shoulders symmetric about the
  * chain origin and fixed while posing, both arms of the same lengths (the
  * fit averages them), straight arms where the pose says straight, and the
@@ -164,8 +168,10 @@ int calib_poses(const struct calib_obs *obs, size_t n, sc_t hand, struct calib_b
  * The heading of a sensor in the avatar convention: the unit horizontal
  * vector of its x axis (the person's right), written to *right; the
  * forward direction is then (-right.y, right.x, 0). Returns false (and
- * writes (1, 0, 0)) if q is not finite or zero, or its x axis is within
- * about 6 degrees of vertical.
+ * writes (1, 0, 0) unless right is NULL) if q is NULL, not finite or zero,
+ * or its x axis is within about 6 degrees of vertical. For an upright head
+ * this agrees with avatar_head_yaw(); they differ when the head is both
+ * pitched and rolled (by 5 degrees at 30 degrees pitch and 20 roll).
  */
 bool calib_heading(const struct quat *q, struct vec3 *right);
 

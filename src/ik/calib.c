@@ -11,11 +11,11 @@
  * sensor is not one of them: it is eliminated per reading (see obs_eqs()).
  */
 enum {
-	U_S,     /* Shoulder */
-	U_A,     /* Arm */
-	U_L,     /* Forearm + Hand: straight arms cannot tell them apart */
-	U_NECK,  /* head sensor height above the chain origin */
-	U_HF,    /* head sensor offset along chest y */
+	U_S,	/* Shoulder */
+	U_A,	/* Arm */
+	U_L,	/* Forearm + Hand: straight arms cannot tell them apart */
+	U_NECK, /* head sensor height above the chain origin */
+	U_HF,	/* head sensor offset along chest y */
 	U_N
 };
 
@@ -62,7 +62,7 @@ static bool len_ok(sc_t l)
 static int fail(struct calib_body *out, int err)
 {
 	if (out)
-		*out = (struct calib_body){ .dims = { 0, 0, 0, 0 }, .neck = 0, .head_right = 0, .head_fwd = 0, .rms = 0 };
+		*out = (struct calib_body){ .dims = { 0, 0, 0, 0 }, .head_offset = { 0, 0, 0 }, .rms = 0 };
 	return err;
 }
 
@@ -73,8 +73,10 @@ bool calib_heading(const struct quat *q, struct vec3 *right)
 	struct vec3 x;
 	sc_t h;
 
+	if (!right)
+		return false;
 	*right = ex;
-	if (!sc_isfinite(q->w) || !sc_isfinite(q->x) || !sc_isfinite(q->y) || !sc_isfinite(q->z))
+	if (!q || !sc_isfinite(q->w) || !sc_isfinite(q->x) || !sc_isfinite(q->y) || !sc_isfinite(q->z))
 		return false;
 	if (!quat_normalize(q, &u))
 		return false;
@@ -99,8 +101,8 @@ int calib_paper(const struct vec3 *head, const struct vec3 *rhand, const struct 
 		return CALIB_EINVAL;
 	if (!head || !rhand || !v3_finite(head) || !v3_finite(rhand))
 		return fail(out, CALIB_EINVAL);
-	if (head_q && (!sc_isfinite(head_q->w) || !sc_isfinite(head_q->x) || !sc_isfinite(head_q->y) ||
-		       !sc_isfinite(head_q->z)))
+	if (head_q &&
+	    (!sc_isfinite(head_q->w) || !sc_isfinite(head_q->x) || !sc_isfinite(head_q->y) || !sc_isfinite(head_q->z)))
 		return fail(out, CALIB_EINVAL);
 	if (mode != CALIB_HAND_RATIO && mode != CALIB_HAND_WRIST)
 		return fail(out, CALIB_EINVAL);
@@ -132,9 +134,7 @@ int calib_paper(const struct vec3 *head, const struct vec3 *rhand, const struct 
 		out->dims.forearm = sc_abs(dy);
 		out->dims.hand = 0;
 	}
-	out->neck = out->dims.arm;
-	out->head_right = 0;
-	out->head_fwd = 0;
+	out->head_offset = (struct vec3){ 0, 0, out->dims.arm };
 	out->rms = 0;
 	if (!len_ok(out->dims.shoulder) || !len_ok(out->dims.arm) || !len_ok(out->dims.forearm))
 		return fail(out, CALIB_ERANGE);
@@ -310,11 +310,12 @@ int calib_poses(const struct calib_obs *obs, size_t n, sc_t hand, struct calib_b
 	out->dims.arm = u[U_A];
 	out->dims.forearm = u[U_L] - hand;
 	out->dims.hand = hand;
-	out->neck = u[U_NECK];
-	out->head_right = sc_div(csum, SC_C(n));
-	out->head_fwd = u[U_HF];
-	if (!len_ok(out->dims.shoulder) || !len_ok(out->dims.arm) || !len_ok(out->dims.forearm) || !len_ok(out->neck) ||
-	    !(sc_abs(out->head_right) <= CALIB_MAX_LEN) || !(sc_abs(out->head_fwd) <= CALIB_MAX_LEN))
+	out->head_offset.x = sc_div(csum, SC_C(n));
+	out->head_offset.y = u[U_HF];
+	out->head_offset.z = u[U_NECK];
+	if (!len_ok(out->dims.shoulder) || !len_ok(out->dims.arm) || !len_ok(out->dims.forearm) ||
+	    !len_ok(out->head_offset.z) || !(sc_abs(out->head_offset.x) <= CALIB_MAX_LEN) ||
+	    !(sc_abs(out->head_offset.y) <= CALIB_MAX_LEN))
 		return fail(out, CALIB_ERANGE);
 
 	/* residual: a second pass, exact rather than from the normal equations */
