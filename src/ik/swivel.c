@@ -17,26 +17,10 @@
  */
 #include "ik/ik.h"
 
-/* 3x3 helpers, row-major m[row][col] */
-static void m3_mul(const sc_t a[3][3], const sc_t b[3][3], sc_t out[3][3])
+/* (a^T b)[i][j] for row-major 3x3 matrices */
+static sc_t m3_tdot(const sc_t a[3][3], const sc_t b[3][3], int i, int j)
 {
-	int i, j;
-
-	for (i = 0; i < 3; i++)
-		for (j = 0; j < 3; j++)
-			out[i][j] = sc_acc_get(
-				sc_mac(sc_mac(sc_mac(sc_acc0(), a[i][0], b[0][j]), a[i][1], b[1][j]), a[i][2], b[2][j]));
-}
-
-/* out = a^T b */
-static void m3_tmul(const sc_t a[3][3], const sc_t b[3][3], sc_t out[3][3])
-{
-	int i, j;
-
-	for (i = 0; i < 3; i++)
-		for (j = 0; j < 3; j++)
-			out[i][j] = sc_acc_get(
-				sc_mac(sc_mac(sc_mac(sc_acc0(), a[0][i], b[0][j]), a[1][i], b[1][j]), a[2][i], b[2][j]));
+	return sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), a[0][i], b[0][j]), a[1][i], b[1][j]), a[2][i], b[2][j]));
 }
 
 static sc_t v3_normalize(struct vec3 *v)
@@ -106,6 +90,7 @@ struct swivel_ctx {
 	struct vec3 c;  /* centre of the circle (from the shoulder) */
 	sc_t r;         /* radius of the circle */
 	sc_t q1, q5, s5, c5;
+	sc_t inv_a;     /* 1 / A */
 	sc_t viol15;    /* limit violation of J1 and J5 */
 };
 
@@ -119,6 +104,7 @@ static bool ctx_init(struct swivel_ctx *x, const struct arm *a, const struct vec
 
 	x->a = a;
 	x->q1 = q1;
+	x->inv_a = sc_div(SC_C(1), A);
 	sc_sincos(q1, &s1, &c1);
 	dw = (struct vec3){ w->x - sc_mul(S, c1), w->y - sc_mul(S, s1), w->z };
 	x->u = (struct vec3){ sc_mul(c1, dw.x) + sc_mul(s1, dw.y), sc_mul(c1, dw.y) - sc_mul(s1, dw.x), dw.z };
@@ -182,9 +168,9 @@ static sc_t ctx_swivel_of(const struct swivel_ctx *x, const struct vec3 *x4)
 static sc_t ctx_eval(const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF], bool full)
 {
 	const struct arm *a = x->a;
-	sc_t sp, cp, R[3][3], R5[3][3], R15[3][3], M[3][3], v;
+	sc_t sp, cp, R[3][3], R15[3][3], M[3][3], v;
+	int i;
 	struct vec3 n, e, x4, y4, z4;
-	sc_t inv_a = sc_div(SC_C(1), a->dims.arm);
 
 	sc_sincos(phi, &sp, &cp);
 	n.x = sc_mul(cp, x->n1.x) + sc_mul(sp, x->n2.x);
@@ -193,17 +179,13 @@ static sc_t ctx_eval(const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF], bool
 	e.x = x->c.x + sc_mul(x->r, n.x);
 	e.y = x->c.y + sc_mul(x->r, n.y);
 	e.z = x->c.z + sc_mul(x->r, n.z);
-	/* upper-arm frame: -z along the upper arm, x the elbow axis */
-	z4 = (struct vec3){ -sc_mul(e.x, inv_a), -sc_mul(e.y, inv_a), -sc_mul(e.z, inv_a) };
-	v3_normalize(&z4);
+	/*
+	 * Upper-arm frame: -z along the upper arm, x the elbow axis. |e| = A,
+	 * and n, u^ are orthonormal, so z4 and x4 = n x u^ are unit vectors and
+	 * orthogonal (z4 lies in the plane of u^ and n) up to rounding.
+	 */
+	z4 = (struct vec3){ -sc_mul(e.x, x->inv_a), -sc_mul(e.y, x->inv_a), -sc_mul(e.z, x->inv_a) };
 	v3_cross(&n, &x->uh, &x4);
-	{
-		/* make x4 exactly orthogonal to z4 (they are, up to rounding) */
-		sc_t k = v3_dot(&x4, &z4);
-
-		x4 = (struct vec3){ x4.x - sc_mul(k, z4.x), x4.y - sc_mul(k, z4.y), x4.z - sc_mul(k, z4.z) };
-		v3_normalize(&x4);
-	}
 	v3_cross(&z4, &x4, &y4);
 	R[0][0] = x4.x, R[0][1] = y4.x, R[0][2] = z4.x;
 	R[1][0] = x4.y, R[1][1] = y4.y, R[1][2] = z4.y;
@@ -213,12 +195,22 @@ static sc_t ctx_eval(const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF], bool
 	q[4] = x->q5;
 	if (v > 0 && !full)
 		return v + x->viol15 + UPPER_PENALTY;
-	/* R15 = R Rx(q5), in the J1 frame; the wrist turns the rest */
-	R5[0][0] = SC_C(1), R5[0][1] = 0, R5[0][2] = 0;
-	R5[1][0] = 0, R5[1][1] = x->c5, R5[1][2] = -x->s5;
-	R5[2][0] = 0, R5[2][1] = x->s5, R5[2][2] = x->c5;
-	m3_mul((const sc_t(*)[3])R, (const sc_t(*)[3])R5, R15);
-	m3_tmul((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, M);
+	/*
+	 * The wrist turns M = R15^T Rt with R15 = R Rx(q5) (J1 frame). Rx only
+	 * mixes columns 1 and 2; of M only the five entries the Y-X-Z angles
+	 * read are needed.
+	 */
+	for (i = 0; i < 3; i++) {
+		R15[i][0] = R[i][0];
+		R15[i][1] = sc_mul(x->c5, R[i][1]) + sc_mul(x->s5, R[i][2]);
+		R15[i][2] = sc_mul(x->c5, R[i][2]) - sc_mul(x->s5, R[i][1]);
+	}
+	M[0][0] = M[0][1] = M[2][0] = M[2][1] = 0;
+	M[0][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 0, 2);
+	M[1][0] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 0);
+	M[1][1] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 1);
+	M[1][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 2);
+	M[2][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 2, 2);
 	v += euler_yxz((const sc_t(*)[3])M, &a->lim, 5, full, &q[5]);
 	return v + x->viol15;
 }
@@ -582,7 +574,8 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 			continue;
 		}
 		/* the nearest J1 is searched closely, the others coarsely first */
-		if (!ctx_search(&s, &x, preferred_swivel(&st, &x), k == 0, cand))
+		/* past the first J1, start where the wrist is nearest neutral: its limits are the tightest */
+		if (!ctx_search(&s, &x, k == 0 ? preferred_swivel(&st, &x) : ctx_swivel_hand(&x), k == 0, cand))
 			continue;
 		found = true;
 		q_copy(q, cand);
