@@ -1,7 +1,8 @@
 #!/bin/sh
 # SPDX-License-Identifier: MIT
 # make bench: the IK benchmark on the shared targets, every solver and mode,
-# one JSON line per run (kept in $BUILD/bench.jsonl) and a summary table.
+# one JSON line per configuration (the middle of 3 runs by median time, kept
+# in $BUILD/bench.jsonl) and a summary table.
 set -eu
 BUILD=${1:-build}
 SHARED=${2:-../shared}
@@ -15,11 +16,12 @@ for f in "$T" "$J"; do
 done
 echo "machine: $(uname -srm), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) cores; $(date -u +%Y-%m-%d)"
 : >"$OUT"
+# each configuration runs 3 times; the run with the middle median time is kept
 run() {
-	# set mode solver
 	set_name=$1
 	shift
-	line=$("$BENCH" --quiet "$@")
+	line=$(for i in 1 2 3; do "$BENCH" --quiet "$@"; done |
+		awk -F'"median_us":' '{split($2, a, ","); print a[1], $0}' | sort -n | sed -n 2p | cut -d' ' -f2-)
 	echo "$line" | sed "s/^{/{\"set\":\"$set_name\",/" >>"$OUT"
 }
 run random --targets "$T" --mode reset --solver dq
