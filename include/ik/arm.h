@@ -70,6 +70,7 @@ struct arm {
 	/* derived by arm_init(): local joint axis and translation after it */
 	struct vec3 axis[ARM_DOF];
 	struct vec3 trans[ARM_DOF];
+	sc_t lim_cs[ARM_DOF][4]; /* cos lo, sin lo, cos hi, sin hi: limit tests without atan2 */
 };
 
 #define arm_default_limits SCN(arm_default_limits)

@@ -47,6 +47,10 @@ void arm_init(struct arm *a, enum arm_side side, const struct arm_dims *dims, co
 		a->axis[i] = ax;
 		a->trans[i] = (struct vec3){ 0, 0, 0 };
 	}
+	for (i = 0; i < ARM_DOF; i++) {
+		sc_sincos(a->lim.lo[i], &a->lim_cs[i][1], &a->lim_cs[i][0]);
+		sc_sincos(a->lim.hi[i], &a->lim_cs[i][3], &a->lim_cs[i][2]);
+	}
 	a->trans[0].x = sc_mul(mirror, dims->shoulder);
 	a->trans[3].z = -dims->arm;
 	a->trans[4].y = dims->forearm;

@@ -80,6 +80,58 @@ static sc_t euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, 
 	return v0;
 }
 
+/*
+ * The same limit test without atan2, for the scans: the angle of the unit
+ * vector (c, s) against joint j's limits through sin(theta - lo) and
+ * sin(hi - theta). Returns 0 inside, else 1 - cos of the angle to the nearer
+ * limit (monotonic in that angle, which is all the search needs to rank).
+ */
+static sc_t arc_violation(const struct arm *a, int j, sc_t c, sc_t s)
+{
+	const sc_t *cs = a->lim_cs[j];
+	sc_t slo = sc_mul(cs[0], s) - sc_mul(cs[1], c);
+	sc_t shi = sc_mul(c, cs[3]) - sc_mul(s, cs[2]);
+	bool in;
+
+	if (a->lim.hi[j] - a->lim.lo[j] <= SC_PI)
+		in = slo >= 0 && shi >= 0;
+	else
+		in = slo >= 0 || shi >= 0;
+	if (in)
+		return 0;
+	return SC_C(1) - sc_max(sc_mul(c, cs[0]) + sc_mul(s, cs[1]), sc_mul(c, cs[2]) + sc_mul(s, cs[3])) + SC_EPS;
+}
+
+/*
+ * euler_yxz's verdict alone, cheaply: 0 if one branch of the Y-X-Z angles
+ * of m lies inside the limits [i0, i0+2], else a positive ranking value.
+ */
+static sc_t euler_fast(const sc_t m[3][3], const struct arm *a, int i0)
+{
+	sc_t sb = -m[1][2], cb = sc_sqrt(SC_C(1) - sc_mul(sb, sb)), best = SC_C(1e3);
+	int k;
+
+	for (k = 0; k < 2 && best > 0; k++) {
+		sc_t sg = k ? SC_C(-1) : SC_C(1), v, inv;
+
+		v = arc_violation(a, i0 + 1, sc_mul(sg, cb), sb);
+		if (v >= best)
+			continue;
+		if (cb < SC_C(1e-6)) {
+			/* gimbal lock: the outer two angles only add; the exact path decides */
+			best = v;
+			continue;
+		}
+		inv = sc_div(sg, cb);
+		v += arc_violation(a, i0, sc_mul(m[2][2], inv), sc_mul(m[0][2], inv));
+		if (v >= best)
+			continue;
+		v += arc_violation(a, i0 + 2, sc_mul(m[1][1], inv), sc_mul(m[1][0], inv));
+		best = sc_min(best, v);
+	}
+	return best;
+}
+
 /* what stays fixed while the swivel moves: one target, one J1 */
 struct swivel_ctx {
 	const struct arm *a;
@@ -190,11 +242,15 @@ static sc_t ctx_eval(const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF], bool
 	R[0][0] = x4.x, R[0][1] = y4.x, R[0][2] = z4.x;
 	R[1][0] = x4.y, R[1][1] = y4.y, R[1][2] = z4.y;
 	R[2][0] = x4.z, R[2][1] = y4.z, R[2][2] = z4.z;
-	v = euler_yxz((const sc_t(*)[3])R, &a->lim, 1, full, &q[1]);
 	q[0] = x->q1;
 	q[4] = x->q5;
-	if (v > 0 && !full)
-		return v + x->viol15 + UPPER_PENALTY;
+	if (!full) {
+		v = euler_fast((const sc_t(*)[3])R, a, 1);
+		if (v > 0)
+			return v + x->viol15 + UPPER_PENALTY;
+	} else {
+		v = euler_yxz((const sc_t(*)[3])R, &a->lim, 1, true, &q[1]);
+	}
 	/*
 	 * The wrist turns M = R15^T Rt with R15 = R Rx(q5) (J1 frame). Rx only
 	 * mixes columns 1 and 2; of M only the five entries the Y-X-Z angles
@@ -211,7 +267,16 @@ static sc_t ctx_eval(const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF], bool
 	M[1][1] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 1);
 	M[1][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 2);
 	M[2][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 2, 2);
-	v += euler_yxz((const sc_t(*)[3])M, &a->lim, 5, full, &q[5]);
+	if (!full) {
+		v = euler_fast((const sc_t(*)[3])M, a, 5);
+		if (v > 0)
+			return v + x->viol15;
+		/* inside: now the angles themselves */
+		euler_yxz((const sc_t(*)[3])R, &a->lim, 1, true, &q[1]);
+		euler_yxz((const sc_t(*)[3])M, &a->lim, 5, true, &q[5]);
+		return x->viol15;
+	}
+	v += euler_yxz((const sc_t(*)[3])M, &a->lim, 5, true, &q[5]);
 	return v + x->viol15;
 }
 
