@@ -213,18 +213,18 @@ static sc_t ctx_swivel_of(const struct swivel_ctx *x, const struct vec3 *x4)
 #define UPPER_PENALTY SC_C(4)
 
 /*
- * The posture at swivel phi; returns its limit violation (0: inside). With
+ * The posture at the swivel whose cosine and sine are cp, sp; returns its
+ * limit violation (0: inside). With
  * full false the wrist is skipped when the upper arm is already outside its
  * limits (the result is then only a bound, and q[5..7] are not written).
  */
-static sc_t ctx_eval(const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF], bool full)
+static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM_DOF], bool full)
 {
 	const struct arm *a = x->a;
-	sc_t sp, cp, R[3][3], R15[3][3], M[3][3], v;
+	sc_t R[3][3], R15[3][3], M[3][3], v;
 	int i;
 	struct vec3 n, e, x4, y4, z4;
 
-	sc_sincos(phi, &sp, &cp);
 	n.x = sc_mul(cp, x->n1.x) + sc_mul(sp, x->n2.x);
 	n.y = sc_mul(cp, x->n1.y) + sc_mul(sp, x->n2.y);
 	n.z = sc_mul(cp, x->n1.z) + sc_mul(sp, x->n2.z);
@@ -305,13 +305,14 @@ struct search {
 	sc_t best_q1, best_phi;
 };
 
-static sc_t search_eval(struct search *s, const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF], bool full)
+static sc_t search_eval_cs(struct search *s, const struct swivel_ctx *x, sc_t phi, sc_t cp, sc_t sp,
+			   sc_t q[ARM_DOF], bool full)
 {
 	sc_t v;
 
 	if (s->evals >= s->o->max_evals)
 		return SC_C(1e3); /* budget spent: nothing more is feasible */
-	v = ctx_eval(x, phi, q, full);
+	v = ctx_eval_cs(x, cp, sp, q, full);
 
 	s->evals++;
 	if (v < s->best_v) {
@@ -321,6 +322,14 @@ static sc_t search_eval(struct search *s, const struct swivel_ctx *x, sc_t phi, 
 		q_copy(s->best_q, q);
 	}
 	return v;
+}
+
+static sc_t search_eval(struct search *s, const struct swivel_ctx *x, sc_t phi, sc_t q[ARM_DOF], bool full)
+{
+	sc_t sp, cp;
+
+	sc_sincos(phi, &sp, &cp);
+	return search_eval_cs(s, x, phi, cp, sp, q, full);
 }
 
 /*
@@ -372,17 +381,30 @@ static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, 
 {
 	int samples = s->o->swivel_samples > 2 ? s->o->swivel_samples : 2;
 	sc_t step = sc_div(2 * SC_PI, SC_C(samples)), t[ARM_DOF], v, bv, bphi;
+	sc_t c0, s0, cs, ss, cf, sf, cb, sb;
 	int k, side, it;
 
-	bv = search_eval(s, x, phi0, q, false);
+	/* the samples' cosines and sines by rotation, forward (cf, sf) and back (cb, sb) */
+	sc_sincos(phi0, &s0, &c0);
+	sc_sincos(step, &ss, &cs);
+	cf = cb = c0;
+	sf = sb = s0;
+	bv = search_eval_cs(s, x, phi0, c0, s0, q, false);
 	if (bv == 0)
 		return true;
 	bphi = phi0;
 	for (k = 1; 2 * k <= samples; k++) {
+		sc_t nc = sc_mul(cf, cs) - sc_mul(sf, ss);
+
+		sf = sc_mul(sf, cs) + sc_mul(cf, ss);
+		cf = nc;
+		nc = sc_mul(cb, cs) + sc_mul(sb, ss);
+		sb = sc_mul(sb, cs) - sc_mul(cb, ss);
+		cb = nc;
 		for (side = -1; side <= 1; side += 2) {
 			sc_t lo, hi = phi0 + sc_mul(SC_C(side * k), step);
 
-			v = search_eval(s, x, hi, t, false);
+			v = side < 0 ? search_eval_cs(s, x, hi, cb, sb, t, false) : search_eval_cs(s, x, hi, cf, sf, t, false);
 			if (v > 0) {
 				if (v < bv)
 					bv = v, bphi = hi;
