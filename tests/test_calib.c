@@ -23,19 +23,10 @@
 #include "ik/avatar.h"
 #include "ik/calib.h"
 
+#include "testutil.h"
+
 #define DEG2RAD 0.017453292519943295
 
-static char ctx[200];
-
-#define set_ctx(...) snprintf(ctx, sizeof(ctx), __VA_ARGS__)
-
-#define assert_near(got, want, tol)                                                                                    \
-	do {                                                                                                           \
-		double g_ = (got), w_ = (want), t_ = (tol);                                                            \
-		if (!(fabs(g_ - w_) <= t_))                                                                            \
-			fail_msg("%s: %s = %.17g, want %s = %.17g (diff %.3g, tol %.3g)", ctx, #got, g_, #want, w_,    \
-				 fabs(g_ - w_), t_);                                                                   \
-	} while (0)
 
 #define assert_rc(got, want)                                                                                           \
 	do {                                                                                                           \
@@ -44,28 +35,6 @@ static char ctx[200];
 			fail_msg("%s: %s returned %d (%s), want %d (%s)", ctx, #got, g_, calib_strerror(g_), w_,       \
 				 calib_strerror(w_));                                                                  \
 	} while (0)
-
-/* ---- random numbers ---------------------------------------------------------- */
-
-static uint64_t rng_state;
-
-static void rng_seed(uint64_t s)
-{
-	rng_state = s ? s : 0x9e3779b97f4a7c15ull;
-}
-
-static double rnd(void) /* [0, 1) */
-{
-	rng_state ^= rng_state << 13;
-	rng_state ^= rng_state >> 7;
-	rng_state ^= rng_state << 17;
-	return (double)(rng_state >> 11) * (1.0 / 9007199254740992.0);
-}
-
-static double rnd_in(double lo, double hi)
-{
-	return lo + (hi - lo) * rnd();
-}
 
 /* ---- a synthetic person -------------------------------------------------------- */
 
@@ -78,13 +47,13 @@ struct person {
 /* a plausible adult, or a child, or a tall adult */
 static void random_person(struct person *p, double hand)
 {
-	p->dims.shoulder = rnd_in(0.10, 0.22);
-	p->dims.arm = rnd_in(0.20, 0.36);
-	p->dims.forearm = rnd_in(0.17, 0.30);
+	p->dims.shoulder = rnd_range(0.10, 0.22);
+	p->dims.arm = rnd_range(0.20, 0.36);
+	p->dims.forearm = rnd_range(0.17, 0.30);
 	p->dims.hand = hand;
-	p->neck = rnd_in(0.06, 0.30);
-	p->head_right = rnd_in(-0.03, 0.03);
-	p->head_fwd = rnd_in(-0.06, 0.12);
+	p->neck = rnd_range(0.06, 0.30);
+	p->head_right = rnd_range(-0.03, 0.03);
+	p->head_fwd = rnd_range(-0.06, 0.12);
 }
 
 /* joint angles of the standard poses (arm.h: q = 0 is the paper's initial pose) */
@@ -116,8 +85,8 @@ struct place {
 
 static void random_place(struct place *w)
 {
-	w->yaw = rnd_in(-3.1, 3.1);
-	w->t = (struct vec3){ rnd_in(-2, 2), rnd_in(-2, 2), rnd_in(0.9, 1.6) };
+	w->yaw = rnd_range(-3.1, 3.1);
+	w->t = (struct vec3){ rnd_range(-2, 2), rnd_range(-2, 2), rnd_range(0.9, 1.6) };
 }
 
 static void to_world(const struct place *w, const struct vec3 *c, struct vec3 *out)
@@ -158,9 +127,9 @@ static void make_obs(const struct person *p, enum calib_pose pose, const struct 
 
 static void jitter(struct vec3 *v, double a)
 {
-	v->x += rnd_in(-a, a);
-	v->y += rnd_in(-a, a);
-	v->z += rnd_in(-a, a);
+	v->x += rnd_range(-a, a);
+	v->y += rnd_range(-a, a);
+	v->z += rnd_range(-a, a);
 }
 
 static void assert_body_zero(const struct calib_body *b)
@@ -254,7 +223,7 @@ static void test_paper_exact(void **state)
 		/* facing +y as the paper wants: no head orientation needed */
 		set_ctx("paper person %d, world aligned", k);
 		w.yaw = 0;
-		w.t = (struct vec3){ rnd_in(-2, 2), rnd_in(-2, 2), 1.2 };
+		w.t = (struct vec3){ rnd_range(-2, 2), rnd_range(-2, 2), 1.2 };
 		make_obs(&p, CALIB_POSE_INITIAL, &w, &o);
 		assert_rc(calib_paper(&o.head, &o.rhand, NULL, CALIB_HAND_RATIO, &b), CALIB_OK);
 		assert_body(&b, &p, 1e-12);
@@ -396,7 +365,7 @@ static void test_poses_exact(void **state)
 	(void)state;
 	rng_seed(2);
 	for (k = 0; k < 300; k++) {
-		const double hand = (k % 3 == 0) ? 0 : rnd_in(0, 0.1);
+		const double hand = (k % 3 == 0) ? 0 : rnd_range(0, 0.1);
 		struct person p;
 		size_t s, i;
 
@@ -494,7 +463,8 @@ static void test_poses_noise(void **state)
 		set_ctx("noisy trial %d", k);
 		assert_rc(calib_poses(o, 3, 0, &b), CALIB_OK);
 		assert_body(&b, &p, 0.006);
-		assert_true(b.rms > 0 && b.rms < 0.002);
+		/* each residual is a difference of two readings: within 4 mm per coordinate */
+		assert_true(b.rms > 0 && b.rms < 0.004);
 		rms_sum += b.rms;
 		e[0] = b.dims.shoulder - p.dims.shoulder;
 		e[1] = b.dims.arm - p.dims.arm;
@@ -546,9 +516,9 @@ static void test_poses_posing_error(void **state)
 			for (j = 0; j < 2; j++) {
 				arm_init(&a, j ? ARM_LEFT : ARM_RIGHT, &p.dims, NULL);
 				pose_q(set_ifd[i], q);
-				q[1] += rnd_in(-3, 3) * DEG2RAD;
-				q[2] += rnd_in(-3, 3) * DEG2RAD;
-				q[4] += rnd_in(-3, 3) * DEG2RAD;
+				q[1] += rnd_range(-3, 3) * DEG2RAD;
+				q[2] += rnd_range(-3, 3) * DEG2RAD;
+				q[4] += rnd_range(-3, 3) * DEG2RAD;
 				if (q[4] < -90 * DEG2RAD)
 					q[4] = -180 * DEG2RAD - q[4]; /* no hyperextension: mirror back */
 				arm_fk(&a, q, &ee);

@@ -19,22 +19,13 @@
 
 #include "ik/dq.h"
 
+#include "testutil.h"
+
 #define PI 3.14159265358979323846
 
 /* ---- checks ---------------------------------------------------------------- */
 
 /* what the current loop iteration is checking, printed on failure */
-static char ctx[200];
-
-#define set_ctx(...) snprintf(ctx, sizeof(ctx), __VA_ARGS__)
-
-#define assert_near(got, want, tol)                                                                                    \
-	do {                                                                                                           \
-		double g_ = (got), w_ = (want), t_ = (tol);                                                            \
-		if (!(fabs(g_ - w_) <= t_))                                                                            \
-			fail_msg("%s: %s = %.17g, want %s = %.17g (diff %.3g, tol %.3g)", ctx, #got, g_, #want, w_,    \
-				 fabs(g_ - w_), t_);                                                                   \
-	} while (0)
 
 #define assert_ctx(cond)                                                                                               \
 	do {                                                                                                           \
@@ -88,30 +79,6 @@ static char ctx[200];
 		assert_finite((a).d.z);                                                                                \
 	} while (0)
 
-/* ---- deterministic random numbers (xorshift64*) ---------------------------- */
-
-static uint64_t rng_state;
-
-static void rng_seed(uint64_t s)
-{
-	rng_state = s * 0x9e3779b97f4a7c15ull + 0x2545f4914f6cdd1dull;
-	if (!rng_state)
-		rng_state = 1;
-}
-
-/* uniform in [0, 1) */
-static double rnd(void)
-{
-	rng_state ^= rng_state >> 12;
-	rng_state ^= rng_state << 25;
-	rng_state ^= rng_state >> 27;
-	return (double)((rng_state * 0x2545f4914f6cdd1dull) >> 11) * (1.0 / 9007199254740992.0);
-}
-
-static double rnd_range(double lo, double hi)
-{
-	return lo + (hi - lo) * rnd();
-}
 
 static struct vec3 rnd_vec(double scale)
 {

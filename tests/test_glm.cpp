@@ -32,6 +32,8 @@ extern "C" {
 
 #include "ik/arm.h"
 
+#include "testutil.h"
+
 typedef glm::tdualquat<double> gdq;
 
 static const double pi = 3.14159265358979323846;
@@ -39,17 +41,6 @@ static const double bench_dims[4] = { 0.18, 0.30, 0.26, 0.08 };
 
 /* ---- checks ---------------------------------------------------------------- */
 
-static char ctx[200];
-
-#define set_ctx(...) snprintf(ctx, sizeof(ctx), __VA_ARGS__)
-
-#define assert_near(got, want, tol)                                                                                    \
-	do {                                                                                                           \
-		double g_ = (got), w_ = (want), t_ = (tol);                                                            \
-		if (!(std::fabs(g_ - w_) <= t_))                                                                       \
-			fail_msg("%s: %s = %.17g, want %s = %.17g (diff %.3g, tol %.3g)", ctx, #got, g_, #want, w_,    \
-				 std::fabs(g_ - w_), t_);                                                              \
-	} while (0)
 
 /* ours and GLM's hold the same eight numbers, up to the sign of the whole */
 static void assert_same_dq(const struct dq *a, const gdq &g, double tol)
@@ -74,29 +65,6 @@ static void assert_same_mat4(const double m[4][4], const glm::dmat4 &g, double t
 			assert_near(m[r][c], g[c][r], tol);
 }
 
-/* ---- deterministic random numbers (xorshift64*) ---------------------------- */
-
-static uint64_t rng_state;
-
-static void rng_seed(uint64_t s)
-{
-	rng_state = s * 0x9e3779b97f4a7c15ull + 0x2545f4914f6cdd1dull;
-	if (!rng_state)
-		rng_state = 1;
-}
-
-static double rnd(void)
-{
-	rng_state ^= rng_state >> 12;
-	rng_state ^= rng_state << 25;
-	rng_state ^= rng_state >> 27;
-	return (double)((rng_state * 0x2545f4914f6cdd1dull) >> 11) * (1.0 / 9007199254740992.0);
-}
-
-static double rnd_range(double lo, double hi)
-{
-	return lo + (hi - lo) * rnd();
-}
 
 static glm::dvec3 rnd_dvec3(double scale)
 {
