@@ -45,38 +45,21 @@ static sc_t violation(sc_t v, sc_t lo, sc_t hi)
 /*
  * M = Ry(a) Rx(b) Rz(c): both angle triples, the one inside the limits
  * [i0, i0+2] chosen (else the one violating them least). Returns the
- * violation. Without full it stops as soon as both triples are known to
- * violate (the cheap middle angle first); out is then incomplete.
+ * violation in radians.
  */
-static sc_t euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, bool full, sc_t out[3])
+static sc_t euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, sc_t out[3])
 {
 	const sc_t *lo = &lim->lo[i0], *hi = &lim->hi[i0];
-	sc_t b = sc_asin(-m[1][2]), a, c, b1, a1, c1, v0, v1;
+	sc_t b = sc_asin(-m[1][2]), a = sc_atan2(m[0][2], m[2][2]), c = sc_atan2(m[1][0], m[1][1]);
+	sc_t a1 = sc_wrap_pi(a + SC_PI), b1 = sc_wrap_pi(SC_PI - b), c1 = sc_wrap_pi(c + SC_PI);
+	sc_t v0 = violation(a, lo[0], hi[0]) + violation(b, lo[1], hi[1]) + violation(c, lo[2], hi[2]);
+	sc_t v1 = violation(a1, lo[0], hi[0]) + violation(b1, lo[1], hi[1]) + violation(c1, lo[2], hi[2]);
 
-	b1 = sc_wrap_pi(SC_PI - b);
-	v0 = violation(b, lo[1], hi[1]);
-	v1 = violation(b1, lo[1], hi[1]);
-	out[1] = b;
-	if (!full && v0 > 0 && v1 > 0)
-		return sc_min(v0, v1);
-	a = sc_atan2(m[0][2], m[2][2]);
-	a1 = sc_wrap_pi(a + SC_PI);
-	v0 += violation(a, lo[0], hi[0]);
-	v1 += violation(a1, lo[0], hi[0]);
-	out[0] = a;
-	if (!full && v0 > 0 && v1 > 0)
-		return sc_min(v0, v1);
-	c = sc_atan2(m[1][0], m[1][1]);
-	c1 = sc_wrap_pi(c + SC_PI);
-	v0 += violation(c, lo[2], hi[2]);
-	v1 += violation(c1, lo[2], hi[2]);
 	if (v1 < v0) {
-		out[0] = a1;
-		out[1] = b1;
-		out[2] = c1;
+		out[0] = a1, out[1] = b1, out[2] = c1;
 		return v1;
 	}
-	out[2] = c;
+	out[0] = a, out[1] = b, out[2] = c;
 	return v0;
 }
 
@@ -249,7 +232,7 @@ static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM
 		if (v > 0)
 			return v + x->viol15 + UPPER_PENALTY;
 	} else {
-		v = euler_yxz((const sc_t(*)[3])R, &a->lim, 1, true, &q[1]);
+		v = euler_yxz((const sc_t(*)[3])R, &a->lim, 1, &q[1]);
 	}
 	/*
 	 * The wrist turns M = R15^T Rt with R15 = R Rx(q5) (J1 frame). Rx only
@@ -272,11 +255,11 @@ static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM
 		if (v > 0)
 			return v + x->viol15;
 		/* inside: now the angles themselves */
-		euler_yxz((const sc_t(*)[3])R, &a->lim, 1, true, &q[1]);
-		euler_yxz((const sc_t(*)[3])M, &a->lim, 5, true, &q[5]);
+		euler_yxz((const sc_t(*)[3])R, &a->lim, 1, &q[1]);
+		euler_yxz((const sc_t(*)[3])M, &a->lim, 5, &q[5]);
 		return x->viol15;
 	}
-	v += euler_yxz((const sc_t(*)[3])M, &a->lim, 5, true, &q[5]);
+	v += euler_yxz((const sc_t(*)[3])M, &a->lim, 5, &q[5]);
 	return v + x->viol15;
 }
 
