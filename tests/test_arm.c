@@ -40,13 +40,6 @@ void agree_fk_f(int left, const double dims[4], const double q[ARM_DOF], double 
 			fail_msg("%s: %s is false", ctx, #cond);                                                       \
 	} while (0)
 
-#define assert_v3_near(a, b, tol)                                                                                      \
-	do {                                                                                                           \
-		assert_near((a).x, (b).x, (tol));                                                                      \
-		assert_near((a).y, (b).y, (tol));                                                                      \
-		assert_near((a).z, (b).z, (tol));                                                                      \
-	} while (0)
-
 /* same transform: equal up to the sign of the whole dual quaternion */
 static void assert_dq_same(const struct dq *a, const struct dq *b, double tol)
 {

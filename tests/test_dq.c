@@ -40,21 +40,6 @@
 			fail_msg("%s: %s = %g is not finite", ctx, #x, g_);                                            \
 	} while (0)
 
-#define assert_v3_near(a, b, tol)                                                                                      \
-	do {                                                                                                           \
-		assert_near((a).x, (b).x, (tol));                                                                      \
-		assert_near((a).y, (b).y, (tol));                                                                      \
-		assert_near((a).z, (b).z, (tol));                                                                      \
-	} while (0)
-
-#define assert_quat_near(a, b, tol)                                                                                    \
-	do {                                                                                                           \
-		assert_near((a).w, (b).w, (tol));                                                                      \
-		assert_near((a).x, (b).x, (tol));                                                                      \
-		assert_near((a).y, (b).y, (tol));                                                                      \
-		assert_near((a).z, (b).z, (tol));                                                                      \
-	} while (0)
-
 /* a and b stand for the same transform: equal up to the sign of the whole dual quaternion */
 #define assert_dq_same(a, b, tol)                                                                                      \
 	do {                                                                                                           \

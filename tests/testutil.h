@@ -45,4 +45,19 @@ static char ctx[200];
 				 fabs(g_ - w_), t_);                                                                   \
 	} while (0)
 
+#define assert_v3_near(a, b, tol)                                                                                      \
+	do {                                                                                                           \
+		assert_near((a).x, (b).x, (tol));                                                                      \
+		assert_near((a).y, (b).y, (tol));                                                                      \
+		assert_near((a).z, (b).z, (tol));                                                                      \
+	} while (0)
+
+#define assert_quat_near(a, b, tol)                                                                                    \
+	do {                                                                                                           \
+		assert_near((a).w, (b).w, (tol));                                                                      \
+		assert_near((a).x, (b).x, (tol));                                                                      \
+		assert_near((a).y, (b).y, (tol));                                                                      \
+		assert_near((a).z, (b).z, (tol));                                                                      \
+	} while (0)
+
 #endif /* AVATARGW_TESTUTIL_H */

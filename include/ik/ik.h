@@ -121,13 +121,12 @@ unsigned ik_solve(const struct arm *a, const struct ik_kin *kin, const struct ik
 void ik_rest_posture(const struct arm *a, sc_t q[ARM_DOF]);
 /*
  * The closed-form part on its own: searches J1 and the swivel for a posture
- * inside the limits that reaches t exactly. With seeded, the search starts at
- * pref's J1 and elbow plane (continuity with the previous frame); without,
- * at pref's J1 and the swivel that keeps the wrist nearest neutral. Returns
- * true and writes q if one was found, else writes the least violating
- * posture seen; evals counts the postures tried.
+ * inside the limits that reaches t exactly, starting at pref's J1 and elbow
+ * plane (the previous frame's, or the rest posture's). Returns true and
+ * writes q if one was found, else writes the least violating posture seen;
+ * evals counts the postures tried.
  */
-bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t pref[ARM_DOF], bool seeded,
+bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t pref[ARM_DOF],
 		     const struct ik_opts *o, sc_t q[ARM_DOF], int *evals);
 
 #ifdef __cplusplus

@@ -356,7 +356,7 @@ unsigned ik_solve(const struct arm *a, const struct ik_kin *kin, const struct ik
 		if (err_ok(&res->err, o))
 			goto done;
 	}
-	if (ik_swivel_solve(a, t, pref, seed != NULL, o, q, &res->evals))
+	if (ik_swivel_solve(a, t, pref, o, q, &res->evals))
 		res->flags |= IK_ANALYTIC;
 	arm_clamp(a, q);
 	newton_limited(a, kin, t, o, 0, q, res);

@@ -418,13 +418,8 @@ struct swivel_target {
 	struct vec3 w;   /* wrist centre, right-arm chest frame */
 	sc_t rt[3][3];   /* target rotation, right-arm chest frame */
 	struct vec3 x4p; /* preferred elbow axis, J1 frame */
-	bool seeded;     /* prefer the seed's swivel (else: wrist nearest neutral) */
 };
 
-static sc_t preferred_swivel(const struct swivel_target *st, const struct swivel_ctx *x)
-{
-	return (st->seeded || 1) ? ctx_swivel_of(x, &st->x4p) : ctx_swivel_hand(x);
-}
 
 static int yaw_candidates(const struct swivel_target *st, sc_t q1p, int samples, sc_t out[], int max);
 
@@ -597,7 +592,7 @@ static int yaw_candidates(const struct swivel_target *st, sc_t q1p, int samples,
 	return m;
 }
 
-bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t pref[ARM_DOF], bool seeded,
+bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t pref[ARM_DOF],
 		     const struct ik_opts *o, sc_t q[ARM_DOF], int *evals)
 {
 	struct swivel_target st;
@@ -615,7 +610,6 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 	s.best_q1 = s.best_phi = 0;
 	q_copy(s.best_q, pref);
 	st.a = a;
-	st.seeded = seeded;
 	d = t->d;
 	if (a->side == ARM_LEFT)
 		arm_mirror_dq(&t->d, &d);
@@ -640,12 +634,12 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 			continue;
 		if (x.viol15 > 0) {
 			/* rounding at the edge of reach: only the fallback may use it */
-			search_eval(&s, &x, preferred_swivel(&st, &x), cand, true);
+			search_eval(&s, &x, ctx_swivel_of(&x, &st.x4p), cand, true);
 			continue;
 		}
 		/* the nearest J1 is searched closely, the others coarsely first */
 		/* past the first J1, start where the wrist is nearest neutral: its limits are the tightest */
-		if (!ctx_search(&s, &x, k == 0 ? preferred_swivel(&st, &x) : ctx_swivel_hand(&x), k == 0, cand))
+		if (!ctx_search(&s, &x, k == 0 ? ctx_swivel_of(&x, &st.x4p) : ctx_swivel_hand(&x), k == 0, cand))
 			continue;
 		found = true;
 		q_copy(q, cand);
