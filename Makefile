@@ -53,17 +53,61 @@ $(LIBIK): $(CORE_OBJ)
 	@rm -f $@
 	$(AR) rcs $@ $^
 
+# ---- the daemon: everything but the core, in data-flow order -------------------
+# wire (the protocol, shared with clients), config, trackers (sources and
+# drivers), frames (latest samples -> pose frames), publish (outputs), daemon
+# (loop, control, systemd). main.c alone makes the program.
+INIH_LIBS = $(shell pkg-config --libs inih 2>/dev/null || echo -linih)
+LIBS = $(INIH_LIBS) -lpthread -lm
+GW_SRC = $(filter-out src/daemon/main.c,$(wildcard src/wire/*.c src/config/*.c src/trackers/*.c \
+	src/frames/*.c src/publish/*.c src/daemon/*.c))
+GW_OBJ = $(patsubst src/%.c,$(BUILD)/obj/%.o,$(GW_SRC)) $(BUILD)/obj/gen/builtin.o
+# files compiled into the daemon: the demo configuration and its clip
+BUILTIN_FILES = config/demo.conf config/clips/cmu_141_16.csv
+
+$(BUILD)/gen/builtin.c: $(BUILTIN_FILES) tools/embed.sh
+	@mkdir -p $(dir $@)
+	tools/embed.sh $@ $(BUILTIN_FILES)
+
+$(BUILD)/obj/gen/builtin.o: $(BUILD)/gen/builtin.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -Isrc -c $< -o $@
+LIBGW = $(BUILD)/libavatargw.a
+DAEMON = $(BUILD)/avatargw
+
+$(BUILD)/obj/%.o: src/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -D_GNU_SOURCE -Isrc -c $< -o $@
+
+$(LIBGW): $(GW_OBJ)
+	@rm -f $@
+	$(AR) rcs $@ $^
+
+$(DAEMON): $(BUILD)/obj/daemon/main.o $(LIBGW) $(LIBIK)
+	$(CC) $(LDFLAGS) -o $@ $^ $(LIBS)
+
 # ---- tools ------------------------------------------------------------------
-# every tools/avatargw-*.c is one program linked with the core
+# every tools/avatargw-*.c is one program linked with both libraries;
+# every tools/examples/*.cpp an example client
 TOOL_SRC = $(wildcard tools/avatargw-*.c)
 TOOLS = $(patsubst tools/%.c,$(BUILD)/%,$(TOOL_SRC))
+EXAMPLE_SRC = $(wildcard tools/examples/*.cpp)
+EXAMPLES = $(patsubst tools/examples/%.cpp,$(BUILD)/examples/%,$(EXAMPLE_SRC))
 
 $(BUILD)/obj/tools/%.o: tools/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -c $< -o $@
+	$(CC) $(ALL_CFLAGS) -D_GNU_SOURCE -Isrc -c $< -o $@
 
-$(BUILD)/avatargw-%: $(BUILD)/obj/tools/avatargw-%.o $(LIBIK)
-	$(CC) $(LDFLAGS) -o $@ $^ -lm
+$(BUILD)/avatargw-%: $(BUILD)/obj/tools/avatargw-%.o $(LIBGW) $(LIBIK)
+	$(CC) $(LDFLAGS) -o $@ $^ $(LIBS)
+
+$(BUILD)/obj/examples/%.o: tools/examples/%.cpp
+	@mkdir -p $(dir $@)
+	$(CXX) $(ALL_CXXFLAGS) -c $< -o $@
+
+$(BUILD)/examples/%: $(BUILD)/obj/examples/%.o $(LIBGW)
+	@mkdir -p $(dir $@)
+	$(CXX) $(LDFLAGS) -o $@ $^ -lm
 
 # ---- tests --------------------------------------------------------------------
 TEST_C = $(wildcard tests/test_*.c)
@@ -82,18 +126,18 @@ $(BUILD)/obj/tests/lib/%.f.o: tests/lib/%.c
 	$(CC) $(ALL_CFLAGS) $(SC_f) -Itests -c $< -o $@
 $(BUILD)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -Itests -DSHARED_DIR='"$(SHARED)"' -c $< -o $@
+	$(CC) $(ALL_CFLAGS) -D_GNU_SOURCE -Isrc -Itests -DSHARED_DIR='"$(SHARED)"' -c $< -o $@
 $(BUILD)/obj/tests/%.o: tests/%.cpp
 	@mkdir -p $(dir $@)
 	$(CXX) $(ALL_CXXFLAGS) -Itests -DSHARED_DIR='"$(SHARED)"' -c $< -o $@
-$(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_LIB_OBJ) $(LIBIK)
+$(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
 	@mkdir -p $(dir $@)
-	$(CXX) $(LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) -lm
+	$(CXX) $(LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) $(LIBS)
 
 # ---- top-level targets --------------------------------------------------------
 .SECONDARY:
 .PHONY: all test check-core bench install clean run
-all: $(LIBIK) $(TOOLS)
+all: $(LIBIK) $(LIBGW) $(DAEMON) $(TOOLS) $(EXAMPLES)
 
 # The core may reference nothing from libc but memcpy/memset and libm's own functions.
 CORE_ALLOWED = memcpy memset sin cos sincos atan2 sqrt sinf cosf sincosf atan2f sqrtf

@@ -1,0 +1,1228 @@
+// SPDX-License-Identifier: MIT
+/*
+ * config.c - reads INI files with inih into a list of entries, then checks
+ * every entry against one typed table of keys.
+ *
+ * Two passes because drop-ins override key by key: first every file is read
+ * (a key given twice in one file is an error, a later file replaces an
+ * earlier file's value), then each section is built from its entries in a
+ * fixed order (daemon, sources, avatars, outputs: later ones refer to
+ * earlier ones). The Debian build of inih does not pass line numbers to the
+ * handler, so the line reader counts them.
+ */
+#include "config/config.h"
+
+#include "config/builtin.h"
+#include "trackers/tracker.h"
+
+#include <ini.h>
+
+#include <ctype.h>
+#include <dirent.h>
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#define DEG (M_PI / 180.0)
+
+const char *const cfg_sensor_roles[3] = { "head", "left_hand", "right_hand" };
+
+enum sect { S_DAEMON, S_SOURCE, S_AVATAR, S_OUTPUT, S_COUNT };
+static const char *const sect_names[S_COUNT] = { "daemon", "source", "avatar", "output" };
+
+enum kind {
+	K_INT,
+	K_U32,
+	K_DOUBLE,
+	K_DEG,     /* degrees in the file, radians in memory */
+	K_BOOL,
+	K_ENUM,
+	K_STR,
+	K_PATH,
+	K_VEC3,
+	K_RANGE,   /* two numbers in degrees: lo hi */
+	K_SENSOR,  /* SOURCE/SENSOR */
+	K_PERSON,  /* SOURCE[/PREFIX]: head, left_hand, right_hand at once */
+	K_LIST,    /* avatar names, or all */
+};
+
+static const char *const e_mode[] = { "deadline", "events", NULL };
+static const char *const e_log[] = { "err", "warning", "info", "debug", NULL };
+static const char *const e_solver[] = { "dq", "matrix", NULL };
+static const char *const e_out[] = { "udp", "multicast", "tcp", "unix", NULL };
+
+struct key_def {
+	int sect;
+	const char *name;
+	int kind;
+	size_t off, off2;
+	double min, max;
+	const char *def;    /* NULL: required (or, for sensors, given by person) */
+	const char *unit;
+	const char *const *enums;
+	const char *only;   /* source: drivers, output: types that take the key; NULL = all */
+	const char *doc;
+};
+
+#define D(f) offsetof(struct cfg_daemon, f)
+#define SRC(f) offsetof(struct cfg_source, f)
+#define AV(f) offsetof(struct cfg_avatar, f)
+#define OUT(f) offsetof(struct cfg_output, f)
+
+static const struct key_def keys[] = {
+	{ S_DAEMON, "rate", K_DOUBLE, D(rate), 0, 1, 4000, "240", "Hz", NULL, NULL,
+	  "avatars solved and published per second (deadline mode)" },
+	{ S_DAEMON, "mode", K_ENUM, D(mode), 0, 0, 0, "deadline", NULL, e_mode, NULL,
+	  "deadline: a cycle at every period, to absolute deadlines; events: a cycle when a source has new samples" },
+	{ S_DAEMON, "stale_ms", K_DOUBLE, D(stale_ms), 0, 1, 60000, "100", "ms",
+	  NULL, NULL, "a sensor without a new sample for this long is STALE" },
+	{ S_DAEMON, "realtime_priority", K_INT, D(realtime_priority), 0, 0, 99, "0", NULL, NULL, NULL,
+	  "SCHED_FIFO priority of the loop thread, 0 = normal scheduling" },
+	{ S_DAEMON, "cpu", K_INT, D(cpu), 0, -1, 1023, "-1", NULL, NULL, NULL,
+	  "pin the loop thread to this CPU, -1 = no pinning" },
+	{ S_DAEMON, "lock_memory", K_BOOL, D(lock_memory), 0, 0, 0, "yes", NULL, NULL, NULL,
+	  "mlockall() at start-up so that the loop never page-faults" },
+	{ S_DAEMON, "control_socket", K_PATH, D(control_socket), 0, 0, 0, "/run/avatargw/control", NULL, NULL,
+	  NULL, "Unix socket of avatargw-ctl; empty = none" },
+	{ S_DAEMON, "describe_interval", K_DOUBLE, D(describe_interval), 0, 0.1, 3600, "1", "s", NULL,
+	  NULL, "period of the DESCRIBE messages (also sent when an avatar's description changes)" },
+	{ S_DAEMON, "log_level", K_ENUM, D(log_level), 0, 0, 0, "info", NULL, e_log, NULL,
+	  "least important messages logged" },
+
+	{ S_SOURCE, "type", K_STR, 0, 0, 0, 0, NULL, NULL, NULL, NULL,
+	  "the driver: sim or replay" },
+	{ S_SOURCE, "origin", K_VEC3, SRC(origin), 0, -1e4, 1e4, "0 0 0", "m", NULL, NULL,
+	  "position of the tracker's frame in the world (x y z)" },
+	{ S_SOURCE, "yaw", K_DEG, SRC(yaw), 0, -360, 360, "0", "deg", NULL, NULL,
+	  "rotation of the tracker's frame about the world's z axis" },
+	{ S_SOURCE, "people", K_INT, SRC(people), 0, 1, CFG_MAX_AVATARS, "1", NULL, NULL, "sim",
+	  "simulated people; their sensors are pN.head, pN.left_hand, pN.right_hand" },
+	{ S_SOURCE, "seed", K_U32, SRC(seed), 0, 0, 4294967295.0, "1", NULL, NULL, "sim",
+	  "seed of the motion (same seed, same motion)" },
+	{ S_SOURCE, "sample_rate", K_DOUBLE, SRC(sample_rate), 0, 1, 4000, "240", "Hz", NULL, "sim",
+	  "sensor samples per second" },
+	{ S_SOURCE, "spacing", K_DOUBLE, SRC(spacing), 0, 0, 100, "1", "m", NULL, "sim",
+	  "distance between simulated people along x" },
+	{ S_SOURCE, "file", K_PATH, SRC(file), 0, 0, 0, NULL, NULL, NULL, "replay",
+	  "sensor CSV (columns t, head_x..head_qz, lhand_*, rhand_*), relative to this file's directory; "
+	  "builtin:NAME for a clip compiled into the daemon" },
+	{ S_SOURCE, "speed", K_DOUBLE, SRC(speed), 0, 0.01, 100, "1", NULL, NULL, "replay",
+	  "playback speed, 1 = real time" },
+	{ S_SOURCE, "loop", K_BOOL, SRC(loop), 0, 0, 0, "yes", NULL, NULL, "replay",
+	  "start again at the end; otherwise the sensors go STALE" },
+	{ S_SOURCE, "start", K_DOUBLE, SRC(start), 0, 0, 1e6, "0", "s", NULL, "replay",
+	  "begin this far into the recording" },
+
+	{ S_AVATAR, "id", K_INT, AV(id), 0, 0, 65535, "auto", NULL, NULL, NULL,
+	  "avatar id on the wire (auto: one more than the previous avatar's)" },
+	{ S_AVATAR, "count", K_INT, 0, 0, 1, CFG_MAX_AVATARS, "1", NULL, NULL, NULL,
+	  "this many avatars from consecutive people (person = SOURCE/p0 -> p0, p1, ...), ids counting up" },
+	{ S_AVATAR, "person", K_PERSON, 0, 0, 0, 0, "", NULL, NULL, NULL,
+	  "SOURCE or SOURCE/PREFIX: head, left_hand and right_hand are PREFIX.head, ... of that source" },
+	{ S_AVATAR, "head", K_SENSOR, 0, 0, 0, 0, NULL, NULL, NULL, NULL, "head sensor, SOURCE/SENSOR" },
+	{ S_AVATAR, "left_hand", K_SENSOR, 1, 0, 0, 0, NULL, NULL, NULL, NULL, "left hand sensor, SOURCE/SENSOR" },
+	{ S_AVATAR, "right_hand", K_SENSOR, 2, 0, 0, 0, NULL, NULL, NULL, NULL, "right hand sensor, SOURCE/SENSOR" },
+	{ S_AVATAR, "shoulder", K_DOUBLE, AV(dims[0]), 0, 0.01, 1, "0.1732", "m", NULL, NULL,
+	  "chest centre to shoulder joint (the paper's Shoulder)" },
+	{ S_AVATAR, "upper_arm", K_DOUBLE, AV(dims[1]), 0, 0.05, 1, "0.2886", "m", NULL, NULL,
+	  "shoulder to elbow" },
+	{ S_AVATAR, "forearm", K_DOUBLE, AV(dims[2]), 0, 0.05, 1, "0.1955", "m", NULL, NULL,
+	  "elbow to wrist" },
+	{ S_AVATAR, "hand", K_DOUBLE, AV(dims[3]), 0, 0, 0.5, "0", "m", NULL, NULL,
+	  "wrist to the hand sensor, along the hand" },
+	{ S_AVATAR, "head_offset", K_VEC3, AV(head_offset), 0, -1, 1, "0.008 -0.0386 0.0967", "m", NULL, NULL,
+	  "head sensor from the chest centre, in the chest frame (x right, y forward, z up; the paper: 0 0 Neck)" },
+	{ S_AVATAR, "j1", K_RANGE, AV(lo[0]), AV(hi[0]), -180, 180, "-30 30", "deg", NULL, NULL,
+	  "limits of J1, shoulder girdle / chest yaw" },
+	{ S_AVATAR, "j2", K_RANGE, AV(lo[1]), AV(hi[1]), -180, 180, "-90 30", "deg", NULL, NULL,
+	  "limits of J2, shoulder abduction (-) / adduction (+)" },
+	{ S_AVATAR, "j3", K_RANGE, AV(lo[2]), AV(hi[2]), -180, 180, "-60 120", "deg", NULL, NULL,
+	  "limits of J3, shoulder extension (-) / flexion (+)" },
+	{ S_AVATAR, "j4", K_RANGE, AV(lo[3]), AV(hi[3]), -180, 180, "-90 90", "deg", NULL, NULL,
+	  "limits of J4, humeral rotation" },
+	{ S_AVATAR, "j5", K_RANGE, AV(lo[4]), AV(hi[4]), -180, 180, "-90 60", "deg", NULL, NULL,
+	  "limits of J5, elbow (anatomical flexion = 90 deg + J5)" },
+	{ S_AVATAR, "j6", K_RANGE, AV(lo[5]), AV(hi[5]), -180, 180, "-90 90", "deg", NULL, NULL,
+	  "limits of J6, forearm pronation / supination" },
+	{ S_AVATAR, "j7", K_RANGE, AV(lo[6]), AV(hi[6]), -180, 180, "-70 70", "deg", NULL, NULL,
+	  "limits of J7, wrist flexion / extension" },
+	{ S_AVATAR, "j8", K_RANGE, AV(lo[7]), AV(hi[7]), -180, 180, "-30 30", "deg", NULL, NULL,
+	  "limits of J8, wrist deviation" },
+	{ S_AVATAR, "solver", K_ENUM, AV(solver), 0, 0, 0, "dq", NULL, e_solver, NULL,
+	  "kinematics of the IK: dual quaternions or 4x4 matrices" },
+	{ S_AVATAR, "ik_max_iterations", K_INT, AV(max_iter), 0, 1, 200, "20", NULL, NULL, NULL,
+	  "Newton iterations at most per arm and frame" },
+	{ S_AVATAR, "ik_tolerance", K_DOUBLE, AV(tol_mm), 0, 1e-4, 10, "0.01", "mm", NULL, NULL,
+	  "position error at which an arm counts as reached" },
+	{ S_AVATAR, "ik_max_evals", K_INT, AV(max_evals), 0, 16, 100000, "800", NULL, NULL, NULL,
+	  "closed-form search: postures evaluated at most (bounds the worst-case time)" },
+	{ S_AVATAR, "ik_warm_iterations", K_INT, AV(warm_iter), 0, 0, 100, "6", NULL, NULL, NULL,
+	  "Newton iterations tried from the previous frame before the closed-form search" },
+
+	{ S_OUTPUT, "type", K_ENUM, OUT(type), 0, 0, 0, NULL, NULL, e_out, NULL,
+	  "udp (unicast), multicast, tcp or unix (streams: u32 length + message)" },
+	{ S_OUTPUT, "address", K_STR, OUT(address), 0, 0, 0, "127.0.0.1", NULL, NULL, "udp multicast tcp",
+	  "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp: listen address" },
+	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "7770", NULL, NULL, "udp multicast tcp",
+	  "UDP destination port or TCP listening port" },
+	{ S_OUTPUT, "interface", K_STR, OUT(interface), 0, 0, 0, "", NULL, NULL, "multicast",
+	  "network interface for multicast (empty: the kernel's choice)" },
+	{ S_OUTPUT, "ttl", K_INT, OUT(ttl), 0, 0, 255, "1", NULL, NULL, "multicast",
+	  "multicast hop limit" },
+	{ S_OUTPUT, "loopback", K_BOOL, OUT(mcast_loop), 0, 0, 0, "yes", NULL, NULL, "multicast",
+	  "deliver multicast to listeners on this host too" },
+	{ S_OUTPUT, "path", K_PATH, OUT(path), 0, 0, 0, "/run/avatargw/stream", NULL, NULL, "unix",
+	  "Unix socket path to listen on" },
+	{ S_OUTPUT, "max_clients", K_INT, OUT(max_clients), 0, 1, 256, "8", NULL, NULL, "tcp unix",
+	  "stream subscribers at most; more are refused" },
+	{ S_OUTPUT, "client_buffer", K_INT, OUT(client_buffer), 0, 4096, 16777216, "65536", "bytes", NULL,
+	  "tcp unix", "per-subscriber buffer; messages that do not fit are dropped and counted" },
+	{ S_OUTPUT, "decimate", K_INT, OUT(decimate), 0, 1, 1000, "1", NULL, NULL, NULL,
+	  "publish every n-th frame" },
+	{ S_OUTPUT, "avatars", K_LIST, OUT(avatar_list), 0, 0, 0, "all", NULL, NULL, NULL,
+	  "avatar names to publish (space separated), or all" },
+};
+
+#define N_KEYS (sizeof(keys) / sizeof(keys[0]))
+
+/* ---- errors ----------------------------------------------------------------------- */
+
+struct parse {
+	struct config *c;
+	char *err;
+	size_t errlen;
+	int failed;
+	/* the file being read */
+	int file;
+	int line;
+	int first_entry; /* index of this file's first entry: duplicates within a file */
+	/* the line reader */
+	const char *text;
+	size_t pos;
+	int long_line;
+};
+
+static int failf(struct parse *p, struct cfg_where w, const char *fmt, ...)
+	__attribute__((format(printf, 3, 4)));
+
+static int failf(struct parse *p, struct cfg_where w, const char *fmt, ...)
+{
+	va_list ap;
+	size_t n;
+
+	if (p->failed++)
+		return -1; /* the first error is the one reported */
+	if (w.file >= 0)
+		n = (size_t)snprintf(p->err, p->errlen, "%s:%d: ", p->c->files[w.file], w.line);
+	else
+		n = (size_t)snprintf(p->err, p->errlen, "%s: ", w.file == -2 ? "(command line)" : "(default)");
+	if (n >= p->errlen)
+		return -1;
+	va_start(ap, fmt);
+	vsnprintf(p->err + n, p->errlen - n, fmt, ap);
+	va_end(ap);
+	return -1;
+}
+
+const char *config_where(const struct config *c, struct cfg_where w, char *buf, size_t len)
+{
+	if (w.file >= 0)
+		snprintf(buf, len, "%s:%d", c->files[w.file], w.line);
+	else
+		snprintf(buf, len, "default");
+	return buf;
+}
+
+/* ---- pass 1: files to entries ---------------------------------------------------- */
+
+static char *dupstr(const char *s)
+{
+	size_t n = strlen(s) + 1;
+	char *d = malloc(n);
+
+	if (d)
+		memcpy(d, s, n);
+	return d;
+}
+
+static char *line_reader(char *str, int num, void *stream)
+{
+	struct parse *p = stream;
+	size_t i = 0, start = p->pos;
+
+	if (!p->text[p->pos])
+		return NULL;
+	while (p->text[p->pos] && p->text[p->pos] != '\n') {
+		if (i + 2 < (size_t)num)
+			str[i++] = p->text[p->pos];
+		p->pos++;
+	}
+	if (p->text[p->pos] == '\n')
+		p->pos++;
+	p->line++;
+	if (p->pos - start > (size_t)num - 2 && !p->long_line)
+		p->long_line = p->line;
+	str[i++] = '\n';
+	str[i] = '\0';
+	return str;
+}
+
+static int add_entry(struct parse *p, const char *section, const char *key, const char *value)
+{
+	struct config *c = p->c;
+	struct cfg_where w = { p->file, p->line };
+
+	for (size_t i = 0; i < c->n_entries; i++) {
+		struct cfg_entry *e = &c->entries[i];
+
+		if (strcmp(e->section, section) || strcmp(e->key, key))
+			continue;
+		if ((int)i >= p->first_entry) {
+			char prev[CFG_PATH_MAX + 16];
+
+			return failf(p, w, "[%s] %s: given twice in one file (first at %s)", section, key,
+				     config_where(c, e->where, prev, sizeof(prev)));
+		}
+		/* a later file wins */
+		free(e->value);
+		e->value = dupstr(value);
+		e->where = w;
+		return e->value ? 0 : failf(p, w, "out of memory");
+	}
+	if (c->n_entries == c->cap_entries) {
+		size_t cap = c->cap_entries ? 2 * c->cap_entries : 64;
+		struct cfg_entry *ne = realloc(c->entries, cap * sizeof(*ne));
+
+		if (!ne)
+			return failf(p, w, "out of memory");
+		c->entries = ne;
+		c->cap_entries = cap;
+	}
+	c->entries[c->n_entries] = (struct cfg_entry){ dupstr(section), dupstr(key), dupstr(value), w };
+	if (!c->entries[c->n_entries].section || !c->entries[c->n_entries].key || !c->entries[c->n_entries].value)
+		return failf(p, w, "out of memory");
+	c->n_entries++;
+	return 0;
+}
+
+static int on_entry(void *user, const char *section, const char *name, const char *value)
+{
+	struct parse *p = user;
+
+	if (!section[0]) {
+		failf(p, (struct cfg_where){ p->file, p->line }, "%s: a key outside any section", name);
+		return 0;
+	}
+	return add_entry(p, section, name, value) == 0;
+}
+
+static int read_text(struct parse *p, const char *name, const char *text)
+{
+	int rc;
+
+	if (p->c->n_files == CFG_MAX_FILES)
+		return failf(p, (struct cfg_where){ -2, 0 }, "%s: more than %d configuration files", name,
+			     CFG_MAX_FILES);
+	p->c->files[p->c->n_files] = dupstr(name);
+	p->file = p->c->n_files++;
+	p->line = 0;
+	p->text = text;
+	p->pos = 0;
+	p->long_line = 0;
+	p->first_entry = (int)p->c->n_entries;
+	rc = ini_parse_stream(line_reader, p, on_entry, p);
+	if (p->failed)
+		return -1;
+	if (p->long_line)
+		return failf(p, (struct cfg_where){ p->file, p->long_line }, "line longer than %d characters",
+			     INI_MAX_LINE - 2);
+	if (rc > 0)
+		return failf(p, (struct cfg_where){ p->file, rc },
+			     "syntax error: expected [section], key = value, or a comment");
+	return 0;
+}
+
+static int read_file(struct parse *p, const char *path)
+{
+	FILE *f = fopen(path, "r");
+	char *text = NULL;
+	size_t len = 0, cap = 0;
+	int rc;
+
+	if (!f)
+		return failf(p, (struct cfg_where){ -2, 0 }, "%s: %s", path, strerror(errno));
+	for (;;) {
+		if (len + 4096 + 1 > cap) {
+			char *n = realloc(text, cap = cap ? 2 * cap : 8192);
+
+			if (!n) {
+				free(text);
+				fclose(f);
+				return failf(p, (struct cfg_where){ -2, 0 }, "%s: out of memory", path);
+			}
+			text = n;
+		}
+		size_t got = fread(text + len, 1, 4096, f);
+
+		len += got;
+		if (got < 4096)
+			break;
+	}
+	rc = ferror(f);
+	fclose(f);
+	if (rc) {
+		free(text);
+		return failf(p, (struct cfg_where){ -2, 0 }, "%s: read error", path);
+	}
+	text[len] = '\0';
+	if (strlen(text) != len) {
+		free(text);
+		return failf(p, (struct cfg_where){ -2, 0 }, "%s: not a text file (NUL byte)", path);
+	}
+	rc = read_text(p, path, text);
+	free(text);
+	return rc;
+}
+
+static int cmp_str(const void *a, const void *b)
+{
+	return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+static int read_dropins(struct parse *p, const char *main_path)
+{
+	char dir[CFG_PATH_MAX + 16];
+	const char *slash = strrchr(main_path, '/');
+	char *names[CFG_MAX_FILES];
+	int n = 0, rc = 0;
+	struct dirent *de;
+	DIR *d;
+
+	if (slash)
+		snprintf(dir, sizeof(dir), "%.*s/conf.d", (int)(slash - main_path), main_path);
+	else
+		snprintf(dir, sizeof(dir), "conf.d");
+	d = opendir(dir);
+	if (!d)
+		return errno == ENOENT ? 0 : failf(p, (struct cfg_where){ -2, 0 }, "%s: %s", dir, strerror(errno));
+	while ((de = readdir(d))) {
+		size_t l = strlen(de->d_name);
+
+		if (de->d_name[0] == '.' || l < 6 || strcmp(de->d_name + l - 5, ".conf"))
+			continue;
+		if (n == CFG_MAX_FILES - 1) {
+			rc = failf(p, (struct cfg_where){ -2, 0 }, "%s: too many drop-ins", dir);
+			break;
+		}
+		names[n] = malloc(strlen(dir) + l + 2);
+		if (!names[n])
+			break;
+		sprintf(names[n], "%s/%s", dir, de->d_name);
+		n++;
+	}
+	closedir(d);
+	qsort(names, (size_t)n, sizeof(names[0]), cmp_str);
+	for (int i = 0; i < n; i++) {
+		if (!rc)
+			rc = read_file(p, names[i]);
+		free(names[i]);
+	}
+	return rc;
+}
+
+/* ---- pass 2: values ------------------------------------------------------------------ */
+
+static bool valid_name(const char *s)
+{
+	size_t n = strlen(s);
+
+	if (n == 0 || n >= CFG_NAME_MAX)
+		return false;
+	for (; *s; s++)
+		if (!isalnum((unsigned char)*s) && *s != '_' && *s != '-' && *s != '.')
+			return false;
+	return true;
+}
+
+/* one number, the whole string */
+static bool parse_num(const char *s, double *v)
+{
+	char *end;
+
+	errno = 0;
+	*v = strtod(s, &end);
+	if (end == s || errno == ERANGE || !isfinite(*v))
+		return false;
+	while (isspace((unsigned char)*end))
+		end++;
+	return *end == '\0';
+}
+
+/* n numbers separated by spaces or commas */
+static bool parse_nums(const char *s, double *v, int n)
+{
+	for (int i = 0; i < n; i++) {
+		char *end;
+
+		while (isspace((unsigned char)*s) || (i && *s == ','))
+			s++;
+		errno = 0;
+		v[i] = strtod(s, &end);
+		if (end == s || errno == ERANGE || !isfinite(v[i]))
+			return false;
+		s = end;
+	}
+	while (isspace((unsigned char)*s))
+		s++;
+	return *s == '\0';
+}
+
+struct section_ctx {
+	struct parse *p;
+	int sect;
+	const char *name;   /* the section's name after its kind */
+	const char *full;   /* as written */
+	void *obj;
+	const char *type;   /* source driver or output type name (keys with only) */
+	struct cfg_where first;
+};
+
+static bool word_in(const char *word, const char *list)
+{
+	size_t n = strlen(word);
+
+	for (const char *s = list; (s = strstr(s, word)); s += n)
+		if ((s == list || s[-1] == ' ') && (s[n] == ' ' || s[n] == '\0'))
+			return true;
+	return false;
+}
+
+static const struct key_def *find_key(int sect, const char *name)
+{
+	for (size_t i = 0; i < N_KEYS; i++)
+		if (keys[i].sect == sect && !strcmp(keys[i].name, name))
+			return &keys[i];
+	return NULL;
+}
+
+static void list_keys(int sect, const char *type, char *buf, size_t len)
+{
+	size_t n = 0;
+
+	buf[0] = '\0';
+	for (size_t i = 0; i < N_KEYS && n < len; i++)
+		if (keys[i].sect == sect && (!keys[i].only || (type && word_in(type, keys[i].only))))
+			n += (size_t)snprintf(buf + n, len - n, "%s%s", n ? ", " : "", keys[i].name);
+}
+
+static int set_value(struct section_ctx *s, const struct key_def *k, const char *value, struct cfg_where w)
+{
+	struct parse *p = s->p;
+	char *obj = s->obj;
+	double v[3];
+
+	switch (k->kind) {
+	case K_INT:
+	case K_U32:
+	case K_DOUBLE:
+	case K_DEG:
+		if (!parse_num(value, v))
+			return failf(p, w, "[%s] %s: '%s' is not a number", s->full, k->name, value);
+		if (v[0] < k->min || v[0] > k->max)
+			return failf(p, w, "[%s] %s: %s is out of range [%g, %g]%s%s", s->full, k->name, value,
+				     k->min, k->max, k->unit ? " " : "", k->unit ? k->unit : "");
+		if ((k->kind == K_INT || k->kind == K_U32) && v[0] != floor(v[0]))
+			return failf(p, w, "[%s] %s: '%s' is not a whole number", s->full, k->name, value);
+		if (k->kind == K_INT)
+			*(int *)(obj + k->off) = (int)v[0];
+		else if (k->kind == K_U32)
+			*(uint32_t *)(obj + k->off) = (uint32_t)v[0];
+		else
+			*(double *)(obj + k->off) = k->kind == K_DEG ? v[0] * DEG : v[0];
+		return 0;
+	case K_BOOL:
+		if (!strcasecmp(value, "yes") || !strcasecmp(value, "true") || !strcasecmp(value, "on") ||
+		    !strcmp(value, "1"))
+			*(bool *)(obj + k->off) = true;
+		else if (!strcasecmp(value, "no") || !strcasecmp(value, "false") || !strcasecmp(value, "off") ||
+			 !strcmp(value, "0"))
+			*(bool *)(obj + k->off) = false;
+		else
+			return failf(p, w, "[%s] %s: '%s' is not yes or no", s->full, k->name, value);
+		return 0;
+	case K_ENUM:
+		for (int i = 0; k->enums[i]; i++)
+			if (!strcmp(value, k->enums[i])) {
+				*(int *)(obj + k->off) = i;
+				return 0;
+			}
+		{
+			char opts[128];
+			size_t n = 0;
+
+			opts[0] = '\0';
+			for (int i = 0; k->enums[i]; i++)
+				n += (size_t)snprintf(opts + n, sizeof(opts) - n, "%s%s", i ? ", " : "", k->enums[i]);
+			return failf(p, w, "[%s] %s: '%s' is not one of: %s", s->full, k->name, value, opts);
+		}
+	case K_STR:
+	case K_PATH:
+	case K_LIST: {
+		size_t cap = k->kind == K_STR && s->sect == S_OUTPUT && !strcmp(k->name, "interface") ? CFG_NAME_MAX
+											       : CFG_PATH_MAX;
+		char *dst = obj + k->off;
+
+		if (strlen(value) >= cap)
+			return failf(p, w, "[%s] %s: longer than %zu characters", s->full, k->name, cap - 1);
+		if (k->kind == K_PATH && value[0] && value[0] != '/' && strncmp(value, "builtin:", 8) &&
+		    w.file >= 0) {
+			/* relative to the directory of the file that says it */
+			const char *f = p->c->files[w.file];
+			const char *slash = strrchr(f, '/');
+
+			if (slash && (size_t)(slash - f) + 1 + strlen(value) < cap) {
+				size_t dl = (size_t)(slash - f);
+
+				memcpy(dst, f, dl);
+				dst[dl] = '/';
+				memcpy(dst + dl + 1, value, strlen(value) + 1);
+				return 0;
+			}
+			if (slash)
+				return failf(p, w, "[%s] %s: path too long", s->full, k->name);
+		}
+		snprintf(dst, cap, "%s", value);
+		return 0;
+	}
+	case K_VEC3:
+		if (!parse_nums(value, v, 3))
+			return failf(p, w, "[%s] %s: '%s' is not three numbers (x y z)", s->full, k->name, value);
+		for (int i = 0; i < 3; i++) {
+			if (v[i] < k->min || v[i] > k->max)
+				return failf(p, w, "[%s] %s: %g is out of range [%g, %g] %s", s->full, k->name, v[i],
+					     k->min, k->max, k->unit);
+			((double *)(obj + k->off))[i] = v[i];
+		}
+		return 0;
+	case K_RANGE:
+		if (!parse_nums(value, v, 2))
+			return failf(p, w, "[%s] %s: '%s' is not two numbers (lo hi, degrees)", s->full, k->name,
+				     value);
+		if (v[0] < k->min || v[1] > k->max || v[0] > v[1])
+			return failf(p, w, "[%s] %s: '%s' must satisfy %g <= lo <= hi <= %g degrees", s->full, k->name,
+				     value, k->min, k->max);
+		*(double *)(obj + k->off) = v[0] * DEG;
+		*(double *)(obj + k->off2) = v[1] * DEG;
+		return 0;
+	default:
+		return 0; /* K_SENSOR, K_PERSON: resolved by the avatar code */
+	}
+}
+
+/* the entry of a key in a section, or NULL */
+static const struct cfg_entry *entry_of(const struct config *c, const char *section, const char *key)
+{
+	for (size_t i = 0; i < c->n_entries; i++)
+		if (!strcmp(c->entries[i].section, section) && !strcmp(c->entries[i].key, key))
+			return &c->entries[i];
+	return NULL;
+}
+
+/* defaults, then the section's entries; keys of other types are errors */
+static int apply_section(struct section_ctx *s)
+{
+	struct parse *p = s->p;
+	const struct config *c = p->c;
+	char known[512];
+
+	for (size_t i = 0; i < N_KEYS; i++) {
+		const struct key_def *k = &keys[i];
+
+		if (k->sect != s->sect || !k->def || (k->only && !word_in(s->type, k->only)))
+			continue;
+		if (k->kind == K_SENSOR || k->kind == K_PERSON || !strcmp(k->name, "count") ||
+		    (s->sect == S_SOURCE && !strcmp(k->name, "type")))
+			continue;
+		if (!strcmp(k->def, "auto"))
+			continue;
+		if (set_value(s, k, k->def, (struct cfg_where){ -1, 0 }))
+			return -1;
+	}
+	for (size_t i = 0; i < c->n_entries; i++) {
+		const struct cfg_entry *e = &c->entries[i];
+		const struct key_def *k;
+
+		if (strcmp(e->section, s->full))
+			continue;
+		k = find_key(s->sect, e->key);
+		if (!k || (k->only && !word_in(s->type, k->only))) {
+			list_keys(s->sect, s->type, known, sizeof(known));
+			return failf(p, e->where, "[%s] %s: unknown key%s%s%s (known: %s)", s->full, e->key,
+				     s->type ? " for type " : "", s->type ? s->type : "", "", known);
+		}
+		if (k->kind == K_SENSOR || k->kind == K_PERSON || (k->def && !strcmp(k->def, "auto")) ||
+		    !strcmp(k->name, "count") || (s->sect == S_SOURCE && !strcmp(k->name, "type")))
+			continue;
+		if (set_value(s, k, e->value, e->where))
+			return -1;
+	}
+	return 0;
+}
+
+/* sections in order of first appearance; the kind and name of a section header */
+static int section_kind(const char *full, const char **name)
+{
+	for (int i = 0; i < S_COUNT; i++) {
+		size_t n = strlen(sect_names[i]);
+
+		if (strncmp(full, sect_names[i], n))
+			continue;
+		if (full[n] == '\0') {
+			*name = "";
+			return i;
+		}
+		if (full[n] == ' ' || full[n] == '\t') {
+			const char *q = full + n;
+
+			while (*q == ' ' || *q == '\t')
+				q++;
+			*name = q;
+			return i;
+		}
+	}
+	return -1;
+}
+
+static int resolve_sensor(struct parse *p, const char *full, const char *key, const char *ref, struct cfg_where w,
+			  struct cfg_sensor_ref *out)
+{
+	const struct config *c = p->c;
+	const char *slash = strchr(ref, '/');
+	size_t sn = slash ? (size_t)(slash - ref) : strlen(ref);
+
+	for (int i = 0; i < c->n_sources; i++) {
+		const struct cfg_source *src = &c->source[i];
+
+		if (strlen(src->name) != sn || strncmp(src->name, ref, sn))
+			continue;
+		if (!slash || !slash[1])
+			return failf(p, w, "[%s] %s: '%s' names no sensor (SOURCE/SENSOR)", full, key, ref);
+		out->source = i;
+		out->sensor = tracker_sensor_lookup(src, slash + 1);
+		out->where = w;
+		if (out->sensor < 0) {
+			char names[256], nm[CFG_NAME_MAX * 2];
+			size_t n = 0;
+			const struct tracker_driver *d = trackers_table[src->driver];
+			int cnt = d->sensor_count(src);
+
+			names[0] = '\0';
+			for (int j = 0; j < cnt && j < 6 && n < sizeof(names); j++) {
+				d->sensor_name(src, j, nm, sizeof(nm));
+				n += (size_t)snprintf(names + n, sizeof(names) - n, "%s%s", j ? ", " : "", nm);
+			}
+			return failf(p, w, "[%s] %s: source '%s' has no sensor '%s' (it has: %s%s)", full, key,
+				     src->name, slash + 1, names, cnt > 6 ? ", ..." : "");
+		}
+		return 0;
+	}
+	return failf(p, w, "[%s] %s: no [source %.*s] is configured", full, key, (int)sn, ref);
+}
+
+static int build_avatars(struct parse *p, const char *full, const char *name, struct cfg_avatar *tmpl,
+			 int *next_id)
+{
+	struct config *c = p->c;
+	const struct cfg_entry *e_count = entry_of(c, full, "count");
+	const struct cfg_entry *e_id = entry_of(c, full, "id");
+	const struct cfg_entry *e_person = entry_of(c, full, "person");
+	const struct cfg_entry *e_role[3];
+	int count = 1;
+	double v;
+	char prefix[CFG_PATH_MAX] = "";
+	long pnum = -1;
+	size_t pbase = 0;
+
+	if (e_count) {
+		if (!parse_num(e_count->value, &v) || v != floor(v) || v < 1 || v > CFG_MAX_AVATARS)
+			return failf(p, e_count->where, "[%s] count: '%s' is not a whole number in [1, %d]", full,
+				     e_count->value, CFG_MAX_AVATARS);
+		count = (int)v;
+	}
+	if (e_id) {
+		if (!parse_num(e_id->value, &v) || v != floor(v) || v < 0 || v + count - 1 > 65535)
+			return failf(p, e_id->where, "[%s] id: '%s' is not a whole number in [0, %d]", full,
+				     e_id->value, 65536 - count);
+		*next_id = (int)v;
+	}
+	if (*next_id + count - 1 > 65535)
+		return failf(p, e_count ? e_count->where : (struct cfg_where){ -1, 0 },
+			     "[%s] id: avatar ids past 65535", full);
+	for (int r = 0; r < 3; r++)
+		e_role[r] = entry_of(c, full, cfg_sensor_roles[r]);
+	if (e_person) {
+		const char *slash;
+
+		snprintf(prefix, sizeof(prefix), "%s", e_person->value);
+		slash = strchr(prefix, '/');
+		if (slash) {
+			/* a trailing number counts up with count */
+			size_t l = strlen(prefix);
+
+			pbase = l;
+			while (pbase > (size_t)(slash - prefix) + 1 && isdigit((unsigned char)prefix[pbase - 1]))
+				pbase--;
+			if (pbase < l)
+				pnum = strtol(prefix + pbase, NULL, 10);
+		}
+		if (count > 1 && pnum < 0)
+			return failf(p, e_person->where,
+				     "[%s] person: count = %d needs a numbered person (SOURCE/p0)", full, count);
+	} else if (count > 1) {
+		return failf(p, e_count->where, "[%s] count: needs person = SOURCE/p0", full);
+	}
+	if (c->n_avatars + count > CFG_MAX_AVATARS)
+		return failf(p, e_count ? e_count->where : (struct cfg_where){ -1, 0 },
+			     "[%s]: more than %d avatars", full, CFG_MAX_AVATARS);
+	for (int k = 0; k < count; k++) {
+		struct cfg_avatar *a = &c->avatar[c->n_avatars];
+
+		*a = *tmpl;
+		if (count > 1)
+			snprintf(a->name, sizeof(a->name), "%.20s-%d", name, k);
+		else
+			snprintf(a->name, sizeof(a->name), "%s", name);
+		a->id = (uint16_t)(*next_id + k);
+		for (int r = 0; r < 3; r++) {
+			char ref[CFG_PATH_MAX + 32];
+			struct cfg_where w;
+
+			if (e_role[r]) {
+				snprintf(ref, sizeof(ref), "%s", e_role[r]->value);
+				w = e_role[r]->where;
+			} else if (e_person) {
+				if (pnum >= 0)
+					snprintf(ref, sizeof(ref), "%.*s%ld.%s", (int)pbase, prefix, pnum + k,
+						 cfg_sensor_roles[r]);
+				else if (strchr(prefix, '/'))
+					snprintf(ref, sizeof(ref), "%s.%s", prefix, cfg_sensor_roles[r]);
+				else
+					snprintf(ref, sizeof(ref), "%s/%s", prefix, cfg_sensor_roles[r]);
+				w = e_person->where;
+			} else {
+				const struct cfg_entry *any = NULL;
+
+				for (size_t i = 0; i < c->n_entries && !any; i++)
+					if (!strcmp(c->entries[i].section, full))
+						any = &c->entries[i];
+				return failf(p, any ? any->where : (struct cfg_where){ -1, 0 },
+					     "[%s] %s: missing (give %s = SOURCE/SENSOR or person = SOURCE)", full,
+					     cfg_sensor_roles[r], cfg_sensor_roles[r]);
+			}
+			if (resolve_sensor(p, full, e_role[r] ? cfg_sensor_roles[r] : "person", ref, w, &a->sensor[r]))
+				return -1;
+		}
+		for (int i = 0; i < c->n_avatars; i++) {
+			if (c->avatar[i].id == a->id)
+				return failf(p, e_id ? e_id->where : (struct cfg_where){ -1, 0 },
+					     "[%s] id: %u is already avatar '%s'", full, a->id, c->avatar[i].name);
+			if (!strcmp(c->avatar[i].name, a->name))
+				return failf(p, e_id ? e_id->where : (struct cfg_where){ -1, 0 },
+					     "[%s]: avatar name '%s' used twice", full, a->name);
+		}
+		c->n_avatars++;
+	}
+	*next_id += count;
+	return 0;
+}
+
+static int resolve_output_avatars(struct parse *p, const char *full, struct cfg_output *o)
+{
+	const struct config *c = p->c;
+	const struct cfg_entry *e = entry_of(c, full, "avatars");
+	char buf[CFG_PATH_MAX], *save, *tok;
+	int n = 0;
+
+	if (!strcmp(o->avatar_list, "all"))
+		return 0;
+	o->avatar_ids = calloc((size_t)c->n_avatars + 1, sizeof(uint16_t));
+	if (!o->avatar_ids)
+		return failf(p, e->where, "out of memory");
+	snprintf(buf, sizeof(buf), "%s", o->avatar_list);
+	for (tok = strtok_r(buf, " ,", &save); tok; tok = strtok_r(NULL, " ,", &save)) {
+		int found = 0;
+
+		for (int i = 0; i < c->n_avatars; i++) {
+			const char *an = c->avatar[i].name;
+			size_t tl = strlen(tok);
+
+			/* a counted avatar's name selects all its copies */
+			if (!strcmp(an, tok) || (!strncmp(an, tok, tl) && an[tl] == '-' && isdigit((unsigned char)an[tl + 1]))) {
+				bool dup = false;
+
+				for (int j = 0; j < n; j++)
+					dup |= o->avatar_ids[j] == c->avatar[i].id;
+				if (!dup && n < c->n_avatars)
+					o->avatar_ids[n++] = c->avatar[i].id;
+				found = 1;
+			}
+		}
+		if (!found)
+			return failf(p, e->where, "[%s] avatars: no avatar named '%s'", full, tok);
+	}
+	if (!n)
+		return failf(p, e->where, "[%s] avatars: empty list (say all)", full);
+	o->n_avatars = n;
+	return 0;
+}
+
+static int build(struct parse *p)
+{
+	struct config *c = p->c;
+	const char *seen[CFG_MAX_SOURCES + CFG_MAX_OUTPUTS + CFG_MAX_AVATARS + 1];
+	int n_seen = 0, next_id = 0;
+	struct cfg_avatar tmpl;
+
+	c->avatar = calloc(CFG_MAX_AVATARS, sizeof(*c->avatar));
+	if (!c->avatar)
+		return failf(p, (struct cfg_where){ -2, 0 }, "out of memory");
+	/* the daemon section always exists */
+	{
+		struct section_ctx s = { p, S_DAEMON, "", "daemon", &c->daemon, NULL, { -1, 0 } };
+
+		if (apply_section(&s))
+			return -1;
+	}
+	/* each kind in turn, sections in order of first appearance */
+	for (int pass = 0; pass < S_COUNT; pass++) {
+		n_seen = 0;
+		for (size_t i = 0; i < c->n_entries; i++) {
+			const struct cfg_entry *e = &c->entries[i];
+			const char *name = "";
+			int kind = section_kind(e->section, &name);
+			bool dup = false;
+
+			for (int j = 0; j < n_seen; j++)
+				dup |= !strcmp(seen[j], e->section);
+			if (dup)
+				continue;
+			if (n_seen < (int)(sizeof(seen) / sizeof(seen[0])))
+				seen[n_seen++] = e->section;
+			if (kind < 0) {
+				if (pass == 0)
+					return failf(p, e->where,
+						     "[%s]: unknown section (daemon, source NAME, avatar NAME, output NAME)",
+						     e->section);
+				continue;
+			}
+			if (kind != pass || kind == S_DAEMON) {
+				if (kind == S_DAEMON && pass == 0 && name[0])
+					return failf(p, e->where, "[%s]: the daemon section has no name", e->section);
+				continue;
+			}
+			if (!valid_name(name))
+				return failf(p, e->where, "[%s]: '%s' is not a valid name (1-%d of A-Z a-z 0-9 _ - .)",
+					     e->section, name, CFG_NAME_MAX - 1);
+			if (kind == S_SOURCE) {
+				const struct cfg_entry *t = entry_of(c, e->section, "type");
+				struct cfg_source *src;
+				struct section_ctx s;
+
+				if (c->n_sources == CFG_MAX_SOURCES)
+					return failf(p, e->where, "[%s]: more than %d sources", e->section,
+						     CFG_MAX_SOURCES);
+				if (!t)
+					return failf(p, e->where, "[%s] type: missing (sim or replay)", e->section);
+				src = &c->source[c->n_sources];
+				memset(src, 0, sizeof(*src));
+				snprintf(src->name, sizeof(src->name), "%s", name);
+				src->where = e->where;
+				src->driver = trackers_find(t->value);
+				if (src->driver < 0) {
+					char names[128];
+					size_t n = 0;
+
+					names[0] = '\0';
+					for (int d = 0; d < trackers_count; d++)
+						n += (size_t)snprintf(names + n, sizeof(names) - n, "%s%s", d ? ", " : "",
+								      trackers_table[d]->name);
+					return failf(p, t->where, "[%s] type: unknown driver '%s' (known: %s)", e->section,
+						     t->value, names);
+				}
+				for (int j = 0; j < c->n_sources; j++)
+					if (!strcmp(c->source[j].name, name))
+						return failf(p, e->where, "[%s]: source name used twice", e->section);
+				s = (struct section_ctx){ p, S_SOURCE, name, e->section, src, t->value, e->where };
+				if (apply_section(&s))
+					return -1;
+				if (trackers_table[src->driver] == &replay_driver && !src->file[0])
+					return failf(p, t->where, "[%s] file: missing (the recording to replay)",
+						     e->section);
+				if (trackers_table[src->driver]->check) {
+					char why[256];
+
+					if (trackers_table[src->driver]->check(src, why, sizeof(why))) {
+						const struct cfg_entry *fe = entry_of(c, e->section, "file");
+
+						return failf(p, fe ? fe->where : t->where, "[%s] %s", e->section, why);
+					}
+				}
+				c->n_sources++;
+			} else if (kind == S_AVATAR) {
+				struct section_ctx s;
+
+				memset(&tmpl, 0, sizeof(tmpl));
+				s = (struct section_ctx){ p, S_AVATAR, name, e->section, &tmpl, NULL, e->where };
+				if (apply_section(&s) || build_avatars(p, e->section, name, &tmpl, &next_id))
+					return -1;
+			} else if (kind == S_OUTPUT) {
+				const struct cfg_entry *t = entry_of(c, e->section, "type");
+				struct cfg_output *o;
+				struct section_ctx s;
+
+				if (c->n_outputs == CFG_MAX_OUTPUTS)
+					return failf(p, e->where, "[%s]: more than %d outputs", e->section,
+						     CFG_MAX_OUTPUTS);
+				if (!t)
+					return failf(p, e->where, "[%s] type: missing (udp, multicast, tcp or unix)",
+						     e->section);
+				o = &c->output[c->n_outputs];
+				memset(o, 0, sizeof(*o));
+				snprintf(o->name, sizeof(o->name), "%s", name);
+				o->where = e->where;
+				for (int j = 0; j < c->n_outputs; j++)
+					if (!strcmp(c->output[j].name, name))
+						return failf(p, e->where, "[%s]: output name used twice", e->section);
+				/* the type first: it decides which keys exist */
+				s = (struct section_ctx){ p, S_OUTPUT, name, e->section, o, NULL, e->where };
+				if (set_value(&s, find_key(S_OUTPUT, "type"), t->value, t->where))
+					return -1;
+				s.type = e_out[o->type];
+				if (o->type == CFG_OUT_MULTICAST) {
+					/* a multicast output without an address has no sensible default */
+					if (!entry_of(c, e->section, "address"))
+						return failf(p, t->where, "[%s] address: missing (a multicast group)",
+							     e->section);
+				}
+				if (apply_section(&s) || resolve_output_avatars(p, e->section, o))
+					return -1;
+				c->n_outputs++;
+			}
+		}
+	}
+	return 0;
+}
+
+static void config_init(struct config *c)
+{
+	memset(c, 0, sizeof(*c));
+}
+
+int config_load(struct config *c, const char *path, char *err, size_t errlen)
+{
+	struct parse p = { .c = c, .err = err, .errlen = errlen };
+
+	config_init(c);
+	if (read_file(&p, path) || read_dropins(&p, path) || build(&p))
+		return -1;
+	return 0;
+}
+
+int config_load_ex(struct config *c, const char *path, const char *const *sets, int n_sets, char *err,
+		   size_t errlen)
+{
+	struct parse p = { .c = c, .err = err, .errlen = errlen };
+
+	config_init(c);
+	if (!strncmp(path, "builtin:", 8)) {
+		const char *text = builtin_find(path + 8, NULL);
+
+		if (!text)
+			return failf(&p, (struct cfg_where){ -2, 0 }, "%s: no such builtin configuration", path);
+		if (read_text(&p, path, text))
+			return -1;
+	} else if (read_file(&p, path) || read_dropins(&p, path)) {
+		return -1;
+	}
+	for (int i = 0; i < n_sets; i++) {
+		const char *eq = strchr(sets[i], '=');
+		const char *dot = NULL;
+		char *text;
+		int rc;
+
+		for (const char *q = sets[i]; eq && q < eq; q++)
+			if (*q == '.')
+				dot = q;
+		if (!eq || !dot || dot == sets[i] || dot + 1 == eq)
+			return failf(&p, (struct cfg_where){ -2, 0 }, "--set %s: expected SECTION.KEY=VALUE", sets[i]);
+		if (asprintf(&text, "[%.*s]\n%.*s = %s\n", (int)(dot - sets[i]), sets[i], (int)(eq - dot - 1), dot + 1,
+			     eq + 1) < 0)
+			return failf(&p, (struct cfg_where){ -2, 0 }, "out of memory");
+		rc = read_text(&p, "--set", text);
+		free(text);
+		if (rc)
+			return -1;
+	}
+	return build(&p);
+}
+
+int config_load_text(struct config *c, const char *name, const char *text, char *err, size_t errlen)
+{
+	struct parse p = { .c = c, .err = err, .errlen = errlen };
+
+	config_init(c);
+	if (read_text(&p, name, text) || build(&p))
+		return -1;
+	return 0;
+}
+
+void config_free(struct config *c)
+{
+	for (int i = 0; i < c->n_outputs; i++)
+		free(c->output[i].avatar_ids);
+	for (size_t i = 0; i < c->n_entries; i++) {
+		free(c->entries[i].section);
+		free(c->entries[i].key);
+		free(c->entries[i].value);
+	}
+	for (int i = 0; i < c->n_files; i++)
+		free(c->files[i]);
+	free(c->entries);
+	free(c->avatar);
+	memset(c, 0, sizeof(*c));
+}
+
+/* ---- printing ------------------------------------------------------------------------ */
+
+static void print_value(FILE *out, const struct key_def *k, const void *obj)
+{
+	const char *o = obj;
+
+	switch (k->kind) {
+	case K_INT:
+		fprintf(out, "%d", *(const int *)(o + k->off));
+		break;
+	case K_U32:
+		fprintf(out, "%u", *(const uint32_t *)(o + k->off));
+		break;
+	case K_DOUBLE:
+		fprintf(out, "%.10g", *(const double *)(o + k->off));
+		break;
+	case K_DEG:
+		fprintf(out, "%.10g", *(const double *)(o + k->off) / DEG);
+		break;
+	case K_BOOL:
+		fputs(*(const bool *)(o + k->off) ? "yes" : "no", out);
+		break;
+	case K_ENUM:
+		fputs(k->enums[*(const int *)(o + k->off)], out);
+		break;
+	case K_STR:
+	case K_PATH:
+	case K_LIST:
+		fputs(o + k->off, out);
+		break;
+	case K_VEC3: {
+		const double *v = (const double *)(o + k->off);
+
+		fprintf(out, "%.10g %.10g %.10g", v[0], v[1], v[2]);
+		break;
+	}
+	case K_RANGE:
+		fprintf(out, "%.10g %.10g", *(const double *)(o + k->off) / DEG, *(const double *)(o + k->off2) / DEG);
+		break;
+	default:
+		break;
+	}
+}
+
+static void print_origin(FILE *out, const struct config *c, const char *section, const char *key)
+{
+	const struct cfg_entry *e = entry_of(c, section, key);
+	char w[CFG_PATH_MAX + 16];
+
+	if (e)
+		fprintf(out, "    ; %s\n", config_where(c, e->where, w, sizeof(w)));
+	else
+		fputs("    ; default\n", out);
+}
+
+static void print_section(FILE *out, const struct config *c, int sect, const char *full, const char *type,
+			  const void *obj)
+{
+	fprintf(out, "\n[%s]\n", full);
+	if (sect == S_SOURCE) {
+		fprintf(out, "type = %s", type);
+		print_origin(out, c, full, "type");
+	}
+	for (size_t i = 0; i < N_KEYS; i++) {
+		const struct key_def *k = &keys[i];
+
+		if (k->sect != sect || (k->only && !word_in(type, k->only)))
+			continue;
+		if (k->kind == K_SENSOR || k->kind == K_PERSON || !strcmp(k->name, "count") || !strcmp(k->name, "id") ||
+		    (sect == S_SOURCE && !strcmp(k->name, "type")))
+			continue;
+		fprintf(out, "%s = ", k->name);
+		print_value(out, k, obj);
+		print_origin(out, c, full, k->name);
+	}
+}
+
+void config_print(const struct config *c, FILE *out)
+{
+	char full[CFG_NAME_MAX + 16];
+
+	fprintf(out, "; effective configuration, from:");
+	for (int i = 0; i < c->n_files; i++)
+		fprintf(out, " %s", c->files[i]);
+	fputc('\n', out);
+	print_section(out, c, S_DAEMON, "daemon", NULL, &c->daemon);
+	for (int i = 0; i < c->n_sources; i++) {
+		const struct cfg_source *s = &c->source[i];
+		const char *type = trackers_table[s->driver]->name;
+
+		snprintf(full, sizeof(full), "source %s", s->name);
+		print_section(out, c, S_SOURCE, full, type, s);
+	}
+	for (int i = 0; i < c->n_avatars; i++) {
+		const struct cfg_avatar *a = &c->avatar[i];
+
+		snprintf(full, sizeof(full), "avatar %s", a->name);
+		print_section(out, c, S_AVATAR, full, NULL, a);
+		fprintf(out, "id = %u\n", a->id);
+		for (int r = 0; r < 3; r++) {
+			const struct cfg_source *s = &c->source[a->sensor[r].source];
+			char nm[CFG_NAME_MAX * 2], w[CFG_PATH_MAX + 16];
+
+			trackers_table[s->driver]->sensor_name(s, a->sensor[r].sensor, nm, sizeof(nm));
+			fprintf(out, "%s = %s/%s    ; %s\n", cfg_sensor_roles[r], s->name, nm,
+				config_where(c, a->sensor[r].where, w, sizeof(w)));
+		}
+	}
+	for (int i = 0; i < c->n_outputs; i++) {
+		const struct cfg_output *o = &c->output[i];
+
+		snprintf(full, sizeof(full), "output %s", o->name);
+		print_section(out, c, S_OUTPUT, full, e_out[o->type], o);
+	}
+}
+
+void config_print_reference(FILE *out)
+{
+	for (int s = 0; s < S_COUNT; s++) {
+		fprintf(out, "[%s%s]\n", sect_names[s], s == S_DAEMON ? "" : " NAME");
+		for (size_t i = 0; i < N_KEYS; i++) {
+			const struct key_def *k = &keys[i];
+
+			if (k->sect != s)
+				continue;
+			fprintf(out, "%s\t%s\t%s\t%s\t%s\n", k->name, k->def ? k->def : "(required)",
+				k->unit ? k->unit : "-", k->only ? k->only : "all", k->doc);
+		}
+	}
+}

@@ -1,0 +1,163 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * config.h - avatargw's configuration: INI files read with inih, checked
+ * against one typed table of keys (config.c), merged from a main file and
+ * its conf.d drop-ins (*.conf , sorted by name; later files win key by key).
+ *
+ * Every error names file:line, the section and the key; the daemon exits
+ * with EX_CONFIG (78). Units are in the key names' documentation
+ * (config/avatargw.conf): metres, degrees in the file, radians in memory.
+ */
+#ifndef AGW_CONFIG_H
+#define AGW_CONFIG_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#define EX_CONFIG_CODE 78
+
+#define CFG_NAME_MAX 32
+#define CFG_PATH_MAX 256
+#define CFG_MAX_SOURCES 16
+#define CFG_MAX_OUTPUTS 16
+#define CFG_MAX_AVATARS 4096
+#define CFG_MAX_FILES 64
+
+/* where a value came from: files[file] line, or file < 0 for a default */
+struct cfg_where {
+	int file;
+	int line;
+};
+
+enum cfg_log_level { CFG_LOG_ERR, CFG_LOG_WARNING, CFG_LOG_INFO, CFG_LOG_DEBUG };
+enum cfg_loop_mode { CFG_LOOP_DEADLINE, CFG_LOOP_EVENTS };
+
+struct cfg_daemon {
+	double rate;            /* Hz */
+	int mode;               /* enum cfg_loop_mode */
+	double stale_ms;
+	int realtime_priority;  /* SCHED_FIFO, 0 = off */
+	int cpu;                /* -1 = no affinity */
+	bool lock_memory;
+	char control_socket[CFG_PATH_MAX];
+	double describe_interval; /* seconds */
+	int log_level;
+	bool ik_stats;
+};
+
+struct cfg_source {
+	char name[CFG_NAME_MAX];
+	int driver;             /* index into trackers_table */
+	struct cfg_where where; /* its first line */
+	/* every tracker */
+	double origin[3];       /* world position of the tracker's frame, m */
+	double yaw;             /* rotation of the tracker's frame about world z, rad */
+	/* sim */
+	int people;
+	uint32_t seed;
+	double sample_rate;     /* Hz */
+	double spacing;         /* m between simulated people */
+	/* replay */
+	char file[CFG_PATH_MAX];
+	double speed;
+	bool loop;
+	double start;           /* s into the file */
+};
+
+/* a sensor reference: a source and one of its sensors */
+struct cfg_sensor_ref {
+	int source;
+	int sensor;
+	struct cfg_where where;
+};
+
+enum cfg_solver { CFG_SOLVER_DQ, CFG_SOLVER_MATRIX };
+
+struct cfg_avatar {
+	char name[CFG_NAME_MAX];
+	uint16_t id;
+	struct cfg_sensor_ref sensor[3]; /* head, left hand, right hand */
+	double dims[4];                  /* shoulder, upper arm, forearm, hand, m */
+	double head_offset[3];           /* m, chest frame */
+	double lo[8], hi[8];             /* rad */
+	int solver;
+	int max_iter;
+	double tol_mm;
+	int max_evals;
+	int warm_iter;
+};
+
+enum cfg_output_type { CFG_OUT_UDP, CFG_OUT_MULTICAST, CFG_OUT_TCP, CFG_OUT_UNIX };
+
+struct cfg_output {
+	char name[CFG_NAME_MAX];
+	int type;
+	struct cfg_where where;
+	char address[CFG_PATH_MAX]; /* udp/multicast: destination; tcp: listen address */
+	int port;
+	char interface[CFG_NAME_MAX];
+	int ttl;
+	bool mcast_loop;
+	char path[CFG_PATH_MAX];    /* unix */
+	int max_clients;
+	int client_buffer;          /* bytes per stream client */
+	int decimate;               /* publish every n-th frame */
+	/* which avatars: all when n_avatars == 0 */
+	int n_avatars;
+	uint16_t *avatar_ids;       /* resolved ids */
+	char avatar_list[CFG_PATH_MAX];
+};
+
+/* one key=value as read, kept to print the effective configuration */
+struct cfg_entry {
+	char *section;
+	char *key;
+	char *value;
+	struct cfg_where where;
+};
+
+struct config {
+	struct cfg_daemon daemon;
+	int n_sources;
+	struct cfg_source source[CFG_MAX_SOURCES];
+	int n_avatars;
+	struct cfg_avatar *avatar;
+	int n_outputs;
+	struct cfg_output output[CFG_MAX_OUTPUTS];
+
+	/* the files read, in order */
+	int n_files;
+	char *files[CFG_MAX_FILES];
+	size_t n_entries, cap_entries;
+	struct cfg_entry *entries;
+};
+
+/*
+ * Reads path and the *.conf files of conf.d/ beside it (if that directory
+ * exists), or the text given (name is then what errors call it). Returns 0,
+ * or -1 with the message in err (file:line: [section] key: what).
+ */
+int config_load(struct config *c, const char *path, char *err, size_t errlen);
+/*
+ * The same, then overrides "SECTION.KEY=VALUE" (the last '.' before '='
+ * splits section and key: "output local.port=7771"); path "builtin:NAME"
+ * reads a file compiled into the daemon, without drop-ins.
+ */
+int config_load_ex(struct config *c, const char *path, const char *const *sets, int n_sets, char *err,
+		   size_t errlen);
+int config_load_text(struct config *c, const char *name, const char *text, char *err, size_t errlen);
+void config_free(struct config *c);
+
+/* The effective configuration, every key, with where each value came from. */
+void config_print(const struct config *c, FILE *out);
+/* Every key of the table with its default, unit and documentation (config/avatargw.conf is checked against it). */
+void config_print_reference(FILE *out);
+
+const char *config_where(const struct config *c, struct cfg_where w, char *buf, size_t len);
+
+/* the sensor roles of an avatar */
+extern const char *const cfg_sensor_roles[3];
+
+#endif /* AGW_CONFIG_H */

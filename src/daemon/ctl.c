@@ -1,0 +1,298 @@
+// SPDX-License-Identifier: MIT
+/*
+ * ctl.c - see ctl.h. Runs in the control thread only: it may allocate and
+ * take its time; it reads the loop's counters with relaxed atomic loads.
+ */
+#include "daemon/ctl.h"
+
+#include <errno.h>
+#include <poll.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/time.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+static const char *const tracker_states[] = { "OK", "STALE", "FAULTY", "ENDED" };
+static const char *const sensor_states[] = { "OK", "STALE", "FAULTY" };
+static const char *const out_types[] = { "udp", "multicast", "tcp", "unix" };
+
+void ctl_resolve_path(const char *configured, char *out, size_t len)
+{
+	const char *d;
+
+	if (strcmp(configured, "auto")) {
+		snprintf(out, len, "%s", configured);
+		return;
+	}
+	if ((d = getenv("RUNTIME_DIRECTORY")) && d[0]) {
+		/* systemd may list several, separated by ':' */
+		size_t n = strcspn(d, ":");
+
+		snprintf(out, len, "%.*s/control", (int)n, d);
+	} else if ((d = getenv("XDG_RUNTIME_DIR")) && d[0]) {
+		snprintf(out, len, "%s/avatargw.control", d);
+	} else {
+		snprintf(out, len, "/tmp/avatargw-%u.control", (unsigned)getuid());
+	}
+}
+
+int ctl_listen(const char *path)
+{
+	struct sockaddr_un sun = { .sun_family = AF_UNIX };
+	struct stat st;
+	int fd;
+
+	if (strlen(path) >= sizeof(sun.sun_path))
+		return -ENAMETOOLONG;
+	strcpy(sun.sun_path, path);
+	if (lstat(path, &st) == 0) {
+		if (!S_ISSOCK(st.st_mode))
+			return -EEXIST;
+		unlink(path);
+	}
+	fd = socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+	if (fd < 0)
+		return -errno;
+	if (bind(fd, (struct sockaddr *)&sun, sizeof(sun)) || listen(fd, 8)) {
+		int rc = -errno;
+
+		close(fd);
+		return rc;
+	}
+	return fd;
+}
+
+void ctl_close(int fd, const char *path)
+{
+	if (fd < 0)
+		return;
+	close(fd);
+	unlink(path);
+}
+
+int ctl_rates_update(struct ctl_rates *r, struct gateway *g)
+{
+	struct timespec ts;
+	double t, dt;
+
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	t = (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+	if (r->n_trackers != g->n_trackers || r->n_avatars != g->n_avatars || !r->trk_samples) {
+		/* a new configuration: start over */
+		ctl_rates_free(r);
+		r->n_trackers = g->n_trackers;
+		r->n_avatars = g->n_avatars;
+		r->trk_samples = calloc((size_t)g->n_trackers + 1, sizeof(uint64_t));
+		r->trk_rate = calloc((size_t)g->n_trackers + 1, sizeof(double));
+		r->av_frames = calloc((size_t)g->n_avatars + 1, sizeof(uint64_t));
+		r->av_rate = calloc((size_t)g->n_avatars + 1, sizeof(double));
+		if (!r->trk_samples || !r->trk_rate || !r->av_frames || !r->av_rate)
+			return -ENOMEM;
+		r->t = 0;
+	}
+	dt = t - r->t;
+	for (int i = 0; i < g->n_trackers; i++) {
+		uint64_t s = stat_get(&g->trk[i].st.samples);
+
+		if (r->t > 0 && dt > 0)
+			r->trk_rate[i] = (double)(s - r->trk_samples[i]) / dt / (g->trk[i].n_sensors ? g->trk[i].n_sensors : 1);
+		r->trk_samples[i] = s;
+	}
+	for (int i = 0; i < g->n_avatars; i++) {
+		uint64_t f = stat_get(&g->av[i].st.frames);
+
+		if (r->t > 0 && dt > 0)
+			r->av_rate[i] = (double)(f - r->av_frames[i]) / dt;
+		r->av_frames[i] = f;
+	}
+	r->t = t;
+	return 0;
+}
+
+void ctl_rates_free(struct ctl_rates *r)
+{
+	free(r->trk_samples);
+	free(r->trk_rate);
+	free(r->av_frames);
+	free(r->av_rate);
+	memset(r, 0, sizeof(*r));
+}
+
+static double us(uint64_t ns)
+{
+	return (double)ns / 1000.0;
+}
+
+void ctl_status(FILE *out, const struct ctl_info *info, bool json)
+{
+	struct gateway *g = info->g;
+	const struct ctl_rates *r = info->rates;
+	struct timespec ts;
+	double up;
+	int rt = loop_rt_status(info->l);
+	const char *rts = rt > 0 ? "SCHED_FIFO" : rt < 0 ? "refused" : "off";
+	const struct hist *wk = &g->st.work, *wa = &g->st.wake;
+
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	up = (double)ts.tv_sec + ts.tv_nsec * 1e-9 - info->started;
+	if (json) {
+		fprintf(out, "{\"uptime_s\":%.3f,\"config\":\"%s\",\"source_id\":%u,\"rate_hz\":%.6g,\"mode\":\"%s\","
+			"\"realtime\":\"%s\",\"reloads\":%llu,\"reload_failures\":%llu,",
+			up, info->config_name, g->source_id, g->cfg.daemon.rate,
+			g->cfg.daemon.mode == CFG_LOOP_EVENTS ? "events" : "deadline", rts,
+			(unsigned long long)info->reloads, (unsigned long long)info->reload_failures);
+		fprintf(out, "\"loop\":{\"cycles\":%llu,\"overruns\":%llu,\"poll_errors\":%llu,"
+			"\"work_us\":{\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f},"
+			"\"wake_late_us\":{\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f}},",
+			(unsigned long long)stat_get(&g->st.cycles), (unsigned long long)stat_get(&g->st.overruns),
+			(unsigned long long)stat_get(&g->st.poll_errors), us(hist_percentile(wk, 0.5)),
+			us(hist_percentile(wk, 0.99)), us(stat_get(&wk->max_ns)), us(hist_percentile(wa, 0.5)),
+			us(hist_percentile(wa, 0.99)), us(stat_get(&wa->max_ns)));
+		fputs("\"sources\":[", out);
+		for (int i = 0; i < g->n_trackers; i++) {
+			struct tracker *t = &g->trk[i];
+
+			fprintf(out, "%s{\"name\":\"%s\",\"driver\":\"%s\",\"state\":\"%s\",\"sensors\":%d,"
+				"\"samples\":%llu,\"rate_hz\":%.2f,\"malformed\":%llu,\"faults\":%llu}",
+				i ? "," : "", t->name, t->drv->name,
+				tracker_states[atomic_load_explicit(&t->st.state, memory_order_relaxed) & 3], t->n_sensors,
+				(unsigned long long)stat_get(&t->st.samples), r && i < r->n_trackers ? r->trk_rate[i] : 0.0,
+				(unsigned long long)stat_get(&t->st.malformed), (unsigned long long)stat_get(&t->st.faults));
+		}
+		fputs("],\"avatars\":[", out);
+		for (int i = 0; i < g->n_avatars; i++) {
+			struct gw_avatar *a = &g->av[i];
+			uint64_t solves = stat_get(&a->st.ik_solves);
+
+			fprintf(out, "%s{\"name\":\"%s\",\"id\":%u,\"state\":\"%s\",\"frames\":%llu,\"rate_hz\":%.2f,"
+				"\"new_frames\":%llu,\"stale_frames\":%llu,\"held\":%llu,\"ik_iters_per_arm\":%.3f,"
+				"\"ik_unreached\":%llu,\"nan_blocked\":%llu,"
+				"\"latency_us\":{\"n\":%llu,\"p50\":%.1f,\"p99\":%.1f,\"p999\":%.1f,\"max\":%.1f}}",
+				i ? "," : "", a->cfg->name, a->cfg->id,
+				sensor_states[atomic_load_explicit(&a->st.state, memory_order_relaxed) % 3],
+				(unsigned long long)stat_get(&a->st.frames), r && i < r->n_avatars ? r->av_rate[i] : 0.0,
+				(unsigned long long)stat_get(&a->st.new_frames),
+				(unsigned long long)stat_get(&a->st.stale_frames), (unsigned long long)stat_get(&a->st.held),
+				solves ? (double)stat_get(&a->st.ik_iters) / (double)solves : 0.0,
+				(unsigned long long)stat_get(&a->st.ik_unreached),
+				(unsigned long long)stat_get(&a->st.nan_blocked),
+				(unsigned long long)stat_get(&a->st.latency.n), us(hist_percentile(&a->st.latency, 0.5)),
+				us(hist_percentile(&a->st.latency, 0.99)), us(hist_percentile(&a->st.latency, 0.999)),
+				us(stat_get(&a->st.latency.max_ns)));
+		}
+		fputs("],\"outputs\":[", out);
+		for (int i = 0; i < g->n_outputs; i++) {
+			struct output *o = &g->out[i];
+
+			fprintf(out, "%s{\"name\":\"%s\",\"type\":\"%s\",\"sent\":%llu,\"dropped\":%llu,\"errors\":%llu,"
+				"\"clients\":%llu,\"accepted\":%llu,\"refused\":%llu,\"closed\":%llu}",
+				i ? "," : "", o->name, out_types[o->cfg->type], (unsigned long long)stat_get(&o->st.sent),
+				(unsigned long long)stat_get(&o->st.dropped), (unsigned long long)stat_get(&o->st.errors),
+				(unsigned long long)stat_get(&o->st.clients), (unsigned long long)stat_get(&o->st.accepted),
+				(unsigned long long)stat_get(&o->st.refused), (unsigned long long)stat_get(&o->st.closed));
+		}
+		fputs("]}\n", out);
+		return;
+	}
+	fprintf(out, "avatargw: up %.1f s, config %s, %.6g Hz %s, real-time %s, reloads %llu (%llu failed)\n", up,
+		info->config_name, g->cfg.daemon.rate, g->cfg.daemon.mode == CFG_LOOP_EVENTS ? "on events" : "to deadlines",
+		rts, (unsigned long long)info->reloads, (unsigned long long)info->reload_failures);
+	fprintf(out, "loop: %llu cycles, %llu overruns, work p50 %.1f p99 %.1f max %.1f us, wake-up late p99 %.1f max %.1f us\n",
+		(unsigned long long)stat_get(&g->st.cycles), (unsigned long long)stat_get(&g->st.overruns),
+		us(hist_percentile(wk, 0.5)), us(hist_percentile(wk, 0.99)), us(stat_get(&wk->max_ns)),
+		us(hist_percentile(wa, 0.99)), us(stat_get(&wa->max_ns)));
+	fprintf(out, "\n%-16s %-8s %-7s %8s %10s %9s %7s\n", "SOURCE", "DRIVER", "STATE", "RATE/s", "SAMPLES",
+		"MALFORMED", "FAULTS");
+	for (int i = 0; i < g->n_trackers; i++) {
+		struct tracker *t = &g->trk[i];
+
+		fprintf(out, "%-16s %-8s %-7s %8.1f %10llu %9llu %7llu\n", t->name, t->drv->name,
+			tracker_states[atomic_load_explicit(&t->st.state, memory_order_relaxed) & 3],
+			r && i < r->n_trackers ? r->trk_rate[i] : 0.0, (unsigned long long)stat_get(&t->st.samples),
+			(unsigned long long)stat_get(&t->st.malformed), (unsigned long long)stat_get(&t->st.faults));
+	}
+	fprintf(out, "\n%-16s %5s %-6s %8s %9s %7s %6s %8s %9s %5s %26s\n", "AVATAR", "ID", "STATE", "RATE/s", "FRAMES",
+		"STALE", "HELD", "IK_IT/ARM", "UNREACHED", "NAN", "LATENCY us p50/p99/max");
+	for (int i = 0; i < g->n_avatars; i++) {
+		struct gw_avatar *a = &g->av[i];
+		uint64_t solves = stat_get(&a->st.ik_solves);
+
+		fprintf(out, "%-16s %5u %-6s %8.1f %9llu %7llu %6llu %8.2f %9llu %5llu %10.1f/%.1f/%.1f\n", a->cfg->name,
+			a->cfg->id, sensor_states[atomic_load_explicit(&a->st.state, memory_order_relaxed) % 3],
+			r && i < r->n_avatars ? r->av_rate[i] : 0.0, (unsigned long long)stat_get(&a->st.frames),
+			(unsigned long long)stat_get(&a->st.stale_frames), (unsigned long long)stat_get(&a->st.held),
+			solves ? (double)stat_get(&a->st.ik_iters) / (double)solves : 0.0,
+			(unsigned long long)stat_get(&a->st.ik_unreached), (unsigned long long)stat_get(&a->st.nan_blocked),
+			us(hist_percentile(&a->st.latency, 0.5)), us(hist_percentile(&a->st.latency, 0.99)),
+			us(stat_get(&a->st.latency.max_ns)));
+	}
+	fprintf(out, "\n%-16s %-9s %10s %9s %7s %8s\n", "OUTPUT", "TYPE", "SENT", "DROPPED", "ERRORS", "CLIENTS");
+	for (int i = 0; i < g->n_outputs; i++) {
+		struct output *o = &g->out[i];
+
+		fprintf(out, "%-16s %-9s %10llu %9llu %7llu %8llu\n", o->name, out_types[o->cfg->type],
+			(unsigned long long)stat_get(&o->st.sent), (unsigned long long)stat_get(&o->st.dropped),
+			(unsigned long long)stat_get(&o->st.errors), (unsigned long long)stat_get(&o->st.clients));
+	}
+}
+
+void ctl_serve(int lfd, const struct ctl_info *info, bool *want_reload)
+{
+	char req[128];
+	size_t got = 0;
+	int fd = accept4(lfd, NULL, NULL, SOCK_CLOEXEC);
+	char *text = NULL;
+	size_t len = 0;
+	FILE *out;
+
+	if (fd < 0)
+		return;
+	{
+		struct timeval tv = { 0, 500000 };
+
+		setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof(tv));
+	}
+	/* one line, within half a second: a silent client does not hold the control thread */
+	while (got < sizeof(req) - 1) {
+		struct pollfd p = { fd, POLLIN, 0 };
+		ssize_t n;
+
+		if (poll(&p, 1, 500) <= 0)
+			break;
+		n = recv(fd, req + got, sizeof(req) - 1 - got, 0);
+		if (n <= 0)
+			break;
+		got += (size_t)n;
+		if (memchr(req, '\n', got))
+			break;
+	}
+	req[got] = '\0';
+	req[strcspn(req, "\r\n")] = '\0';
+	out = open_memstream(&text, &len);
+	if (!out) {
+		close(fd);
+		return;
+	}
+	if (!strcmp(req, "status"))
+		ctl_status(out, info, false);
+	else if (!strcmp(req, "status json"))
+		ctl_status(out, info, true);
+	else if (!strcmp(req, "reload")) {
+		*want_reload = true;
+		fputs("reloading\n", out);
+	} else
+		fprintf(out, "error: unknown request '%s' (status, status json, reload)\n", req);
+	fclose(out);
+	for (size_t off = 0; off < len;) {
+		ssize_t n = send(fd, text + off, len - off, MSG_NOSIGNAL);
+
+		if (n <= 0)
+			break;
+		off += (size_t)n;
+	}
+	free(text);
+	close(fd);
+}

@@ -1,0 +1,291 @@
+// SPDX-License-Identifier: MIT
+/*
+ * gateway.c - a configuration made real, and the body of one cycle.
+ */
+#include "daemon/gateway.h"
+
+#include "publish/encode.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+uint64_t gw_mono_ns(void)
+{
+	struct timespec ts;
+
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
+}
+
+void gw_clock(struct tracker_clock *c)
+{
+	struct timespec r;
+
+	c->mono_ns = gw_mono_ns();
+	clock_gettime(CLOCK_REALTIME, &r);
+	c->real_off_ns = (int64_t)((uint64_t)r.tv_sec * 1000000000ull + (uint64_t)r.tv_nsec) - (int64_t)c->mono_ns;
+}
+
+static void avatar_setup(struct gateway *g, struct gw_avatar *a, const struct cfg_avatar *c)
+{
+	struct arm_dims dims = { c->dims[0], c->dims[1], c->dims[2], c->dims[3] };
+	struct vec3 off = { c->head_offset[0], c->head_offset[1], c->head_offset[2] };
+	struct arm_limits lim;
+	struct wire_describe d;
+
+	a->cfg = c;
+	for (int j = 0; j < ARM_DOF; j++) {
+		lim.lo[j] = c->lo[j];
+		lim.hi[j] = c->hi[j];
+	}
+	avatar_init(&a->av, &dims, &off, &lim);
+	a->kin = c->solver == CFG_SOLVER_MATRIX ? &ik_kin_mat : &ik_kin_dq;
+	ik_default_opts(&a->opts);
+	a->opts.max_iter = c->max_iter;
+	a->opts.tol_pos = c->tol_mm * 1e-3;
+	a->opts.max_evals = c->max_evals;
+	a->opts.warm_iter = c->warm_iter;
+	for (int r = 0; r < FRAME_SENSORS; r++) {
+		a->fs.trk[r] = &g->trk[c->sensor[r].source];
+		a->fs.sensor[r] = c->sensor[r].sensor;
+	}
+	encode_describe(&a->av, c->name, g->cfg.daemon.rate, &d);
+	d.h.source_id = g->source_id;
+	d.h.avatar_id = c->id;
+	a->describe_len = (uint16_t)wire_encode_describe(&d, a->describe_msg);
+}
+
+/* the DESCRIBE payloads differ (the header's seq and rev do not count) */
+static bool describe_changed(const struct gw_avatar *a, const struct gw_avatar *b)
+{
+	return a->describe_len != b->describe_len ||
+	       memcmp(a->describe_msg + WIRE_HEADER_LEN, b->describe_msg + WIRE_HEADER_LEN,
+		      (size_t)a->describe_len - WIRE_HEADER_LEN);
+}
+
+int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t source_id, char *err, size_t errlen)
+{
+	uint16_t *ids;
+	int rc = 0;
+
+	memset(g, 0, sizeof(*g));
+	g->cfg = *cfg;
+	memset(cfg, 0, sizeof(*cfg));
+	g->source_id = source_id;
+	g->stale_ns = (uint64_t)(g->cfg.daemon.stale_ms * 1e6);
+	g->describe_ns = (uint64_t)(g->cfg.daemon.describe_interval * 1e9);
+	for (int i = 0; i < g->cfg.n_sources; i++) {
+		rc = tracker_open(&g->trk[i], &g->cfg.source[i], err, errlen);
+		if (rc)
+			goto fail;
+		g->n_trackers++;
+	}
+	g->av = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*g->av));
+	g->arena = malloc(((size_t)g->cfg.n_avatars * 2 + 1) * WIRE_MAX_MSG);
+	g->msgs = calloc((size_t)g->cfg.n_avatars * 2 + 1, sizeof(*g->msgs));
+	ids = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*ids));
+	if (!g->av || !g->arena || !g->msgs || !ids) {
+		free(ids);
+		snprintf(err, errlen, "out of memory");
+		rc = -ENOMEM;
+		goto fail;
+	}
+	for (int i = 0; i < g->cfg.n_avatars; i++) {
+		struct gw_avatar *a = &g->av[i];
+
+		avatar_setup(g, a, &g->cfg.avatar[i]);
+		ids[i] = a->cfg->id;
+		for (int j = 0; old && j < old->n_avatars; j++) {
+			const struct gw_avatar *o = &old->av[j];
+
+			if (o->cfg->id != a->cfg->id)
+				continue;
+			a->seq = o->seq;
+			a->dseq = o->dseq;
+			a->describe_rev = o->describe_rev + (describe_changed(a, o) ? 1 : 0);
+		}
+		g->n_avatars++;
+	}
+	for (int i = 0; i < g->cfg.n_outputs; i++) {
+		struct output *prev = NULL;
+
+		for (int j = 0; old && j < old->n_outputs; j++)
+			if (!strcmp(old->out[j].name, g->cfg.output[i].name))
+				prev = &old->out[j];
+		rc = output_open(&g->out[i], &g->cfg.output[i], ids, g->n_avatars, prev, err, errlen);
+		if (rc)
+			break;
+		g->n_outputs++;
+	}
+	free(ids);
+	if (rc) {
+		/* give adopted subscribers back before anything is closed */
+		for (int i = 0; old && i < g->n_outputs; i++)
+			for (int j = 0; j < old->n_outputs; j++)
+				if (!strcmp(old->out[j].name, g->out[i].name))
+					output_unadopt(&g->out[i], &old->out[j]);
+		goto fail;
+	}
+	return 0;
+fail:
+	gw_close(g);
+	return rc;
+}
+
+void gw_close(struct gateway *g)
+{
+	for (int i = g->n_outputs - 1; i >= 0; i--)
+		output_close(&g->out[i]);
+	for (int i = g->n_trackers - 1; i >= 0; i--)
+		tracker_close(&g->trk[i]);
+	free(g->msgs);
+	free(g->arena);
+	free(g->av);
+	config_free(&g->cfg);
+	memset(g, 0, sizeof(*g));
+}
+
+int gw_event_fds(struct gateway *g, int *fds, int max)
+{
+	int n = 0;
+
+	for (int i = 0; i < g->n_trackers && n < max; i++) {
+		int fd = g->trk[i].drv->fd ? g->trk[i].drv->fd(&g->trk[i]) : -1;
+
+		if (fd >= 0)
+			fds[n++] = fd;
+	}
+	return n;
+}
+
+static void poll_trackers(struct gateway *g, const struct tracker_clock *now)
+{
+	for (int i = 0; i < g->n_trackers; i++) {
+		struct tracker *t = &g->trk[i];
+		int rc = t->drv->poll(t, now);
+		uint32_t st = atomic_load_explicit(&t->st.state, memory_order_relaxed);
+		uint64_t newest = 0;
+
+		if (rc < 0) {
+			stat_add(&g->st.poll_errors, 1);
+			if (st != TRACKER_FAULTY)
+				stat_add(&t->st.faults, 1);
+			atomic_store_explicit(&t->st.state, TRACKER_FAULTY, memory_order_relaxed);
+			continue;
+		}
+		if (st == TRACKER_ENDED || (st == TRACKER_FAULTY && rc == 0))
+			continue;
+		for (int s = 0; s < t->n_sensors; s++)
+			if (t->slot[s].arrival_ns > newest)
+				newest = t->slot[s].arrival_ns;
+		st = newest && now->mono_ns - newest <= g->stale_ns ? TRACKER_OK : TRACKER_STALE;
+		atomic_store_explicit(&t->st.state, st, memory_order_relaxed);
+	}
+}
+
+static uint8_t *slot_of(struct gateway *g, int k)
+{
+	return g->arena + (size_t)k * WIRE_MAX_MSG;
+}
+
+int gw_cycle(struct gateway *g, const struct tracker_clock *now)
+{
+	static const struct dq nan_dq = { { NAN, NAN, NAN, NAN }, { NAN, NAN, NAN, NAN } };
+	int n = 0, frames = 0;
+	uint64_t sent_ns;
+
+	poll_trackers(g, now);
+	for (int i = 0; i < g->n_avatars; i++) {
+		struct gw_avatar *a = &g->av[i];
+		struct pose_frame pf;
+		struct wire_frame wf;
+		struct encode_in in = { &a->av, &pf, NULL, false };
+		const struct dq *s[FRAME_SENSORS];
+
+		frame_gather(&a->fs, now->mono_ns, g->stale_ns, &pf);
+		{
+			uint32_t worst = 0;
+
+			for (int r = 0; r < FRAME_SENSORS; r++)
+				worst = pf.state[r] > worst ? pf.state[r] : worst;
+			atomic_store_explicit(&a->st.state, worst, memory_order_relaxed);
+		}
+		for (int r = 0; r < FRAME_SENSORS; r++)
+			s[r] = pf.state[r] == WIRE_SENSOR_MISSING ? &nan_dq : &pf.sensor[r];
+		if (pf.state[0] != WIRE_SENSOR_MISSING) {
+			struct avatar_pose next;
+
+			avatar_solve(&a->av, a->kin, &a->opts, s[0], s[1], s[2], a->have_pose ? &a->pose : NULL, &next);
+			a->pose = next;
+			a->have_pose = true;
+			in.pose = &a->pose;
+			for (int side = 0; side < 2; side++) {
+				stat_add(&a->st.ik_iters, (uint64_t)next.res[side].iters);
+				if (next.res[side].flags & (IK_UNREACHABLE | IK_BAD_TARGET))
+					stat_add(&a->st.ik_unreached, 1);
+			}
+			stat_add(&a->st.ik_solves, 2);
+		} else if (a->have_pose) {
+			in.pose = &a->pose;
+			in.held = true;
+			stat_add(&a->st.held, 1);
+		}
+		memset(&wf.h, 0, sizeof(wf.h));
+		encode_frame(&in, &wf);
+		if (in.pose && !encode_frame_finite(&wf)) {
+			/* never publish a NaN posture: count, and forget it as a seed */
+			stat_add(&a->st.nan_blocked, 1);
+			a->have_pose = false;
+			continue;
+		}
+		wf.h.source_id = g->source_id;
+		wf.h.seq = a->seq++;
+		wf.h.describe_rev = a->describe_rev;
+		wf.h.sample_time_ns = pf.t_ns;
+		wf.h.avatar_id = a->cfg->id;
+		g->msgs[n] = (struct out_msg){ slot_of(g, n), 0, (uint16_t)i };
+		g->msgs[n].len = (uint16_t)wire_encode_frame(&wf, slot_of(g, n));
+		n++;
+		frames++;
+		stat_add(&a->st.frames, 1);
+		if (pf.new_sample) {
+			stat_add(&a->st.new_frames, 1);
+			a->pose_arrival_ns = pf.arrival_ns;
+		}
+		if (wf.h.flags & WIRE_F_STALE)
+			stat_add(&a->st.stale_frames, 1);
+		if (now->mono_ns >= a->next_describe_ns) {
+			uint8_t *d = slot_of(g, n);
+
+			memcpy(d, a->describe_msg, a->describe_len);
+			/* seq (offset 16) and revision (20) change; the rest was encoded at start-up */
+			for (int b = 0; b < 4; b++) {
+				d[16 + b] = (uint8_t)(a->dseq >> (8 * b));
+				d[20 + b] = (uint8_t)(a->describe_rev >> (8 * b));
+			}
+			a->dseq++;
+			g->msgs[n++] = (struct out_msg){ d, a->describe_len, (uint16_t)i };
+			a->next_describe_ns = now->mono_ns + g->describe_ns;
+		}
+	}
+	for (int o = 0; o < g->n_outputs; o++) {
+		g->out[o].ops->service(&g->out[o]);
+		g->out[o].ops->send(&g->out[o], g->msgs, n);
+	}
+	sent_ns = gw_mono_ns();
+	for (int i = 0; i < g->n_avatars; i++) {
+		struct gw_avatar *a = &g->av[i];
+
+		/* frames carrying a sample that arrived since the previous cycle */
+		if (a->pose_arrival_ns) {
+			hist_add(&a->st.latency, sent_ns - a->pose_arrival_ns);
+			a->pose_arrival_ns = 0;
+		}
+	}
+	stat_add(&g->st.cycles, 1);
+	return frames;
+}

@@ -1,0 +1,90 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * gateway.h - everything a configuration becomes at start-up: trackers,
+ * avatars, outputs, and the buffers of one cycle. gw_cycle() is the loop's
+ * body: poll the trackers, gather each avatar's pose frame, solve it with
+ * the IK core, encode it, hand the batch to every output. After gw_open()
+ * nothing is allocated.
+ */
+#ifndef AGW_GATEWAY_H
+#define AGW_GATEWAY_H
+
+#include "avatargw/wire.h"
+#include "config/config.h"
+#include "daemon/stats.h"
+#include "frames/frame.h"
+#include "ik/avatar.h"
+#include "publish/output.h"
+#include "trackers/tracker.h"
+
+struct gw_avatar_stats {
+	_Atomic uint64_t frames;       /* published */
+	_Atomic uint64_t new_frames;   /* with a new sample */
+	_Atomic uint64_t stale_frames; /* with a sensor STALE or MISSING */
+	_Atomic uint64_t held;         /* no head: previous posture repeated */
+	_Atomic uint64_t ik_solves;    /* arms solved */
+	_Atomic uint64_t ik_iters;     /* Newton iterations, summed */
+	_Atomic uint64_t ik_unreached; /* arms whose target was out of reach or invalid */
+	_Atomic uint64_t nan_blocked;  /* frames not published because a number was not finite */
+	_Atomic uint32_t state;        /* worst sensor state of the last frame (enum wire_sensor_state) */
+	struct hist latency;           /* newest sample's arrival -> datagrams sent */
+};
+
+struct gw_avatar {
+	const struct cfg_avatar *cfg;
+	struct avatar av;
+	const struct ik_kin *kin;
+	struct ik_opts opts;
+	struct frame_source fs;
+	struct avatar_pose pose;
+	bool have_pose;
+	uint32_t seq, dseq;
+	uint32_t describe_rev;
+	uint64_t next_describe_ns;
+	uint64_t pose_arrival_ns;   /* arrival of the newest sample of the frame just queued, 0: none */
+	uint16_t describe_len;
+	uint8_t describe_msg[WIRE_MAX_MSG];
+	struct gw_avatar_stats st;
+};
+
+struct gw_stats {
+	_Atomic uint64_t cycles;
+	_Atomic uint64_t overruns;     /* cycles that started after their deadline had passed the next one */
+	_Atomic uint64_t poll_errors;
+	struct hist work;              /* time of one cycle's work */
+	struct hist wake;              /* lateness of the wake-up after the deadline */
+};
+
+struct gateway {
+	struct config cfg;
+	int n_trackers;
+	struct tracker trk[CFG_MAX_SOURCES];
+	int n_avatars;
+	struct gw_avatar *av;
+	int n_outputs;
+	struct output out[CFG_MAX_OUTPUTS];
+	uint8_t *arena;           /* one message per avatar and cycle, WIRE_MAX_MSG each, + DESCRIBEs */
+	struct out_msg *msgs;
+	uint32_t source_id;
+	uint64_t stale_ns;
+	uint64_t describe_ns;
+	struct gw_stats st;
+};
+
+/*
+ * Builds g from cfg (taken over: freed by gw_close). old: the gateway being
+ * replaced, or NULL; avatars with the same id keep their sequence numbers,
+ * stream outputs at the same address keep their subscribers. On failure old
+ * is as it was. Returns 0 or a negative errno with err set.
+ */
+int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t source_id, char *err, size_t errlen);
+void gw_close(struct gateway *g);
+/* one cycle at now; returns the number of frames published */
+int gw_cycle(struct gateway *g, const struct tracker_clock *now);
+/* descriptors that wake an event-mode loop (trackers with one); returns how many were written */
+int gw_event_fds(struct gateway *g, int *fds, int max);
+
+uint64_t gw_mono_ns(void);
+void gw_clock(struct tracker_clock *c);
+
+#endif /* AGW_GATEWAY_H */

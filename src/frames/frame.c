@@ -1,0 +1,36 @@
+// SPDX-License-Identifier: MIT
+/*
+ * frame.c - the latest samples of an avatar's three sensors, with states.
+ */
+#include "frames/frame.h"
+
+#include "avatargw/wire.h"
+
+void frame_gather(struct frame_source *src, uint64_t now_mono, uint64_t stale_ns, struct pose_frame *out)
+{
+	out->t_ns = 0;
+	out->arrival_ns = 0;
+	out->new_sample = false;
+	for (int i = 0; i < FRAME_SENSORS; i++) {
+		const struct tracker *t = src->trk[i];
+		const struct sensor_slot *s = &t->slot[src->sensor[i]];
+		uint32_t tstate = atomic_load_explicit(&((struct tracker *)t)->st.state, memory_order_relaxed);
+
+		if (!s->seen || tstate == TRACKER_FAULTY) {
+			out->state[i] = WIRE_SENSOR_MISSING;
+			out->age_ns[i] = s->seen && now_mono > s->arrival_ns ? now_mono - s->arrival_ns : 0;
+			continue;
+		}
+		out->sensor[i] = s->pose;
+		out->age_ns[i] = now_mono > s->arrival_ns ? now_mono - s->arrival_ns : 0;
+		out->state[i] = out->age_ns[i] > stale_ns ? WIRE_SENSOR_STALE : WIRE_SENSOR_OK;
+		if (s->count != src->last_count[i]) {
+			src->last_count[i] = s->count;
+			out->new_sample = true;
+			if (s->arrival_ns > out->arrival_ns)
+				out->arrival_ns = s->arrival_ns;
+		}
+		if (s->t_ns > out->t_ns)
+			out->t_ns = s->t_ns;
+	}
+}

@@ -1,0 +1,32 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * frame.h - one person's pose frame: the latest head, left-hand and
+ * right-hand samples, each with its state (OK, STALE, MISSING) and age.
+ * A stale sample is passed on as it was, flagged: never extrapolated.
+ */
+#ifndef AGW_FRAME_H
+#define AGW_FRAME_H
+
+#include "trackers/tracker.h"
+
+#define FRAME_SENSORS 3 /* head, left hand, right hand (cfg_sensor_roles) */
+
+struct pose_frame {
+	struct dq sensor[FRAME_SENSORS]; /* world; meaningful when state != MISSING */
+	uint8_t state[FRAME_SENSORS];    /* enum wire_sensor_state */
+	uint64_t age_ns[FRAME_SENSORS];  /* now - arrival */
+	uint64_t t_ns;                   /* newest tracker sample time, CLOCK_REALTIME */
+	uint64_t arrival_ns;             /* CLOCK_MONOTONIC arrival of the newest sample */
+	bool new_sample;                 /* a sample arrived since the previous frame */
+};
+
+struct frame_source {
+	const struct tracker *trk[FRAME_SENSORS];
+	int sensor[FRAME_SENSORS];
+	uint32_t last_count[FRAME_SENSORS]; /* samples seen at the previous frame */
+};
+
+/* Gathers the latest samples; stale_ns: age beyond which a sample is STALE. */
+void frame_gather(struct frame_source *src, uint64_t now_mono, uint64_t stale_ns, struct pose_frame *out);
+
+#endif /* AGW_FRAME_H */

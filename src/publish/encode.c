@@ -1,0 +1,186 @@
+// SPDX-License-Identifier: MIT
+/*
+ * encode.c - from the IK core's result to the protocol's structs.
+ *
+ * Segment frames along an arm (k[i] = Q1...Qi, see ik/arm.h): the shoulder
+ * sits at k[3]'s origin with k[4]'s rotation (the upper arm), the elbow at
+ * k[4] with k[5]'s rotation (the forearm), the wrist at k[7] with k[8]'s
+ * rotation (the hand), the hand at k[8] (the end effector, which tracks the
+ * hand sensor).
+ */
+#include "publish/encode.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+static void put_pose(const struct dq *d, struct wire_pose *p)
+{
+	struct vec3 t;
+
+	dq_translation(d, &t);
+	p->p[0] = (float)t.x;
+	p->p[1] = (float)t.y;
+	p->p[2] = (float)t.z;
+	p->q[0] = (float)d->r.w;
+	p->q[1] = (float)d->r.x;
+	p->q[2] = (float)d->r.y;
+	p->q[3] = (float)d->r.z;
+}
+
+static void put_pose_rt(const struct dq *chest, const struct dq *at, const struct dq *rot, struct wire_pose *p)
+{
+	struct vec3 t;
+	struct dq mix;
+
+	dq_translation(at, &t);
+	dq_from_rt(&rot->r, &t, &mix);
+	{
+		struct dq w;
+
+		dq_mul(chest, &mix, &w);
+		put_pose(&w, p);
+	}
+}
+
+static void nan_pose(struct wire_pose *p)
+{
+	for (int i = 0; i < 3; i++)
+		p->p[i] = NAN;
+	for (int i = 0; i < 4; i++)
+		p->q[i] = NAN;
+}
+
+void encode_frame(const struct encode_in *in, struct wire_frame *out)
+{
+	const struct pose_frame *pf = in->pf;
+	const struct avatar_pose *pose = in->pose;
+	static const int seg0[2] = { WIRE_SEG_R_SHOULDER, WIRE_SEG_L_SHOULDER };
+	uint16_t flags = 0;
+
+	for (int i = 0; i < WIRE_SENSORS; i++) {
+		struct wire_sensor_sample *s = &out->sensor[i];
+		uint64_t a = pf->age_ns[i] / 100000u;
+
+		s->state = pf->state[i];
+		s->age_100us = a > 65535 ? 65535 : (uint16_t)a;
+		if (s->state == WIRE_SENSOR_MISSING)
+			nan_pose(&s->pose);
+		else
+			put_pose(&pf->sensor[i], &s->pose);
+		if (s->state != WIRE_SENSOR_OK)
+			flags |= WIRE_F_STALE;
+	}
+	if (pf->new_sample)
+		flags |= WIRE_F_NEW_SAMPLE;
+	if (in->held)
+		flags |= WIRE_F_HELD;
+	if (!pose) {
+		memset(out->arm, 0, sizeof(out->arm));
+		for (int i = 0; i < WIRE_JOINTS; i++)
+			out->joint[i] = NAN;
+		for (int i = 0; i < WIRE_SEGMENTS; i++)
+			nan_pose(&out->segment[i]);
+		out->h.flags = flags | WIRE_F_UNREACHED;
+		return;
+	}
+	out->joint[0] = (float)pose->head_yaw;
+	put_pose(&pose->chest, &out->segment[WIRE_SEG_CHEST]);
+	if (pf->state[WIRE_S_HEAD] == WIRE_SENSOR_MISSING)
+		nan_pose(&out->segment[WIRE_SEG_HEAD]);
+	else
+		put_pose(&pf->sensor[WIRE_S_HEAD], &out->segment[WIRE_SEG_HEAD]);
+	for (int side = 0; side < 2; side++) {
+		const struct ik_result *r = &pose->res[side];
+		struct dq k[ARM_DOF + 1];
+		struct wire_pose *seg = &out->segment[seg0[side]];
+
+		out->arm[side].ik_flags = (uint16_t)r->flags;
+		out->arm[side].iters = (uint8_t)(r->iters > 255 ? 255 : r->iters);
+		out->arm[side].pos_err = (float)r->err.pos;
+		if (r->flags & (IK_UNREACHABLE | IK_BAD_TARGET))
+			flags |= WIRE_F_UNREACHED;
+		for (int j = 0; j < ARM_DOF; j++)
+			out->joint[1 + side * ARM_DOF + j] = (float)pose->q[side][j];
+		arm_fk_frames(&in->av->arm[side], pose->q[side], k);
+		put_pose_rt(&pose->chest, &k[3], &k[4], &seg[0]);
+		put_pose_rt(&pose->chest, &k[4], &k[5], &seg[1]);
+		put_pose_rt(&pose->chest, &k[7], &k[8], &seg[2]);
+		put_pose_rt(&pose->chest, &k[8], &k[8], &seg[3]);
+	}
+	out->h.flags = flags;
+}
+
+static bool pose_finite(const struct wire_pose *p)
+{
+	for (int i = 0; i < 3; i++)
+		if (!isfinite(p->p[i]))
+			return false;
+	for (int i = 0; i < 4; i++)
+		if (!isfinite(p->q[i]))
+			return false;
+	return true;
+}
+
+bool encode_frame_finite(const struct wire_frame *f)
+{
+	for (int i = 0; i < WIRE_JOINTS; i++)
+		if (!isfinite(f->joint[i]))
+			return false;
+	for (int i = 0; i < WIRE_SEGMENTS; i++)
+		if (i != WIRE_SEG_HEAD && !pose_finite(&f->segment[i]))
+			return false;
+	return true;
+}
+
+void encode_describe(const struct avatar *av, const char *name, double rate_hz, struct wire_describe *out)
+{
+	/* the segment each arm joint's rotation is applied at (see the file comment) */
+	static const uint8_t joint_seg[ARM_DOF] = { 0, 0, 0, 0, 1, 2, 2, 2 };
+	static const uint8_t seg_parent[WIRE_SEGMENTS] = { 255, WIRE_SEG_CHEST, WIRE_SEG_CHEST, WIRE_SEG_R_SHOULDER,
+							   WIRE_SEG_R_ELBOW, WIRE_SEG_R_WRIST, WIRE_SEG_CHEST,
+							   WIRE_SEG_L_SHOULDER, WIRE_SEG_L_ELBOW, WIRE_SEG_L_WRIST };
+	static const int seg0[2] = { WIRE_SEG_R_SHOULDER, WIRE_SEG_L_SHOULDER };
+
+	memset(out, 0, sizeof(*out));
+	out->rate_hz = (float)rate_hz;
+	out->dims[0] = (float)av->body.dims.shoulder;
+	out->dims[1] = (float)av->body.dims.arm;
+	out->dims[2] = (float)av->body.dims.forearm;
+	out->dims[3] = (float)av->body.dims.hand;
+	out->head_offset[0] = (float)av->body.head_offset.x;
+	out->head_offset[1] = (float)av->body.head_offset.y;
+	out->head_offset[2] = (float)av->body.head_offset.z;
+	snprintf(out->avatar_name, sizeof(out->avatar_name), "%s", name);
+	snprintf(out->conventions, sizeof(out->conventions), "world z-up right-handed; m; rad; quat wxyz; "
+		 "chest x right y forward z up");
+	snprintf(out->joint[0].name, sizeof(out->joint[0].name), "%s", wire_joint_names[0]);
+	out->joint[0].segment = WIRE_SEG_CHEST;
+	out->joint[0].lo = (float)-M_PI;
+	out->joint[0].hi = (float)M_PI;
+	out->joint[0].axis[2] = 1;
+	for (int side = 0; side < 2; side++) {
+		const struct arm *a = &av->arm[side];
+
+		for (int j = 0; j < ARM_DOF; j++) {
+			struct wire_joint_desc *d = &out->joint[1 + side * ARM_DOF + j];
+
+			snprintf(d->name, sizeof(d->name), "%s", wire_joint_names[1 + side * ARM_DOF + j]);
+			d->segment = (uint8_t)(seg0[side] + joint_seg[j]);
+			d->lo = (float)a->lim.lo[j];
+			d->hi = (float)a->lim.hi[j];
+			d->axis[0] = (float)a->axis[j].x;
+			d->axis[1] = (float)a->axis[j].y;
+			d->axis[2] = (float)a->axis[j].z;
+			d->trans[0] = (float)a->trans[j].x;
+			d->trans[1] = (float)a->trans[j].y;
+			d->trans[2] = (float)a->trans[j].z;
+		}
+	}
+	for (int i = 0; i < WIRE_SEGMENTS; i++) {
+		snprintf(out->segment[i].name, sizeof(out->segment[i].name), "%s", wire_segment_names[i]);
+		out->segment[i].parent = seg_parent[i];
+	}
+	for (int i = 0; i < WIRE_SENSORS; i++)
+		snprintf(out->sensor[i], sizeof(out->sensor[i]), "%s", wire_sensor_names[i]);
+}

@@ -1,0 +1,76 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * output.h - where messages go: one const struct of operations per
+ * transport (udp.c: unicast and multicast; stream.c: TCP and Unix), listed
+ * in outputs.c's table by config type.
+ *
+ * The loop hands every output the same batch of encoded messages once per
+ * cycle. send() never blocks: what the kernel or a subscriber cannot take
+ * now is dropped and counted. service() accepts and retires subscribers.
+ */
+#ifndef AGW_OUTPUT_H
+#define AGW_OUTPUT_H
+
+#include "config/config.h"
+
+#include <stdatomic.h>
+#include <stdint.h>
+
+struct out_msg {
+	const uint8_t *data;
+	uint16_t len;
+	uint16_t avatar;  /* index into the gateway's avatars */
+};
+
+struct output_stats {
+	_Atomic uint64_t sent;      /* messages handed to the kernel */
+	_Atomic uint64_t dropped;   /* messages a full socket or subscriber could not take */
+	_Atomic uint64_t errors;    /* other send errors */
+	_Atomic uint64_t clients;   /* stream subscribers now */
+	_Atomic uint64_t accepted;  /* stream subscribers ever */
+	_Atomic uint64_t refused;   /* over max_clients */
+	_Atomic uint64_t closed;    /* subscribers that went away or were too slow for too long */
+	_Atomic int32_t last_errno;
+};
+
+struct output;
+
+struct output_ops {
+	int (*open)(struct output *o, char *err, size_t errlen);
+	void (*close)(struct output *o);
+	void (*send)(struct output *o, const struct out_msg *m, int n);
+	void (*service)(struct output *o);
+	/* moves what subscribers hold from old to o (a reload keeps them); may be NULL */
+	bool (*adopt)(struct output *o, struct output *old);
+};
+
+struct output {
+	const struct output_ops *ops;
+	const struct cfg_output *cfg;
+	char name[CFG_NAME_MAX];
+	bool *wants;        /* per avatar index */
+	int n_avatars;
+	uint32_t cycle;     /* for decimation */
+	bool adopted;       /* priv was taken over from the previous configuration */
+	struct output_stats st;
+	void *priv;
+};
+
+static inline void ctr_add_out(_Atomic uint64_t *c, uint64_t n)
+{
+	/* one writer (the loop) */
+	atomic_store_explicit(c, atomic_load_explicit(c, memory_order_relaxed) + n, memory_order_relaxed);
+}
+
+extern const struct output_ops udp_output_ops;
+extern const struct output_ops stream_output_ops;
+
+/* start-up: opens the transport; wants[] from the config's avatar list (ids by index) */
+/* old: an output of the configuration being replaced, whose subscribers this one may take over */
+int output_open(struct output *o, const struct cfg_output *cfg, const uint16_t *avatar_ids, int n_avatars,
+		struct output *old, char *err, size_t errlen);
+/* gives adopted subscribers back (a reload that failed) */
+void output_unadopt(struct output *o, struct output *old);
+void output_close(struct output *o);
+
+#endif /* AGW_OUTPUT_H */

@@ -1,0 +1,292 @@
+// SPDX-License-Identifier: MIT
+/*
+ * stream.c - TCP and Unix stream subscribers, each message preceded by its
+ * length (u32, little-endian).
+ *
+ * Every subscriber has a buffer allocated at open(); a cycle appends whole
+ * messages to it and writes what the socket takes without blocking. A
+ * message that does not fit is dropped whole and counted, so a slow reader
+ * loses messages, never the framing, and never slows the loop or the other
+ * subscribers. A reader that is gone (EOF, reset, EPIPE) is closed and its
+ * slot reused. On a reload with the same address the listening socket and
+ * the subscribers are handed to the new configuration (adopt()).
+ */
+#include "publish/output.h"
+
+#include "avatargw/wire.h"
+
+#include <errno.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+struct client {
+	int fd;        /* -1: free slot */
+	uint8_t *buf;
+	size_t off, len;
+};
+
+struct stream {
+	int lfd;
+	int type;
+	char addr[CFG_PATH_MAX + 8];  /* what adopt() compares */
+	int max_clients;
+	size_t buf_size;
+	struct client *cl;
+	uint8_t *pool;
+};
+
+static void describe_addr(const struct cfg_output *cfg, char *buf, size_t len)
+{
+	if (cfg->type == CFG_OUT_UNIX)
+		snprintf(buf, len, "unix:%s", cfg->path);
+	else
+		snprintf(buf, len, "tcp:%s:%d", cfg->address, cfg->port);
+}
+
+static int listen_tcp(const struct cfg_output *cfg, char *err, size_t errlen)
+{
+	struct addrinfo hints = { .ai_socktype = SOCK_STREAM, .ai_flags = AI_NUMERICSERV | AI_PASSIVE }, *ai;
+	char port[8];
+	int fd, one = 1, rc;
+
+	snprintf(port, sizeof(port), "%d", cfg->port);
+	rc = getaddrinfo(cfg->address[0] ? cfg->address : NULL, port, &hints, &ai);
+	if (rc) {
+		snprintf(err, errlen, "[output %s] address: %s: %s", cfg->name, cfg->address, gai_strerror(rc));
+		return -EINVAL;
+	}
+	fd = socket(ai->ai_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+	if (fd < 0 || setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one)) ||
+	    bind(fd, ai->ai_addr, ai->ai_addrlen) || listen(fd, 16)) {
+		rc = -errno;
+		snprintf(err, errlen, "[output %s]: listen on %s port %d: %s", cfg->name, cfg->address, cfg->port,
+			 strerror(errno));
+		if (fd >= 0)
+			close(fd);
+		freeaddrinfo(ai);
+		return rc;
+	}
+	freeaddrinfo(ai);
+	return fd;
+}
+
+static int listen_unix(const struct cfg_output *cfg, char *err, size_t errlen)
+{
+	struct sockaddr_un sun = { .sun_family = AF_UNIX };
+	struct stat st;
+	int fd, rc;
+
+	if (strlen(cfg->path) >= sizeof(sun.sun_path)) {
+		snprintf(err, errlen, "[output %s] path: longer than %zu characters", cfg->name,
+			 sizeof(sun.sun_path) - 1);
+		return -ENAMETOOLONG;
+	}
+	strcpy(sun.sun_path, cfg->path);
+	/* a socket left by a previous run is ours to replace; anything else is not */
+	if (lstat(cfg->path, &st) == 0) {
+		if (!S_ISSOCK(st.st_mode)) {
+			snprintf(err, errlen, "[output %s] path: %s exists and is not a socket", cfg->name, cfg->path);
+			return -EEXIST;
+		}
+		unlink(cfg->path);
+	}
+	fd = socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+	if (fd < 0 || bind(fd, (struct sockaddr *)&sun, sizeof(sun)) || listen(fd, 16)) {
+		rc = -errno;
+		snprintf(err, errlen, "[output %s]: listen on %s: %s", cfg->name, cfg->path, strerror(errno));
+		if (fd >= 0)
+			close(fd);
+		return rc;
+	}
+	return fd;
+}
+
+static int stream_open(struct output *o, char *err, size_t errlen)
+{
+	const struct cfg_output *cfg = o->cfg;
+	struct stream *s = calloc(1, sizeof(*s));
+
+	if (!s)
+		return -ENOMEM;
+	s->type = cfg->type;
+	describe_addr(cfg, s->addr, sizeof(s->addr));
+	s->max_clients = cfg->max_clients;
+	s->buf_size = (size_t)cfg->client_buffer;
+	s->cl = calloc((size_t)s->max_clients, sizeof(*s->cl));
+	s->pool = malloc((size_t)s->max_clients * s->buf_size);
+	if (!s->cl || !s->pool) {
+		free(s->cl);
+		free(s->pool);
+		free(s);
+		return -ENOMEM;
+	}
+	for (int i = 0; i < s->max_clients; i++) {
+		s->cl[i].fd = -1;
+		s->cl[i].buf = s->pool + (size_t)i * s->buf_size;
+	}
+	s->lfd = cfg->type == CFG_OUT_UNIX ? listen_unix(cfg, err, errlen) : listen_tcp(cfg, err, errlen);
+	if (s->lfd < 0) {
+		int rc = s->lfd;
+
+		free(s->cl);
+		free(s->pool);
+		free(s);
+		return rc;
+	}
+	o->priv = s;
+	return 0;
+}
+
+static void drop_client(struct output *o, struct client *c)
+{
+	close(c->fd);
+	c->fd = -1;
+	c->off = c->len = 0;
+	ctr_add_out(&o->st.closed, 1);
+	atomic_store_explicit(&o->st.clients, atomic_load_explicit(&o->st.clients, memory_order_relaxed) - 1,
+			      memory_order_relaxed);
+}
+
+static void stream_close(struct output *o)
+{
+	struct stream *s = o->priv;
+
+	if (!s)
+		return;
+	for (int i = 0; i < s->max_clients; i++)
+		if (s->cl[i].fd >= 0)
+			close(s->cl[i].fd);
+	close(s->lfd);
+	if (s->type == CFG_OUT_UNIX)
+		unlink(o->cfg->path);
+	free(s->cl);
+	free(s->pool);
+	free(s);
+	o->priv = NULL;
+}
+
+static void flush_client(struct output *o, struct client *c)
+{
+	while (c->len) {
+		ssize_t n = send(c->fd, c->buf + c->off, c->len, MSG_DONTWAIT | MSG_NOSIGNAL);
+
+		if (n > 0) {
+			c->off += (size_t)n;
+			c->len -= (size_t)n;
+			continue;
+		}
+		if (n < 0 && errno == EINTR)
+			continue;
+		if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK))
+			break;
+		drop_client(o, c);
+		return;
+	}
+	if (!c->len)
+		c->off = 0;
+}
+
+static void stream_send(struct output *o, const struct out_msg *m, int n)
+{
+	struct stream *s = o->priv;
+	bool frames = o->cfg->decimate <= 1 || o->cycle % (uint32_t)o->cfg->decimate == 0;
+
+	o->cycle++;
+	for (int i = 0; i < s->max_clients; i++) {
+		struct client *c = &s->cl[i];
+
+		if (c->fd < 0)
+			continue;
+		for (int j = 0; j < n; j++) {
+			size_t need = 4u + m[j].len;
+
+			if (!o->wants[m[j].avatar] || (!frames && m[j].data[5] == WIRE_FRAME))
+				continue;
+			if (c->off + c->len + need > s->buf_size && c->off) {
+				memmove(c->buf, c->buf + c->off, c->len);
+				c->off = 0;
+			}
+			if (c->len + need > s->buf_size) {
+				ctr_add_out(&o->st.dropped, 1);
+				continue;
+			}
+			wire_put_len(c->buf + c->off + c->len, m[j].len);
+			memcpy(c->buf + c->off + c->len + 4, m[j].data, m[j].len);
+			c->len += need;
+			ctr_add_out(&o->st.sent, 1);
+		}
+		flush_client(o, c);
+	}
+}
+
+static void stream_service(struct output *o)
+{
+	struct stream *s = o->priv;
+	uint8_t junk[256];
+
+	for (;;) {
+		int fd = accept4(s->lfd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC), slot = -1, one = 1;
+
+		if (fd < 0)
+			break;
+		for (int i = 0; i < s->max_clients && slot < 0; i++)
+			if (s->cl[i].fd < 0)
+				slot = i;
+		if (slot < 0) {
+			close(fd);
+			ctr_add_out(&o->st.refused, 1);
+			continue;
+		}
+		if (s->type == CFG_OUT_TCP)
+			setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
+		s->cl[slot].fd = fd;
+		s->cl[slot].off = s->cl[slot].len = 0;
+		ctr_add_out(&o->st.accepted, 1);
+		ctr_add_out(&o->st.clients, 1);
+	}
+	/* subscribers send nothing: a readable socket means EOF (gone) or noise to discard */
+	for (int i = 0; i < s->max_clients; i++) {
+		struct client *c = &s->cl[i];
+		ssize_t n;
+
+		if (c->fd < 0)
+			continue;
+		n = recv(c->fd, junk, sizeof(junk), MSG_DONTWAIT);
+		if (n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR))
+			drop_client(o, c);
+	}
+}
+
+static bool stream_adopt(struct output *o, struct output *old)
+{
+	struct stream *s = old->priv;
+	char addr[CFG_PATH_MAX + 8];
+
+	if (!s)
+		return false;
+	describe_addr(o->cfg, addr, sizeof(addr));
+	if (strcmp(addr, s->addr) || s->max_clients != o->cfg->max_clients ||
+	    s->buf_size != (size_t)o->cfg->client_buffer)
+		return false;
+	o->priv = s;
+	old->priv = NULL;
+	atomic_store_explicit(&o->st.clients, atomic_load_explicit(&old->st.clients, memory_order_relaxed),
+			      memory_order_relaxed);
+	return true;
+}
+
+const struct output_ops stream_output_ops = {
+	.open = stream_open,
+	.close = stream_close,
+	.send = stream_send,
+	.service = stream_service,
+	.adopt = stream_adopt,
+};

@@ -1,0 +1,103 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * tracker.h - the tracker driver interface: one const struct of operations
+ * per device family (sim.c, replay.c, ...), listed in trackers.c's table
+ * which maps config names to drivers.
+ *
+ * A tracker owns its sensors' latest samples (struct sensor_slot). The loop
+ * calls poll() at every cycle; poll() never blocks, never allocates and
+ * never logs: it counts. Samples are stored in the world frame (z up,
+ * metres, unit quaternions), through the tracker's transform from config.
+ */
+#ifndef AGW_TRACKER_H
+#define AGW_TRACKER_H
+
+#include "config/config.h"
+#include "ik/dq.h"
+
+#include <stdatomic.h>
+
+struct tracker;
+
+enum tracker_state {
+	TRACKER_OK = 0,
+	TRACKER_STALE = 1,  /* no new sample for longer than the stale time */
+	TRACKER_FAULTY = 2, /* the device failed: retried */
+	TRACKER_ENDED = 3,  /* a replay that reached its end */
+};
+
+struct sensor_slot {
+	struct dq pose;      /* world */
+	uint64_t t_ns;       /* tracker sample time, CLOCK_REALTIME */
+	uint64_t arrival_ns; /* CLOCK_MONOTONIC when the daemon took it in */
+	uint32_t count;      /* samples taken in */
+	bool seen;
+};
+
+struct tracker_clock {
+	uint64_t mono_ns;     /* CLOCK_MONOTONIC now */
+	int64_t real_off_ns;  /* CLOCK_REALTIME - CLOCK_MONOTONIC */
+};
+
+struct tracker_driver {
+	const char *name;
+	const char *summary;
+	/* the sensors a source of this driver has, from its config alone */
+	int (*sensor_count)(const struct cfg_source *cfg);
+	void (*sensor_name)(const struct cfg_source *cfg, int i, char *buf, size_t len);
+	/* checks what config cannot (a file's content); 0 or -1 with err */
+	int (*check)(const struct cfg_source *cfg, char *err, size_t errlen);
+	/* start-up: allocate, open; 0 or a negative errno (err says why) */
+	int (*open)(struct tracker *t, char *err, size_t errlen);
+	void (*close)(struct tracker *t);
+	/* non-blocking: take in what has arrived; returns the number of new samples or a negative errno */
+	int (*poll)(struct tracker *t, const struct tracker_clock *now);
+	/* a descriptor that becomes readable when samples arrive (event mode), or -1 */
+	int (*fd)(struct tracker *t);
+};
+
+struct tracker_stats {
+	_Atomic uint64_t samples;
+	_Atomic uint64_t malformed;
+	_Atomic uint64_t faults;
+	_Atomic uint32_t state;
+};
+
+struct tracker {
+	const struct tracker_driver *drv;
+	const struct cfg_source *cfg;
+	char name[CFG_NAME_MAX];
+	int n_sensors;
+	struct sensor_slot *slot;
+	struct dq world;          /* tracker frame -> world */
+	struct tracker_stats st;
+	void *priv;               /* the driver's state */
+};
+
+/* the table: index = cfg_source.driver */
+extern const struct tracker_driver *const trackers_table[];
+extern const int trackers_count;
+int trackers_find(const char *name);
+
+/* start-up: allocates the slots and calls the driver's open() */
+int tracker_open(struct tracker *t, const struct cfg_source *cfg, char *err, size_t errlen);
+void tracker_close(struct tracker *t);
+/* a sample in the tracker's frame, stored in world coordinates */
+void tracker_put(struct tracker *t, int sensor, const struct dq *local, uint64_t t_ns, uint64_t arrival_ns);
+int tracker_sensor_lookup(const struct cfg_source *cfg, const char *name);
+
+static inline void ctr_add(_Atomic uint64_t *c, uint64_t n)
+{
+	/* one writer (the loop): a relaxed load and store, no locked instruction */
+	atomic_store_explicit(c, atomic_load_explicit(c, memory_order_relaxed) + n, memory_order_relaxed);
+}
+
+static inline uint64_t ctr_get(_Atomic uint64_t *c)
+{
+	return atomic_load_explicit(c, memory_order_relaxed);
+}
+
+extern const struct tracker_driver sim_driver;
+extern const struct tracker_driver replay_driver;
+
+#endif /* AGW_TRACKER_H */

@@ -1,0 +1,86 @@
+// SPDX-License-Identifier: MIT
+/*
+ * trackers.c - the table of tracker drivers (config name -> driver) and
+ * what every tracker shares: its sensor slots and its world transform.
+ */
+#include "trackers/tracker.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+const struct tracker_driver *const trackers_table[] = {
+	&sim_driver,
+	&replay_driver,
+};
+
+const int trackers_count = (int)(sizeof(trackers_table) / sizeof(trackers_table[0]));
+
+int trackers_find(const char *name)
+{
+	for (int i = 0; i < trackers_count; i++)
+		if (!strcmp(trackers_table[i]->name, name))
+			return i;
+	return -1;
+}
+
+int tracker_sensor_lookup(const struct cfg_source *cfg, const char *name)
+{
+	const struct tracker_driver *d = trackers_table[cfg->driver];
+	int n = d->sensor_count(cfg);
+	char buf[CFG_NAME_MAX * 2];
+
+	for (int i = 0; i < n; i++) {
+		d->sensor_name(cfg, i, buf, sizeof(buf));
+		if (!strcmp(buf, name))
+			return i;
+	}
+	return -1;
+}
+
+int tracker_open(struct tracker *t, const struct cfg_source *cfg, char *err, size_t errlen)
+{
+	struct quat r = { cos(cfg->yaw / 2), 0, 0, sin(cfg->yaw / 2) };
+	struct vec3 o = { cfg->origin[0], cfg->origin[1], cfg->origin[2] };
+	int rc;
+
+	memset(t, 0, sizeof(*t));
+	t->drv = trackers_table[cfg->driver];
+	t->cfg = cfg;
+	snprintf(t->name, sizeof(t->name), "%s", cfg->name);
+	dq_from_rt(&r, &o, &t->world);
+	t->n_sensors = t->drv->sensor_count(cfg);
+	t->slot = calloc((size_t)t->n_sensors, sizeof(*t->slot));
+	if (!t->slot) {
+		snprintf(err, errlen, "[source %s]: out of memory", cfg->name);
+		return -ENOMEM;
+	}
+	rc = t->drv->open(t, err, errlen);
+	if (rc) {
+		free(t->slot);
+		t->slot = NULL;
+	}
+	return rc;
+}
+
+void tracker_close(struct tracker *t)
+{
+	if (t->drv && t->slot)
+		t->drv->close(t);
+	free(t->slot);
+	t->slot = NULL;
+	t->drv = NULL;
+}
+
+void tracker_put(struct tracker *t, int sensor, const struct dq *local, uint64_t t_ns, uint64_t arrival_ns)
+{
+	struct sensor_slot *s = &t->slot[sensor];
+
+	dq_mul(&t->world, local, &s->pose);
+	s->t_ns = t_ns;
+	s->arrival_ns = arrival_ns;
+	s->count++;
+	s->seen = true;
+	ctr_add(&t->st.samples, 1);
+}

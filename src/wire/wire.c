@@ -1,0 +1,373 @@
+// SPDX-License-Identifier: MIT
+/*
+ * wire.c - encoder and decoder of the avatargw protocol (see avatargw/wire.h
+ * and docs/PROTOCOL.md). Explicit little-endian byte writes: the same bytes
+ * on every host, no struct layout on the wire.
+ */
+#include "avatargw/wire.h"
+
+#include <string.h>
+
+const char *const wire_joint_names[WIRE_JOINTS] = {
+	"chest_yaw",
+	"r_girdle", "r_sh_abd", "r_sh_flex", "r_sh_rot", "r_elbow", "r_pronation", "r_wr_flex", "r_wr_dev",
+	"l_girdle", "l_sh_abd", "l_sh_flex", "l_sh_rot", "l_elbow", "l_pronation", "l_wr_flex", "l_wr_dev",
+};
+
+const char *const wire_segment_names[WIRE_SEGMENTS] = {
+	"chest", "head", "r_shoulder", "r_elbow", "r_wrist", "r_hand",
+	"l_shoulder", "l_elbow", "l_wrist", "l_hand",
+};
+
+const char *const wire_sensor_names[WIRE_SENSORS] = { "head", "left_hand", "right_hand" };
+
+const char *wire_strerror(int err)
+{
+	switch (err < 0 ? -err : err) {
+	case 0: return "no error";
+	case WIRE_ESHORT: return "message shorter than its header says";
+	case WIRE_EMAGIC: return "not an avatargw message (bad magic)";
+	case WIRE_EVERSION: return "unsupported protocol version";
+	case WIRE_ETYPE: return "unexpected message type";
+	case WIRE_ECOUNT: return "counts do not fit this protocol version";
+	case WIRE_ELONG: return "message too long";
+	case WIRE_ESTRING: return "name too long";
+	default: return "unknown wire error";
+	}
+}
+
+/* ---- byte writer / reader ------------------------------------------------- */
+
+struct wbuf {
+	uint8_t *p;
+	size_t n;
+};
+
+static void put_u8(struct wbuf *w, uint8_t v)
+{
+	w->p[w->n++] = v;
+}
+
+static void put_u16(struct wbuf *w, uint16_t v)
+{
+	put_u8(w, (uint8_t)v);
+	put_u8(w, (uint8_t)(v >> 8));
+}
+
+static void put_u32(struct wbuf *w, uint32_t v)
+{
+	put_u16(w, (uint16_t)v);
+	put_u16(w, (uint16_t)(v >> 16));
+}
+
+static void put_u64(struct wbuf *w, uint64_t v)
+{
+	put_u32(w, (uint32_t)v);
+	put_u32(w, (uint32_t)(v >> 32));
+}
+
+static void put_f32(struct wbuf *w, float f)
+{
+	uint32_t v;
+
+	memcpy(&v, &f, sizeof(v));
+	put_u32(w, v);
+}
+
+static void put_str(struct wbuf *w, const char *s)
+{
+	size_t len = strnlen(s, WIRE_NAME_MAX * 4);
+
+	put_u8(w, (uint8_t)len);
+	memcpy(w->p + w->n, s, len);
+	w->n += len;
+}
+
+static void put_pose(struct wbuf *w, const struct wire_pose *p)
+{
+	for (int i = 0; i < 3; i++)
+		put_f32(w, p->p[i]);
+	for (int i = 0; i < 4; i++)
+		put_f32(w, p->q[i]);
+}
+
+struct rbuf {
+	const uint8_t *p;
+	size_t n, len;
+	int err;
+};
+
+static uint8_t get_u8(struct rbuf *r)
+{
+	if (r->n + 1 > r->len) {
+		r->err = WIRE_ESHORT;
+		return 0;
+	}
+	return r->p[r->n++];
+}
+
+static uint16_t get_u16(struct rbuf *r)
+{
+	uint16_t lo = get_u8(r);
+
+	return (uint16_t)(lo | (uint16_t)get_u8(r) << 8);
+}
+
+static uint32_t get_u32(struct rbuf *r)
+{
+	uint32_t lo = get_u16(r);
+
+	return lo | (uint32_t)get_u16(r) << 16;
+}
+
+static uint64_t get_u64(struct rbuf *r)
+{
+	uint64_t lo = get_u32(r);
+
+	return lo | (uint64_t)get_u32(r) << 32;
+}
+
+static float get_f32(struct rbuf *r)
+{
+	uint32_t v = get_u32(r);
+	float f;
+
+	memcpy(&f, &v, sizeof(f));
+	return f;
+}
+
+static void get_str(struct rbuf *r, char *out, size_t cap)
+{
+	size_t len = get_u8(r);
+
+	out[0] = '\0';
+	if (r->err)
+		return;
+	if (len >= cap) {
+		r->err = WIRE_ESTRING;
+		return;
+	}
+	if (r->n + len > r->len) {
+		r->err = WIRE_ESHORT;
+		return;
+	}
+	memcpy(out, r->p + r->n, len);
+	out[len] = '\0';
+	r->n += len;
+}
+
+static void get_pose(struct rbuf *r, struct wire_pose *p)
+{
+	for (int i = 0; i < 3; i++)
+		p->p[i] = get_f32(r);
+	for (int i = 0; i < 4; i++)
+		p->q[i] = get_f32(r);
+}
+
+/* ---- header ------------------------------------------------------------------- */
+
+static void put_header(struct wbuf *w, const struct wire_header *h, uint8_t type)
+{
+	put_u32(w, WIRE_MAGIC);
+	put_u8(w, WIRE_VERSION);
+	put_u8(w, type);
+	put_u16(w, WIRE_HEADER_LEN);
+	put_u16(w, 0); /* payload length, patched by finish() */
+	put_u16(w, h->flags);
+	put_u32(w, h->source_id);
+	put_u32(w, h->seq);
+	put_u32(w, h->describe_rev);
+	put_u64(w, h->sample_time_ns);
+	put_u16(w, h->avatar_id);
+	put_u8(w, WIRE_JOINTS);
+	put_u8(w, WIRE_SEGMENTS);
+	put_u8(w, WIRE_SENSORS);
+	put_u8(w, 0);
+	put_u16(w, 0);
+}
+
+static size_t finish(struct wbuf *w)
+{
+	uint16_t pl = (uint16_t)(w->n - WIRE_HEADER_LEN);
+
+	w->p[8] = (uint8_t)pl;
+	w->p[9] = (uint8_t)(pl >> 8);
+	return w->n;
+}
+
+int wire_peek(const uint8_t *buf, size_t len, struct wire_header *h)
+{
+	struct rbuf r = { buf, 0, len, 0 };
+	uint32_t magic;
+
+	if (len < WIRE_HEADER_LEN)
+		return -WIRE_ESHORT;
+	magic = get_u32(&r);
+	if (magic != WIRE_MAGIC)
+		return -WIRE_EMAGIC;
+	h->version = get_u8(&r);
+	if (h->version != WIRE_VERSION)
+		return -WIRE_EVERSION;
+	h->type = get_u8(&r);
+	h->header_len = get_u16(&r);
+	h->payload_len = get_u16(&r);
+	h->flags = get_u16(&r);
+	h->source_id = get_u32(&r);
+	h->seq = get_u32(&r);
+	h->describe_rev = get_u32(&r);
+	h->sample_time_ns = get_u64(&r);
+	h->avatar_id = get_u16(&r);
+	h->n_joints = get_u8(&r);
+	h->n_segments = get_u8(&r);
+	h->n_sensors = get_u8(&r);
+	if (h->header_len < WIRE_HEADER_LEN)
+		return -WIRE_ESHORT;
+	if ((size_t)h->header_len + h->payload_len > len)
+		return -WIRE_ESHORT;
+	if ((size_t)h->header_len + h->payload_len > WIRE_MAX_MSG)
+		return -WIRE_ELONG;
+	if (h->n_joints != WIRE_JOINTS || h->n_segments != WIRE_SEGMENTS || h->n_sensors != WIRE_SENSORS)
+		return -WIRE_ECOUNT;
+	return h->type;
+}
+
+/* ---- FRAME -------------------------------------------------------------------- */
+
+size_t wire_encode_frame(const struct wire_frame *f, uint8_t *buf)
+{
+	struct wbuf w = { buf, 0 };
+
+	put_header(&w, &f->h, WIRE_FRAME);
+	for (int i = 0; i < WIRE_SENSORS; i++) {
+		put_u8(&w, f->sensor[i].state);
+		put_u8(&w, 0);
+		put_u16(&w, f->sensor[i].age_100us);
+		put_pose(&w, &f->sensor[i].pose);
+	}
+	for (int i = 0; i < WIRE_ARMS; i++) {
+		put_u16(&w, f->arm[i].ik_flags);
+		put_u8(&w, f->arm[i].iters);
+		put_u8(&w, 0);
+		put_f32(&w, f->arm[i].pos_err);
+	}
+	for (int i = 0; i < WIRE_JOINTS; i++)
+		put_f32(&w, f->joint[i]);
+	for (int i = 0; i < WIRE_SEGMENTS; i++)
+		put_pose(&w, &f->segment[i]);
+	return finish(&w);
+}
+
+int wire_decode_frame(const uint8_t *buf, size_t len, struct wire_frame *f)
+{
+	int type = wire_peek(buf, len, &f->h);
+	struct rbuf r;
+
+	if (type < 0)
+		return type;
+	if (type != WIRE_FRAME)
+		return -WIRE_ETYPE;
+	r = (struct rbuf){ buf, f->h.header_len, (size_t)f->h.header_len + f->h.payload_len, 0 };
+	for (int i = 0; i < WIRE_SENSORS; i++) {
+		f->sensor[i].state = get_u8(&r);
+		(void)get_u8(&r);
+		f->sensor[i].age_100us = get_u16(&r);
+		get_pose(&r, &f->sensor[i].pose);
+	}
+	for (int i = 0; i < WIRE_ARMS; i++) {
+		f->arm[i].ik_flags = get_u16(&r);
+		f->arm[i].iters = get_u8(&r);
+		(void)get_u8(&r);
+		f->arm[i].pos_err = get_f32(&r);
+	}
+	for (int i = 0; i < WIRE_JOINTS; i++)
+		f->joint[i] = get_f32(&r);
+	for (int i = 0; i < WIRE_SEGMENTS; i++)
+		get_pose(&r, &f->segment[i]);
+	return r.err ? -r.err : 0;
+}
+
+/* ---- DESCRIBE ----------------------------------------------------------------- */
+
+size_t wire_encode_describe(const struct wire_describe *d, uint8_t *buf)
+{
+	struct wbuf w = { buf, 0 };
+
+	put_header(&w, &d->h, WIRE_DESCRIBE);
+	put_f32(&w, d->rate_hz);
+	for (int i = 0; i < 4; i++)
+		put_f32(&w, d->dims[i]);
+	for (int i = 0; i < 3; i++)
+		put_f32(&w, d->head_offset[i]);
+	put_str(&w, d->avatar_name);
+	put_str(&w, d->conventions);
+	for (int i = 0; i < WIRE_JOINTS; i++) {
+		const struct wire_joint_desc *j = &d->joint[i];
+
+		put_str(&w, j->name);
+		put_u8(&w, j->segment);
+		put_f32(&w, j->lo);
+		put_f32(&w, j->hi);
+		for (int k = 0; k < 3; k++)
+			put_f32(&w, j->axis[k]);
+		for (int k = 0; k < 3; k++)
+			put_f32(&w, j->trans[k]);
+	}
+	for (int i = 0; i < WIRE_SEGMENTS; i++) {
+		put_str(&w, d->segment[i].name);
+		put_u8(&w, d->segment[i].parent);
+	}
+	for (int i = 0; i < WIRE_SENSORS; i++)
+		put_str(&w, d->sensor[i]);
+	return finish(&w);
+}
+
+int wire_decode_describe(const uint8_t *buf, size_t len, struct wire_describe *d)
+{
+	int type = wire_peek(buf, len, &d->h);
+	struct rbuf r;
+
+	if (type < 0)
+		return type;
+	if (type != WIRE_DESCRIBE)
+		return -WIRE_ETYPE;
+	r = (struct rbuf){ buf, d->h.header_len, (size_t)d->h.header_len + d->h.payload_len, 0 };
+	d->rate_hz = get_f32(&r);
+	for (int i = 0; i < 4; i++)
+		d->dims[i] = get_f32(&r);
+	for (int i = 0; i < 3; i++)
+		d->head_offset[i] = get_f32(&r);
+	get_str(&r, d->avatar_name, sizeof(d->avatar_name));
+	get_str(&r, d->conventions, sizeof(d->conventions));
+	for (int i = 0; i < WIRE_JOINTS; i++) {
+		struct wire_joint_desc *j = &d->joint[i];
+
+		get_str(&r, j->name, sizeof(j->name));
+		j->segment = get_u8(&r);
+		j->lo = get_f32(&r);
+		j->hi = get_f32(&r);
+		for (int k = 0; k < 3; k++)
+			j->axis[k] = get_f32(&r);
+		for (int k = 0; k < 3; k++)
+			j->trans[k] = get_f32(&r);
+	}
+	for (int i = 0; i < WIRE_SEGMENTS; i++) {
+		get_str(&r, d->segment[i].name, sizeof(d->segment[i].name));
+		d->segment[i].parent = get_u8(&r);
+	}
+	for (int i = 0; i < WIRE_SENSORS; i++)
+		get_str(&r, d->sensor[i], sizeof(d->sensor[i]));
+	return r.err ? -r.err : 0;
+}
+
+void wire_put_len(uint8_t out[4], uint32_t len)
+{
+	out[0] = (uint8_t)len;
+	out[1] = (uint8_t)(len >> 8);
+	out[2] = (uint8_t)(len >> 16);
+	out[3] = (uint8_t)(len >> 24);
+}
+
+uint32_t wire_get_len(const uint8_t in[4])
+{
+	return (uint32_t)in[0] | (uint32_t)in[1] << 8 | (uint32_t)in[2] << 16 | (uint32_t)in[3] << 24;
+}
