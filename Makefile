@@ -132,7 +132,10 @@ $(BUILD)/obj/tests/%.o: tests/%.cpp
 	$(CXX) $(ALL_CXXFLAGS) -Itests -DSHARED_DIR='"$(SHARED)"' -c $< -o $@
 $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
 	@mkdir -p $(dir $@)
-	$(CXX) $(LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) $(LIBS)
+	$(CXX) $(LDFLAGS) $(TEST_LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) $(LIBS)
+
+# test_alloc counts every allocation made by our code: wrapped at link time
+$(BUILD)/tests/test_alloc: TEST_LDFLAGS = -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free
 
 # ---- top-level targets --------------------------------------------------------
 .SECONDARY:
@@ -148,21 +151,85 @@ check-core: $(LIBIK)
 	if [ -n "$$bad" ]; then echo "check-core: the IK core references: $$bad"; exit 1; fi; \
 	echo "check-core: the IK core references nothing outside itself but: $$(nm -u $(LIBIK) | awk '/ U /{print $$2}' | sort -u | comm -23 - $(BUILD)/core-defined.txt | grep -v -E '^__(asan|ubsan)' | tr '\n' ' ')"
 
+# end-to-end tests (the real daemon on loopback) and checks of docs against the code
+E2E_TESTS = $(wildcard tests/e2e/test_*.py)
+CHECK_SCRIPTS = $(wildcard tests/check-*.sh) tests/service/verify-unit.sh tools/check-man.sh
+
 test: all $(TEST_BIN) check-core
-	@tests/run.sh $(TEST_BIN)
+	@BUILD=$(BUILD) tests/run.sh $(TEST_BIN) $(E2E_TESTS) $(CHECK_SCRIPTS)
 
-bench: $(BUILD)/avatargw-ikbench
+bench: $(BUILD)/avatargw-ikbench $(DAEMON) $(BUILD)/avatargw-dump $(BUILD)/avatargw-ctl
 	@tools/bench.sh $(BUILD) $(SHARED)
+	@tools/bench-daemon.sh $(BUILD)
 
-run: bench
+# the embedded demo in the foreground, with a view of the avatar in the terminal
+run: all
+	@tools/run-demo.sh $(BUILD)
+
+# ---- install / uninstall ------------------------------------------------------
+# The daemon goes to sbin (a system service, started by systemd, not by users),
+# the tools to bin. The systemd, sysusers and udev files go under $(PREFIX)/lib
+# (systemd and udev also read /usr/local/lib/...); SYSCONFDIR is /etc whatever
+# PREFIX is, because that is where the daemon looks. An existing
+# $(SYSCONFDIR)/avatargw/avatargw.conf is never overwritten: the shipped
+# version is always at $(DATADIR)/avatargw/avatargw.conf for comparison.
+# See docs/SERVICE.md for what to run after installing.
+BINDIR ?= $(PREFIX)/bin
+SBINDIR ?= $(PREFIX)/sbin
+LIBDIR ?= $(PREFIX)/lib
+INCLUDEDIR ?= $(PREFIX)/include
+DATADIR ?= $(PREFIX)/share
+MANDIR ?= $(DATADIR)/man
+SYSCONFDIR ?= /etc
+SYSTEMDUNITDIR ?= $(PREFIX)/lib/systemd/system
+SYSUSERSDIR ?= $(PREFIX)/lib/sysusers.d
+UDEVRULESDIR ?= $(PREFIX)/lib/udev/rules.d
+INSTALL_CONF = config/avatargw.conf
+INSTALL_CLIPS = $(wildcard config/clips/*)
+INSTALL_MAN8 = docs/man/avatargw.8
+INSTALL_MAN5 = docs/man/avatargw.conf.5
 
 install: all
-	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib $(DESTDIR)$(PREFIX)/include/avatargw/ik
-	install -d $(DESTDIR)$(PREFIX)/share/avatargw
-	install -m 0755 $(TOOLS) $(DESTDIR)$(PREFIX)/bin/
-	install -m 0644 $(LIBIK) $(DESTDIR)$(PREFIX)/lib/
-	install -m 0644 include/ik/*.h $(DESTDIR)$(PREFIX)/include/avatargw/ik/
-	install -m 0644 config/limits-human.txt $(DESTDIR)$(PREFIX)/share/avatargw/
+	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(SBINDIR) $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCLUDEDIR)/avatargw/ik
+	install -d $(DESTDIR)$(DATADIR)/avatargw/clips $(DESTDIR)$(MANDIR)/man8 $(DESTDIR)$(MANDIR)/man5
+	install -d $(DESTDIR)$(SYSTEMDUNITDIR) $(DESTDIR)$(SYSUSERSDIR) $(DESTDIR)$(UDEVRULESDIR)
+	install -d -m 0755 $(DESTDIR)$(SYSCONFDIR)/avatargw $(DESTDIR)$(SYSCONFDIR)/avatargw/conf.d
+	install -m 0755 $(DAEMON) $(DESTDIR)$(SBINDIR)/
+	install -m 0755 $(TOOLS) $(DESTDIR)$(BINDIR)/
+	install -m 0644 $(LIBIK) $(DESTDIR)$(LIBDIR)/
+	install -m 0644 include/ik/*.h $(DESTDIR)$(INCLUDEDIR)/avatargw/ik/
+	install -m 0644 config/limits-human.txt config/demo.conf $(INSTALL_CONF) $(DESTDIR)$(DATADIR)/avatargw/
+	install -m 0644 $(INSTALL_CLIPS) $(DESTDIR)$(DATADIR)/avatargw/clips/
+	install -m 0644 $(INSTALL_MAN8) $(DESTDIR)$(MANDIR)/man8/
+	install -m 0644 $(INSTALL_MAN5) $(DESTDIR)$(MANDIR)/man5/
+	sed 's|@sbindir@|$(SBINDIR)|g' systemd/avatargw.service >$(DESTDIR)$(SYSTEMDUNITDIR)/avatargw.service
+	chmod 0644 $(DESTDIR)$(SYSTEMDUNITDIR)/avatargw.service
+	install -m 0644 systemd/avatargw.sysusers $(DESTDIR)$(SYSUSERSDIR)/avatargw.conf
+	install -m 0644 systemd/60-avatargw.rules $(DESTDIR)$(UDEVRULESDIR)/
+	@if [ -e $(DESTDIR)$(SYSCONFDIR)/avatargw/avatargw.conf ]; then \
+		echo "install: keeping $(DESTDIR)$(SYSCONFDIR)/avatargw/avatargw.conf (the shipped one: $(DATADIR)/avatargw/avatargw.conf)"; \
+	else \
+		echo "install -m 0644 $(INSTALL_CONF) $(DESTDIR)$(SYSCONFDIR)/avatargw/avatargw.conf"; \
+		install -m 0644 $(INSTALL_CONF) $(DESTDIR)$(SYSCONFDIR)/avatargw/avatargw.conf; \
+	fi
+
+# Removes what install put, but never anything under $(SYSCONFDIR)/avatargw:
+# that configuration may be the administrator's own.
+.PHONY: uninstall
+uninstall:
+	rm -f $(DESTDIR)$(SBINDIR)/avatargw
+	rm -f $(addprefix $(DESTDIR)$(BINDIR)/,$(notdir $(TOOLS)))
+	rm -f $(DESTDIR)$(LIBDIR)/$(notdir $(LIBIK))
+	rm -f $(addprefix $(DESTDIR)$(INCLUDEDIR)/avatargw/ik/,$(notdir $(wildcard include/ik/*.h)))
+	rmdir $(DESTDIR)$(INCLUDEDIR)/avatargw/ik $(DESTDIR)$(INCLUDEDIR)/avatargw 2>/dev/null || true
+	rm -f $(addprefix $(DESTDIR)$(DATADIR)/avatargw/,limits-human.txt demo.conf $(notdir $(INSTALL_CONF)))
+	rm -f $(addprefix $(DESTDIR)$(DATADIR)/avatargw/clips/,$(notdir $(INSTALL_CLIPS)))
+	rmdir $(DESTDIR)$(DATADIR)/avatargw/clips $(DESTDIR)$(DATADIR)/avatargw 2>/dev/null || true
+	rm -f $(DESTDIR)$(MANDIR)/man8/$(notdir $(INSTALL_MAN8)) $(DESTDIR)$(MANDIR)/man5/$(notdir $(INSTALL_MAN5))
+	rm -f $(DESTDIR)$(SYSTEMDUNITDIR)/avatargw.service
+	rm -f $(DESTDIR)$(SYSUSERSDIR)/avatargw.conf
+	rm -f $(DESTDIR)$(UDEVRULESDIR)/60-avatargw.rules
+	@echo "uninstall: left $(DESTDIR)$(SYSCONFDIR)/avatargw, the avatargw user and /var/lib/avatargw in place"
 
 clean:
 	rm -rf build build-san

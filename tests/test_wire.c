@@ -150,8 +150,8 @@ static float rnd_f32(void)
 /* NaN with distinct payloads and signs, infinities, -0, a subnormal */
 static float special_f32(int i)
 {
-	static const uint32_t bits[] = { 0x7fc00000, 0xffc00000, 0x7fc12345, 0x7f800000, 0xff800000, 0x80000000,
-					 0x00000001 };
+	static const uint32_t bits[] = { 0x7fc00000, 0xffc00000, 0x7fc12345, 0x7f800000,
+					 0xff800000, 0x80000000, 0x00000001 };
 
 	return f32_bits(bits[i % (int)(sizeof(bits) / sizeof(bits[0]))]);
 }
@@ -222,7 +222,7 @@ static void make_describe(struct wire_describe *d)
 {
 	static const uint8_t seg_of[8] = { WIRE_SEG_R_SHOULDER, WIRE_SEG_R_SHOULDER, WIRE_SEG_R_SHOULDER,
 					   WIRE_SEG_R_SHOULDER, WIRE_SEG_R_ELBOW,    WIRE_SEG_R_WRIST,
-					   WIRE_SEG_R_WRIST,    WIRE_SEG_R_WRIST };
+					   WIRE_SEG_R_WRIST,	WIRE_SEG_R_WRIST };
 	static const uint8_t parent[WIRE_SEGMENTS] = { 255, 0, 0, 2, 3, 4, 0, 6, 7, 8 };
 
 	memset(d, 0, sizeof(*d));
@@ -429,19 +429,19 @@ static void test_describe_worst_case_fits(void **state)
 static void test_frame_golden_header(void **state)
 {
 	static const uint8_t want[WIRE_HEADER_LEN] = {
-		0x41, 0x56, 0x47, 0x57,                         /*  0 magic "AVGW" */
-		0x01,                                           /*  4 version */
-		0x01,                                           /*  5 type FRAME */
-		0x28, 0x00,                                     /*  6 header_len 40 */
-		0xcc, 0x01,                                     /*  8 payload_len 460 */
-		0x09, 0x00,                                     /* 10 flags STALE | NEW_SAMPLE */
-		0xef, 0xbe, 0xad, 0xde,                         /* 12 source_id 0xdeadbeef */
-		0x04, 0x03, 0x02, 0x01,                         /* 16 seq 0x01020304 */
-		0x05, 0x00, 0x00, 0x00,                         /* 20 describe_rev 5 */
+		0x41, 0x56, 0x47, 0x57,				/*  0 magic "AVGW" */
+		0x01,						/*  4 version */
+		0x01,						/*  5 type FRAME */
+		0x28, 0x00,					/*  6 header_len 40 */
+		0xcc, 0x01,					/*  8 payload_len 460 */
+		0x09, 0x00,					/* 10 flags STALE | NEW_SAMPLE */
+		0xef, 0xbe, 0xad, 0xde,				/* 12 source_id 0xdeadbeef */
+		0x04, 0x03, 0x02, 0x01,				/* 16 seq 0x01020304 */
+		0x05, 0x00, 0x00, 0x00,				/* 20 describe_rev 5 */
 		0x15, 0x81, 0xe9, 0x7d, 0xf4, 0x10, 0x22, 0x11, /* 24 sample_time_ns 0x112210f47de98115 */
-		0x0b, 0x0a,                                     /* 32 avatar_id 0x0a0b */
-		0x11, 0x0a, 0x03,                               /* 34 counts 17, 10, 3 */
-		0x00, 0x00, 0x00,                               /* 37 reserved */
+		0x0b, 0x0a,					/* 32 avatar_id 0x0a0b */
+		0x11, 0x0a, 0x03,				/* 34 counts 17, 10, 3 */
+		0x00, 0x00, 0x00,				/* 37 reserved */
 	};
 	struct wire_frame f;
 	uint8_t buf[BUF_LEN];
@@ -474,18 +474,89 @@ static void test_frame_golden_header(void **state)
 
 	/* the payload at the offsets of docs/PROTOCOL.md */
 	assert_int_equal(buf[40], WIRE_SENSOR_STALE); /* head state */
-	assert_int_equal(buf[41], 0);                 /* pad */
-	assert_int_equal(buf[42], 0x34);              /* head age, little-endian */
+	assert_int_equal(buf[41], 0);		      /* pad */
+	assert_int_equal(buf[42], 0x34);	      /* head age, little-endian */
 	assert_int_equal(buf[43], 0x12);
-	assert_memory_equal(buf + 44, "\x00\x00\x80\x3f", 4); /* head p.x = 1.0f */
-	assert_memory_equal(buf + 56, "\x00\x00\x00\xc0", 4); /* head q.w = -2.0f */
-	assert_int_equal(buf[72], 0);                         /* left hand state OK */
+	assert_memory_equal(buf + 44, "\x00\x00\x80\x3f", 4);  /* head p.x = 1.0f */
+	assert_memory_equal(buf + 56, "\x00\x00\x00\xc0", 4);  /* head q.w = -2.0f */
+	assert_int_equal(buf[72], 0);			       /* left hand state OK */
 	assert_memory_equal(buf + 136, "\x19\x00\x07\x00", 4); /* right arm flags, iters, pad */
 	assert_memory_equal(buf + 148, "\x00\x00\x00\x3f", 4); /* left arm pos_err = 0.5f */
 	assert_memory_equal(buf + 152, "\x00\x00\xc0\x7f", 4); /* chest_yaw NaN */
 	assert_memory_equal(buf + 216, "\x00\x00\x80\x3e", 4); /* l_wr_dev = 0.25f */
 	assert_memory_equal(buf + 220, "\x00\x00\xc0\x3f", 4); /* chest p.x = 1.5f */
 	assert_memory_equal(buf + 496, "\x00\x00\x80\xbf", 4); /* l_hand q.z = -1.0f, the last bytes */
+	assert_guard(buf, len);
+}
+
+/* the DESCRIBE's layout at the offsets of docs/PROTOCOL.md */
+static void test_describe_golden_layout(void **state)
+{
+	struct wire_describe d;
+	uint8_t buf[BUF_LEN];
+	size_t len, at;
+
+	(void)state;
+	memset(&d, 0, sizeof(d));
+	d.h.seq = 3;
+	d.h.describe_rev = 0x0102;
+	d.rate_hz = 240.0f;	 /* 0x43700000 */
+	d.dims[0] = 1.0f;	 /* 0x3f800000 */
+	d.dims[3] = -2.0f;	 /* 0xc0000000 */
+	d.head_offset[2] = 0.5f; /* 0x3f000000 */
+	strcpy(d.avatar_name, "ab");
+	strcpy(d.conventions, "xyz");
+	strcpy(d.joint[0].name, "j");
+	d.joint[0].segment = 9;
+	d.joint[0].lo = -1.0f; /* 0xbf800000 */
+	d.joint[0].hi = 2.0f;  /* 0x40000000 */
+	d.joint[0].axis[2] = 1.0f;
+	d.joint[0].trans[0] = 0.25f; /* 0x3e800000 */
+	strcpy(d.segment[0].name, "s0");
+	d.segment[0].parent = 255;
+	strcpy(d.sensor[2], "hand");
+	memset(buf, GUARD, sizeof(buf));
+	len = wire_encode_describe(&d, buf);
+
+	assert_memory_equal(buf, "AVGW\x01\x02\x28\x00", 8); /* magic, version, DESCRIBE, header_len */
+	assert_int_equal(buf[8] | buf[9] << 8, len - WIRE_HEADER_LEN);
+	assert_memory_equal(buf + 16, "\x03\x00\x00\x00\x02\x01\x00\x00", 8); /* seq, describe_rev */
+	assert_memory_equal(buf + 40, "\x00\x00\x70\x43", 4);		      /* rate_hz */
+	assert_memory_equal(buf + 44, "\x00\x00\x80\x3f", 4);		      /* dims[0] */
+	assert_memory_equal(buf + 56, "\x00\x00\x00\xc0", 4);		      /* dims[3] */
+	assert_memory_equal(buf + 68, "\x00\x00\x00\x3f", 4);		      /* head_offset[2] */
+	assert_memory_equal(buf + 72,
+			    "\x02"
+			    "ab"
+			    "\x03"
+			    "xyz",
+			    7); /* avatar name, conventions */
+	at = 79;		/* joint 0: name, segment, lo, hi, axis, trans */
+	assert_memory_equal(buf + at, "\x01j\x09", 3);
+	assert_memory_equal(buf + at + 3,
+			    "\x00\x00\x80\xbf"
+			    "\x00\x00\x00\x40",
+			    8);
+	assert_memory_equal(buf + at + 11,
+			    "\x00\x00\x00\x00"
+			    "\x00\x00\x00\x00"
+			    "\x00\x00\x80\x3f",
+			    12);
+	assert_memory_equal(buf + at + 23,
+			    "\x00\x00\x80\x3e"
+			    "\x00\x00\x00\x00"
+			    "\x00\x00\x00\x00",
+			    12);
+	at += 35; /* joints 1..16: empty name, 34 bytes each */
+	for (int i = 1; i < WIRE_JOINTS; i++, at += 34)
+		assert_int_equal(buf[at], 0);
+	assert_memory_equal(buf + at, "\x02s0\xff", 4); /* segment 0: name, parent = world */
+	at += 4;
+	for (int i = 1; i < WIRE_SEGMENTS; i++, at += 2)
+		assert_memory_equal(buf + at, "\x00\x00", 2);
+	assert_memory_equal(buf + at, "\x00\x00\x04hand", 7); /* sensors */
+	at += 7;
+	assert_int_equal(len, at);
 	assert_guard(buf, len);
 }
 
@@ -719,8 +790,8 @@ static void test_describe_short(void **state)
 
 static void test_strerror(void **state)
 {
-	static const int errs[] = { WIRE_ESHORT, WIRE_EMAGIC,  WIRE_EVERSION, WIRE_ETYPE,
-				    WIRE_ECOUNT, WIRE_ELONG,   WIRE_ESTRING };
+	static const int errs[] = { WIRE_ESHORT, WIRE_EMAGIC, WIRE_EVERSION, WIRE_ETYPE,
+				    WIRE_ECOUNT, WIRE_ELONG,  WIRE_ESTRING };
 	const char *unknown = wire_strerror(1000);
 	size_t n = sizeof(errs) / sizeof(errs[0]);
 
@@ -888,6 +959,7 @@ int main(void)
 		cmocka_unit_test(test_describe_v1_size),
 		cmocka_unit_test(test_describe_worst_case_fits),
 		cmocka_unit_test(test_frame_golden_header),
+		cmocka_unit_test(test_describe_golden_layout),
 		cmocka_unit_test(test_error_short),
 		cmocka_unit_test(test_error_magic),
 		cmocka_unit_test(test_error_version),

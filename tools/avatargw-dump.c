@@ -168,8 +168,7 @@ static size_t dump_utf8_len(const unsigned char *s, size_t n)
 		cp = cp << 6 | (s[i] & 0x3f);
 	}
 	/* overlong forms, surrogates, beyond U+10FFFF */
-	if ((len == 3 && cp < 0x800) || (len == 4 && cp < 0x10000) || (cp >= 0xd800 && cp <= 0xdfff) ||
-	    cp > 0x10ffff)
+	if ((len == 3 && cp < 0x800) || (len == 4 && cp < 0x10000) || (cp >= 0xd800 && cp <= 0xdfff) || cp > 0x10ffff)
 		return 0;
 	return len;
 }
@@ -425,7 +424,8 @@ static void dump_stats_frame(struct dump *d, const struct wire_frame *f, int64_t
 	dump_seq_update(a, f->h.source_id, f->h.seq);
 	if (!f->h.sample_time_ns)
 		return;
-	ms = (double)(rx_ns - (int64_t)f->h.sample_time_ns) / 1e6;
+	/* modulo 2^64, then signed: any sample time from the wire, no overflow */
+	ms = (double)(int64_t)((uint64_t)rx_ns - f->h.sample_time_ns) / 1e6;
 	a->lat_sum += ms;
 	if (!a->lat_n || ms > a->lat_max)
 		a->lat_max = ms;
@@ -488,8 +488,11 @@ static void dump_stats_print(struct dump *d, bool final)
 		}
 		fputs(",\"total\":{", stdout);
 		dump_json_count(&a->total);
-		printf(",\"restarts\":%" PRIu64 "},\"malformed\":%" PRIu64 ",\"kernel_drops\":%" PRIu32 "%s}\n",
-		       a->restarts, d->malformed, d->kernel_drops, final ? ",\"final\":true" : "");
+		printf(",\"restarts\":%" PRIu64 "},\"malformed\":%" PRIu64 ",\"kernel_drops\":%" PRIu32, a->restarts,
+		       d->malformed, d->kernel_drops);
+		if (d->untracked) /* FRAMEs of avatars beyond the table: counted, not analysed */
+			printf(",\"untracked\":%" PRIu64, d->untracked);
+		fputs(final ? ",\"final\":true}\n" : "}\n", stdout);
 		memset(&a->iv, 0, sizeof(a->iv));
 		a->lat_n = 0;
 		a->lat_sum = a->lat_max = 0;
@@ -905,11 +908,16 @@ static void dump_usage(FILE *f)
 static int dump_parse(int argc, char **argv, struct dump_opts *o)
 {
 	static const struct option longopts[] = {
-		{ "udp", required_argument, NULL, 'u' },      { "interface", required_argument, NULL, 'i' },
-		{ "tcp", required_argument, NULL, 't' },      { "unix", required_argument, NULL, 'x' },
-		{ "count", required_argument, NULL, 'n' },    { "timeout", required_argument, NULL, 'T' },
-		{ "stats", no_argument, NULL, 's' },          { "describe", no_argument, NULL, 'd' },
-		{ "avatar", required_argument, NULL, 'a' },   { "help", no_argument, NULL, 'h' },
+		{ "udp", required_argument, NULL, 'u' },
+		{ "interface", required_argument, NULL, 'i' },
+		{ "tcp", required_argument, NULL, 't' },
+		{ "unix", required_argument, NULL, 'x' },
+		{ "count", required_argument, NULL, 'n' },
+		{ "timeout", required_argument, NULL, 'T' },
+		{ "stats", no_argument, NULL, 's' },
+		{ "describe", no_argument, NULL, 'd' },
+		{ "avatar", required_argument, NULL, 'a' },
+		{ "help", no_argument, NULL, 'h' },
 		{ NULL, 0, NULL, 0 },
 	};
 	static char default_udp[16];

@@ -11,6 +11,11 @@ make
 pkg-config
 libcmocka-dev
 libglm-dev
+libinih-dev
+python3
+systemd
+man-db
+groff-base
 "
 
 missing=""

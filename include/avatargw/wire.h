@@ -55,7 +55,12 @@ enum wire_sensor_state {
 #define WIRE_ARMS 2     /* right, left */
 #define WIRE_JOINTS 17  /* chest_yaw, then 8 right-arm and 8 left-arm joints */
 #define WIRE_SEGMENTS 10
-#define WIRE_NAME_MAX 31
+/*
+ * Longest name, bytes; the conventions string may hold 4 times as many.
+ * 15 is the most that keeps the longest DESCRIBE (every string at its
+ * maximum) within WIRE_MAX_MSG: exactly 1200 bytes.
+ */
+#define WIRE_NAME_MAX 15
 
 enum wire_sensor { WIRE_S_HEAD, WIRE_S_LEFT_HAND, WIRE_S_RIGHT_HAND };
 enum wire_arm { WIRE_ARM_RIGHT, WIRE_ARM_LEFT };
@@ -145,7 +150,7 @@ enum wire_error {
 	WIRE_EVERSION,    /* a version this decoder does not read */
 	WIRE_ETYPE,       /* not the message type asked for */
 	WIRE_ECOUNT,      /* counts that do not fit this version */
-	WIRE_ELONG,       /* longer than WIRE_MAX_MSG or than the buffer */
+	WIRE_ELONG,       /* header_len + payload_len above WIRE_MAX_MSG */
 	WIRE_ESTRING,     /* a name longer than WIRE_NAME_MAX */
 };
 

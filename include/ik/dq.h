@@ -85,43 +85,193 @@ struct line {
 #define dq_exp_twist SCN(dq_exp_twist)
 #define dq_is_finite SCN(dq_is_finite)
 
-sc_t v3_dot(const struct vec3 *a, const struct vec3 *b);
-void v3_cross(const struct vec3 *a, const struct vec3 *b, struct vec3 *out);
-sc_t v3_norm(const struct vec3 *a);
+/*
+ * The small algebra is static inline: every product in the kinematics would
+ * otherwise be a call. The larger functions (normalisation, conversions,
+ * logarithms) are in dq.c.
+ */
+
+static inline sc_t v3_dot(const struct vec3 *a, const struct vec3 *b)
+{
+	sc_acc_t s = sc_acc0();
+
+	s = sc_mac(s, a->x, b->x);
+	s = sc_mac(s, a->y, b->y);
+	s = sc_mac(s, a->z, b->z);
+	return sc_acc_get(s);
+}
+
+static inline void v3_cross(const struct vec3 *a, const struct vec3 *b, struct vec3 *out)
+{
+	struct vec3 c;
+
+	c.x = sc_acc_get(sc_msb(sc_mac(sc_acc0(), a->y, b->z), a->z, b->y));
+	c.y = sc_acc_get(sc_msb(sc_mac(sc_acc0(), a->z, b->x), a->x, b->z));
+	c.z = sc_acc_get(sc_msb(sc_mac(sc_acc0(), a->x, b->y), a->y, b->x));
+	*out = c;
+}
+
+static inline sc_t v3_norm(const struct vec3 *a)
+{
+	return sc_sqrt(v3_dot(a, a));
+}
 
 /* out = a b (Hamilton) */
-void quat_mul(const struct quat *a, const struct quat *b, struct quat *out);
-void quat_conj(const struct quat *a, struct quat *out);
-sc_t quat_norm(const struct quat *a);
+static inline void quat_mul(const struct quat *a, const struct quat *b, struct quat *out)
+{
+	struct quat c;
+	sc_acc_t s;
+
+	s = sc_mac(sc_acc0(), a->w, b->w);
+	s = sc_msb(s, a->x, b->x);
+	s = sc_msb(s, a->y, b->y);
+	c.w = sc_acc_get(sc_msb(s, a->z, b->z));
+	s = sc_mac(sc_acc0(), a->w, b->x);
+	s = sc_mac(s, a->x, b->w);
+	s = sc_mac(s, a->y, b->z);
+	c.x = sc_acc_get(sc_msb(s, a->z, b->y));
+	s = sc_mac(sc_acc0(), a->w, b->y);
+	s = sc_msb(s, a->x, b->z);
+	s = sc_mac(s, a->y, b->w);
+	c.y = sc_acc_get(sc_mac(s, a->z, b->x));
+	s = sc_mac(sc_acc0(), a->w, b->z);
+	s = sc_mac(s, a->x, b->y);
+	s = sc_msb(s, a->y, b->x);
+	c.z = sc_acc_get(sc_mac(s, a->z, b->w));
+	*out = c;
+}
+
+static inline void quat_conj(const struct quat *a, struct quat *out)
+{
+	out->w = a->w;
+	out->x = -a->x;
+	out->y = -a->y;
+	out->z = -a->z;
+}
+
+static inline sc_t quat_norm(const struct quat *a)
+{
+	sc_acc_t s = sc_mac(sc_acc0(), a->w, a->w);
+
+	s = sc_mac(s, a->x, a->x);
+	s = sc_mac(s, a->y, a->y);
+	return sc_sqrt(sc_acc_get(sc_mac(s, a->z, a->z)));
+}
+
 /* Returns false (and writes the identity) if |a| is zero or not finite. */
 bool quat_normalize(const struct quat *a, struct quat *out);
+
 /* out = q v q*, q a unit quaternion */
-void quat_rotate(const struct quat *q, const struct vec3 *v, struct vec3 *out);
+static inline void quat_rotate(const struct quat *q, const struct vec3 *v, struct vec3 *out)
+{
+	/* v' = v + 2w (u x v) + 2 u x (u x v), u the vector part */
+	struct vec3 u, c, cc;
+
+	u.x = q->x;
+	u.y = q->y;
+	u.z = q->z;
+	v3_cross(&u, v, &c);
+	c.x += c.x;
+	c.y += c.y;
+	c.z += c.z;
+	v3_cross(&u, &c, &cc);
+	out->x = v->x + sc_mul(q->w, c.x) + cc.x;
+	out->y = v->y + sc_mul(q->w, c.y) + cc.y;
+	out->z = v->z + sc_mul(q->w, c.z) + cc.z;
+}
+
 /* axis must be a unit vector */
-void quat_from_axis_angle(const struct vec3 *axis, sc_t angle, struct quat *out);
+static inline void quat_from_axis_angle(const struct vec3 *axis, sc_t angle, struct quat *out)
+{
+	sc_t s, c;
+
+	sc_sincos(sc_mul(angle, SC_C(0.5)), &s, &c);
+	out->w = c;
+	out->x = sc_mul(axis->x, s);
+	out->y = sc_mul(axis->y, s);
+	out->z = sc_mul(axis->z, s);
+}
+
 /* rotation matrix m[row][col] of a unit quaternion, and back (out has w >= 0) */
 void quat_to_mat3(const struct quat *q, sc_t m[3][3]);
 void quat_from_mat3(const sc_t m[3][3], struct quat *out);
 /* angle in [0, pi] of the rotation a* b, sign-insensitive */
 sc_t quat_angle_between(const struct quat *a, const struct quat *b);
 
-void dq_identity(struct dq *out);
+static inline void dq_identity(struct dq *out)
+{
+	out->r.w = SC_C(1);
+	out->r.x = out->r.y = out->r.z = 0;
+	out->d.w = out->d.x = out->d.y = out->d.z = 0;
+}
+
 /* out = a b: b first, then a. out must not alias a or b. */
-void dq_mul(const struct dq *a, const struct dq *b, struct dq *out);
+static inline void dq_mul(const struct dq *a, const struct dq *b, struct dq *out)
+{
+	struct quat t1, t2;
+
+	quat_mul(&a->r, &b->r, &out->r);
+	quat_mul(&a->r, &b->d, &t1);
+	quat_mul(&a->d, &b->r, &t2);
+	out->d.w = t1.w + t2.w;
+	out->d.x = t1.x + t2.x;
+	out->d.y = t1.y + t2.y;
+	out->d.z = t1.z + t2.z;
+}
+
 /* quaternion conjugate of both parts: the inverse of a unit dual quaternion */
-void dq_conj(const struct dq *a, struct dq *out);
+static inline void dq_conj(const struct dq *a, struct dq *out)
+{
+	quat_conj(&a->r, &out->r);
+	quat_conj(&a->d, &out->d);
+}
+
 /*
  * Makes a unit dual quaternion: r <- r/|r|, d <- d/|r|, then removes the
  * part of d along r so that r.d = 0. Returns false (identity written) for a
  * zero or non-finite real part.
  */
 bool dq_normalize(const struct dq *a, struct dq *out);
+
 /* x' = R x + t from a unit rotation r and a translation t */
-void dq_from_rt(const struct quat *r, const struct vec3 *t, struct dq *out);
+static inline void dq_from_rt(const struct quat *r, const struct vec3 *t, struct dq *out)
+{
+	struct quat tq, rr = *r;
+
+	tq.w = 0;
+	tq.x = sc_mul(t->x, SC_C(0.5));
+	tq.y = sc_mul(t->y, SC_C(0.5));
+	tq.z = sc_mul(t->z, SC_C(0.5));
+	quat_mul(&tq, &rr, &out->d);
+	out->r = rr;
+}
+
 /* the paper's Q(R, theta, T): rotation about the unit axis, then translation t in the parent frame */
 void dq_from_axis_angle_t(const struct vec3 *axis, sc_t angle, const struct vec3 *t, struct dq *out);
-void dq_translation(const struct dq *a, struct vec3 *out);
-void dq_transform_point(const struct dq *a, const struct vec3 *p, struct vec3 *out);
+
+static inline void dq_translation(const struct dq *a, struct vec3 *out)
+{
+	/* t = 2 d r* */
+	struct quat rc, t;
+
+	quat_conj(&a->r, &rc);
+	quat_mul(&a->d, &rc, &t);
+	out->x = 2 * t.x;
+	out->y = 2 * t.y;
+	out->z = 2 * t.z;
+}
+
+static inline void dq_transform_point(const struct dq *a, const struct vec3 *p, struct vec3 *out)
+{
+	struct vec3 t, rp;
+
+	dq_translation(a, &t);
+	quat_rotate(&a->r, p, &rp);
+	out->x = rp.x + t.x;
+	out->y = rp.y + t.y;
+	out->z = rp.z + t.z;
+}
+
 /* the line moved by the transform: l' = R l, m' = R m + t x R l */
 void dq_transform_line(const struct dq *a, const struct line *in, struct line *out);
 void dq_to_mat4(const struct dq *a, sc_t m[4][4]);

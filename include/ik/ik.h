@@ -63,6 +63,14 @@ struct ik_kin {
 	const char *name;
 	void (*eval)(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_target *t, sc_t J[6][ARM_DOF],
 		     sc_t V[6], struct ik_err *err);
+	/*
+	 * Optional (NULL: eval is used): the same, except that when the errors
+	 * are within tolerance (err->pos < tol_pos and err->rot < tol_rot) it
+	 * returns true and leaves J and V unwritten. The last evaluation of a
+	 * Newton iteration only checks convergence.
+	 */
+	bool (*eval_tol)(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_target *t, sc_t tol_pos,
+			 sc_t tol_rot, sc_t J[6][ARM_DOF], sc_t V[6], struct ik_err *err);
 };
 
 struct ik_opts {

@@ -20,6 +20,7 @@
 #include <ctype.h>
 #include <dirent.h>
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
@@ -196,6 +197,7 @@ struct parse {
 	char *err;
 	size_t errlen;
 	int failed;
+	int fail_line; /* line of the first error when it is in the file being read, else 0 */
 	/* the file being read */
 	int file;
 	int line;
@@ -216,6 +218,7 @@ static int failf(struct parse *p, struct cfg_where w, const char *fmt, ...)
 
 	if (p->failed++)
 		return -1; /* the first error is the one reported */
+	p->fail_line = w.file >= 0 && w.file == p->file ? w.line : 0;
 	if (w.file >= 0)
 		n = (size_t)snprintf(p->err, p->errlen, "%s:%d: ", p->c->files[w.file], w.line);
 	else
@@ -261,10 +264,12 @@ static char *line_reader(char *str, int num, void *stream)
 			str[i++] = p->text[p->pos];
 		p->pos++;
 	}
+	size_t len = p->pos - start;
+
 	if (p->text[p->pos] == '\n')
 		p->pos++;
 	p->line++;
-	if (p->pos - start > (size_t)num - 2 && !p->long_line)
+	if (len > (size_t)num - 2 && !p->long_line)
 		p->long_line = p->line;
 	str[i++] = '\n';
 	str[i] = '\0';
@@ -281,7 +286,7 @@ static int add_entry(struct parse *p, const char *section, const char *key, cons
 
 		if (strcmp(e->section, section) || strcmp(e->key, key))
 			continue;
-		if ((int)i >= p->first_entry) {
+		if (e->where.file == p->file) {
 			char prev[CFG_PATH_MAX + 16];
 
 			return failf(p, w, "[%s] %s: given twice in one file (first at %s)", section, key,
@@ -322,7 +327,7 @@ static int on_entry(void *user, const char *section, const char *name, const cha
 
 static int read_text(struct parse *p, const char *name, const char *text)
 {
-	int rc;
+	int rc, first;
 
 	if (p->c->n_files == CFG_MAX_FILES)
 		return failf(p, (struct cfg_where){ -2, 0 }, "%s: more than %d configuration files", name,
@@ -335,15 +340,19 @@ static int read_text(struct parse *p, const char *name, const char *text)
 	p->long_line = 0;
 	p->first_entry = (int)p->c->n_entries;
 	rc = ini_parse_stream(line_reader, p, on_entry, p);
-	if (p->failed)
-		return -1;
-	if (p->long_line)
+	/* inih reads on after a syntax error, so a handler may have failed on a later line */
+	first = p->failed ? p->fail_line : INT_MAX;
+	if (p->long_line && p->long_line <= first) {
+		p->failed = 0;
 		return failf(p, (struct cfg_where){ p->file, p->long_line }, "line longer than %d characters",
 			     INI_MAX_LINE - 2);
-	if (rc > 0)
+	}
+	if (rc > 0 && rc < first) {
+		p->failed = 0;
 		return failf(p, (struct cfg_where){ p->file, rc },
 			     "syntax error: expected [section], key = value, or a comment");
-	return 0;
+	}
+	return p->failed ? -1 : 0;
 }
 
 static int read_file(struct parse *p, const char *path)
@@ -579,7 +588,7 @@ static int set_value(struct section_ctx *s, const struct key_def *k, const char 
 		if (strlen(value) >= cap)
 			return failf(p, w, "[%s] %s: longer than %zu characters", s->full, k->name, cap - 1);
 		if (k->kind == K_PATH && value[0] && value[0] != '/' && strncmp(value, "builtin:", 8) &&
-		    w.file >= 0) {
+		    !(s->sect == S_DAEMON && !strcmp(value, "auto")) && w.file >= 0) {
 			/* relative to the directory of the file that says it */
 			const char *f = p->c->files[w.file];
 			const char *slash = strrchr(f, '/');
@@ -793,9 +802,10 @@ static int build_avatars(struct parse *p, const char *full, const char *name, st
 
 		*a = *tmpl;
 		if (count > 1)
-			snprintf(a->name, sizeof(a->name), "%.20s-%d", name, k);
+			snprintf(a->name, sizeof(a->name), "%.20s-%d", name, k % CFG_MAX_AVATARS); /* k < 4096 */
 		else
 			snprintf(a->name, sizeof(a->name), "%s", name);
+		snprintf(a->section, sizeof(a->section), "%s", name);
 		a->id = (uint16_t)(*next_id + k);
 		for (int r = 0; r < 3; r++) {
 			char ref[CFG_PATH_MAX + 32];
@@ -1008,8 +1018,11 @@ static int build(struct parse *p)
 						return failf(p, t->where, "[%s] address: missing (a multicast group)",
 							     e->section);
 				}
-				if (apply_section(&s) || resolve_output_avatars(p, e->section, o))
+				if (apply_section(&s) || resolve_output_avatars(p, e->section, o)) {
+					free(o->avatar_ids); /* not counted in n_outputs: config_free would miss it */
+					o->avatar_ids = NULL;
 					return -1;
+				}
 				c->n_outputs++;
 			}
 		}
@@ -1027,12 +1040,14 @@ int config_load(struct config *c, const char *path, char *err, size_t errlen)
 	struct parse p = { .c = c, .err = err, .errlen = errlen };
 
 	config_init(c);
-	if (read_file(&p, path) || read_dropins(&p, path) || build(&p))
+	if (read_file(&p, path) || read_dropins(&p, path) || build(&p)) {
+		config_free(c); /* a failed load leaves nothing to free */
 		return -1;
+	}
 	return 0;
 }
 
-int config_load_ex(struct config *c, const char *path, const char *const *sets, int n_sets, char *err,
+static int load_ex(struct config *c, const char *path, const char *const *sets, int n_sets, char *err,
 		   size_t errlen)
 {
 	struct parse p = { .c = c, .err = err, .errlen = errlen };
@@ -1070,13 +1085,25 @@ int config_load_ex(struct config *c, const char *path, const char *const *sets, 
 	return build(&p);
 }
 
+int config_load_ex(struct config *c, const char *path, const char *const *sets, int n_sets, char *err,
+		   size_t errlen)
+{
+	if (load_ex(c, path, sets, n_sets, err, errlen)) {
+		config_free(c);
+		return -1;
+	}
+	return 0;
+}
+
 int config_load_text(struct config *c, const char *name, const char *text, char *err, size_t errlen)
 {
 	struct parse p = { .c = c, .err = err, .errlen = errlen };
 
 	config_init(c);
-	if (read_text(&p, name, text) || build(&p))
+	if (read_text(&p, name, text) || build(&p)) {
+		config_free(c);
 		return -1;
+	}
 	return 0;
 }
 
@@ -1151,13 +1178,14 @@ static void print_origin(FILE *out, const struct config *c, const char *section,
 		fputs("    ; default\n", out);
 }
 
-static void print_section(FILE *out, const struct config *c, int sect, const char *full, const char *type,
-			  const void *obj)
+/* full: the section printed; from: the section its entries are in (a counted avatar's) */
+static void print_section(FILE *out, const struct config *c, int sect, const char *full, const char *from,
+			  const char *type, const void *obj)
 {
 	fprintf(out, "\n[%s]\n", full);
 	if (sect == S_SOURCE) {
 		fprintf(out, "type = %s", type);
-		print_origin(out, c, full, "type");
+		print_origin(out, c, from, "type");
 	}
 	for (size_t i = 0; i < N_KEYS; i++) {
 		const struct key_def *k = &keys[i];
@@ -1169,7 +1197,7 @@ static void print_section(FILE *out, const struct config *c, int sect, const cha
 			continue;
 		fprintf(out, "%s = ", k->name);
 		print_value(out, k, obj);
-		print_origin(out, c, full, k->name);
+		print_origin(out, c, from, k->name);
 	}
 }
 
@@ -1181,19 +1209,22 @@ void config_print(const struct config *c, FILE *out)
 	for (int i = 0; i < c->n_files; i++)
 		fprintf(out, " %s", c->files[i]);
 	fputc('\n', out);
-	print_section(out, c, S_DAEMON, "daemon", NULL, &c->daemon);
+	print_section(out, c, S_DAEMON, "daemon", "daemon", NULL, &c->daemon);
 	for (int i = 0; i < c->n_sources; i++) {
 		const struct cfg_source *s = &c->source[i];
 		const char *type = trackers_table[s->driver]->name;
 
 		snprintf(full, sizeof(full), "source %s", s->name);
-		print_section(out, c, S_SOURCE, full, type, s);
+		print_section(out, c, S_SOURCE, full, full, type, s);
 	}
 	for (int i = 0; i < c->n_avatars; i++) {
 		const struct cfg_avatar *a = &c->avatar[i];
 
+		char from[CFG_NAME_MAX + 16];
+
 		snprintf(full, sizeof(full), "avatar %s", a->name);
-		print_section(out, c, S_AVATAR, full, NULL, a);
+		snprintf(from, sizeof(from), "avatar %s", a->section);
+		print_section(out, c, S_AVATAR, full, from, NULL, a);
 		fprintf(out, "id = %u\n", a->id);
 		for (int r = 0; r < 3; r++) {
 			const struct cfg_source *s = &c->source[a->sensor[r].source];
@@ -1208,7 +1239,7 @@ void config_print(const struct config *c, FILE *out)
 		const struct cfg_output *o = &c->output[i];
 
 		snprintf(full, sizeof(full), "output %s", o->name);
-		print_section(out, c, S_OUTPUT, full, e_out[o->type], o);
+		print_section(out, c, S_OUTPUT, full, full, e_out[o->type], o);
 	}
 }
 

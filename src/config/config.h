@@ -77,6 +77,7 @@ enum cfg_solver { CFG_SOLVER_DQ, CFG_SOLVER_MATRIX };
 
 struct cfg_avatar {
 	char name[CFG_NAME_MAX];
+	char section[CFG_NAME_MAX]; /* NAME of the [avatar NAME] it comes from (count = N: NAME-k's NAME) */
 	uint16_t id;
 	struct cfg_sensor_ref sensor[3]; /* head, left hand, right hand */
 	double dims[4];                  /* shoulder, upper arm, forearm, hand, m */
@@ -137,7 +138,8 @@ struct config {
 /*
  * Reads path and the *.conf files of conf.d/ beside it (if that directory
  * exists), or the text given (name is then what errors call it). Returns 0,
- * or -1 with the message in err (file:line: [section] key: what).
+ * or -1 with the message in err (file:line: [section] key: what) and c
+ * freed (config_free() on it again is harmless).
  */
 int config_load(struct config *c, const char *path, char *err, size_t errlen);
 /*

@@ -273,8 +273,14 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		}
 	}
 	for (int o = 0; o < g->n_outputs; o++) {
+		uint64_t acc = stat_get(&g->out[o].st.accepted);
+
 		g->out[o].ops->service(&g->out[o]);
 		g->out[o].ops->send(&g->out[o], g->msgs, n);
+		/* a new stream subscriber gets every DESCRIBE at the next cycle, not a second later */
+		if (stat_get(&g->out[o].st.accepted) != acc)
+			for (int i = 0; i < g->n_avatars; i++)
+				g->av[i].next_describe_ns = 0;
 	}
 	sent_ns = gw_mono_ns();
 	for (int i = 0; i < g->n_avatars; i++) {

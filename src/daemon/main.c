@@ -259,7 +259,8 @@ int main(int argc, char **argv)
 	if (gw_open(&gws[cur], &cfg, NULL, source_id, err, sizeof(err))) {
 		pr_err("%s", err);
 		config_free(&cfg);
-		return strstr(err, "] ") || strstr(err, "]:") ? EX_CONFIG_CODE : 1;
+		/* the configuration was valid: what failed is the system (a port in use...), worth a retry */
+		return 1;
 	}
 	if (gws[cur].cfg.daemon.lock_memory && mlockall(MCL_CURRENT | MCL_FUTURE))
 		pr_warning("mlockall: %s: memory may be paged out (raise LimitMEMLOCK)", strerror(errno));

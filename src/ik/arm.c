@@ -4,6 +4,7 @@
  * their product, the screw-axis Jacobian. See ik/arm.h.
  */
 #include "ik/arm.h"
+#include "ik_private.h"
 
 #define DEG(x) SC_C((x) * 0.017453292519943295)
 
@@ -69,62 +70,206 @@ void arm_joint_dq(const struct arm *a, int i, sc_t qi, struct dq *out)
 	quat_mul(&r, &tq, &out->d);
 }
 
-void arm_fk_frames(const struct arm *a, const sc_t q[ARM_DOF], struct dq k[ARM_DOF + 1])
+/* r <- r Rot(e_k, angle) with s, c the sine and cosine of half the angle: a sparse quaternion product */
+static inline void rot_x(struct quat *r, sc_t s, sc_t c)
 {
-	struct dq qi;
+	struct quat o;
+
+	o.w = sc_mul(r->w, c) - sc_mul(r->x, s);
+	o.x = sc_mul(r->w, s) + sc_mul(r->x, c);
+	o.y = sc_mul(r->y, c) + sc_mul(r->z, s);
+	o.z = sc_mul(r->z, c) - sc_mul(r->y, s);
+	*r = o;
+}
+
+static inline void rot_y(struct quat *r, sc_t s, sc_t c)
+{
+	struct quat o;
+
+	o.w = sc_mul(r->w, c) - sc_mul(r->y, s);
+	o.x = sc_mul(r->x, c) - sc_mul(r->z, s);
+	o.y = sc_mul(r->w, s) + sc_mul(r->y, c);
+	o.z = sc_mul(r->x, s) + sc_mul(r->z, c);
+	*r = o;
+}
+
+static inline void rot_z(struct quat *r, sc_t s, sc_t c)
+{
+	struct quat o;
+
+	o.w = sc_mul(r->w, c) - sc_mul(r->z, s);
+	o.x = sc_mul(r->x, c) + sc_mul(r->y, s);
+	o.y = sc_mul(r->y, c) - sc_mul(r->x, s);
+	o.z = sc_mul(r->w, s) + sc_mul(r->z, c);
+	*r = o;
+}
+
+/* columns of the rotation matrix of a unit quaternion: R e_x, R e_y, R e_z (as in quat_to_mat3) */
+static inline void col_x(const struct quat *q, struct vec3 *o)
+{
+	o->x = SC_C(1) - 2 * (sc_mul(q->y, q->y) + sc_mul(q->z, q->z));
+	o->y = 2 * (sc_mul(q->x, q->y) + sc_mul(q->w, q->z));
+	o->z = 2 * (sc_mul(q->x, q->z) - sc_mul(q->w, q->y));
+}
+
+static inline void col_y(const struct quat *q, struct vec3 *o)
+{
+	o->x = 2 * (sc_mul(q->x, q->y) - sc_mul(q->w, q->z));
+	o->y = SC_C(1) - 2 * (sc_mul(q->x, q->x) + sc_mul(q->z, q->z));
+	o->z = 2 * (sc_mul(q->y, q->z) + sc_mul(q->w, q->x));
+}
+
+static inline void col_z(const struct quat *q, struct vec3 *o)
+{
+	o->x = 2 * (sc_mul(q->x, q->z) + sc_mul(q->w, q->y));
+	o->y = 2 * (sc_mul(q->y, q->z) - sc_mul(q->w, q->x));
+	o->z = SC_C(1) - 2 * (sc_mul(q->x, q->x) + sc_mul(q->y, q->y));
+}
+
+/* p + k u */
+static inline void add_scaled(const struct vec3 *p, sc_t k, const struct vec3 *u, struct vec3 *out)
+{
+	out->x = p->x + sc_mul(k, u->x);
+	out->y = p->y + sc_mul(k, u->y);
+	out->z = p->z + sc_mul(k, u->z);
+}
+
+/* Jacobian column i: the joint's line (l, p x l), l = sgn u */
+static inline void jac_col(sc_t J[6][ARM_DOF], int i, const struct vec3 *p, sc_t sgn, const struct vec3 *u)
+{
+	struct vec3 l = { sc_mul(sgn, u->x), sc_mul(sgn, u->y), sc_mul(sgn, u->z) }, m;
+
+	v3_cross(p, &l, &m);
+	J[0][i] = l.x;
+	J[1][i] = l.y;
+	J[2][i] = l.z;
+	J[3][i] = m.x;
+	J[4][i] = m.y;
+	J[5][i] = m.z;
+}
+
+void arm_chain_eval(const struct arm *a, const sc_t q[ARM_DOF], struct arm_chain *ch, sc_t J[6][ARM_DOF])
+{
+	/*
+	 * Joint i turns by q[i] about sgn_i e_k (sgn_i = +-1, the left arm's y and
+	 * z axes are reversed): its quaternion is (c, sgn_i s e_k) with s, c of
+	 * q[i] / 2. The axis of joint i is sgn_i R(r[i]) e_k = sgn_i R(r[i+1]) e_k,
+	 * so each column serves both the axis and the translation along it.
+	 */
+	const sc_t sg[ARM_DOF] = { a->axis[0].z, a->axis[1].y, a->axis[2].x, a->axis[3].z,
+				   a->axis[4].x, a->axis[5].y, a->axis[6].x, a->axis[7].z };
+	sc_t s[ARM_DOF], c[ARM_DOF];
+	struct quat *r = ch->r;
+	struct vec3 *p = ch->p, u1x, u4z, u5y, u8y;
 	int i;
 
-	dq_identity(&k[0]);
 	for (i = 0; i < ARM_DOF; i++) {
-		arm_joint_dq(a, i, q[i], &qi);
-		dq_mul(&k[i], &qi, &k[i + 1]);
+		sc_sincos(sc_mul(q[i], SC_C(0.5)), &s[i], &c[i]);
+		s[i] = sc_mul(sg[i], s[i]);
 	}
+	r[0].w = SC_C(1);
+	r[0].x = r[0].y = r[0].z = 0;
+	p[0].x = p[0].y = p[0].z = 0;
+	/* J1 about z, then (S, 0, 0) */
+	r[1].w = c[0];
+	r[1].x = r[1].y = 0;
+	r[1].z = s[0];
+	col_x(&r[1], &u1x);
+	add_scaled(&p[0], a->trans[0].x, &u1x, &p[1]);
+	/* J2 about y, J3 about x, J4 about z then (0, 0, -A) */
+	r[2] = r[1];
+	rot_y(&r[2], s[1], c[1]);
+	r[3] = r[2];
+	rot_x(&r[3], s[2], c[2]);
+	r[4] = r[3];
+	rot_z(&r[4], s[3], c[3]);
+	p[2] = p[3] = p[1];
+	col_z(&r[4], &u4z);
+	add_scaled(&p[3], a->trans[3].z, &u4z, &p[4]);
+	/* J5 about x then (0, F, 0) */
+	r[5] = r[4];
+	rot_x(&r[5], s[4], c[4]);
+	col_y(&r[5], &u5y);
+	add_scaled(&p[4], a->trans[4].y, &u5y, &p[5]);
+	/* J6 about y, J7 about x, J8 about z then (0, H, 0) */
+	r[6] = r[5];
+	rot_y(&r[6], s[5], c[5]);
+	r[7] = r[6];
+	rot_x(&r[7], s[6], c[6]);
+	r[8] = r[7];
+	rot_z(&r[8], s[7], c[7]);
+	p[6] = p[7] = p[5];
+	col_y(&r[8], &u8y);
+	add_scaled(&p[7], a->trans[7].y, &u8y, &p[8]);
+	if (J)
+		arm_chain_jacobian(a, ch, J);
+}
+
+void arm_chain_jacobian(const struct arm *a, const struct arm_chain *ch, sc_t J[6][ARM_DOF])
+{
+	const struct quat *r = ch->r;
+	const struct vec3 *p = ch->p;
+	struct vec3 u;
+
+	/* the axis of J1 passes through the origin: (0, 0, sgn), no moment */
+	J[0][0] = J[1][0] = 0;
+	J[2][0] = a->axis[0].z;
+	J[3][0] = J[4][0] = J[5][0] = 0;
+	col_y(&r[1], &u);
+	jac_col(J, 1, &p[1], a->axis[1].y, &u);
+	col_x(&r[2], &u);
+	jac_col(J, 2, &p[2], a->axis[2].x, &u);
+	col_z(&r[4], &u);
+	jac_col(J, 3, &p[3], a->axis[3].z, &u);
+	col_x(&r[5], &u);
+	jac_col(J, 4, &p[4], a->axis[4].x, &u);
+	col_y(&r[5], &u);
+	jac_col(J, 5, &p[5], a->axis[5].y, &u);
+	col_x(&r[6], &u);
+	jac_col(J, 6, &p[6], a->axis[6].x, &u);
+	col_z(&r[8], &u);
+	jac_col(J, 7, &p[7], a->axis[7].z, &u);
+}
+
+void arm_fk_frames(const struct arm *a, const sc_t q[ARM_DOF], struct dq k[ARM_DOF + 1])
+{
+	struct arm_chain ch;
+	int i;
+
+	arm_chain_eval(a, q, &ch, NULL);
+	for (i = 0; i <= ARM_DOF; i++)
+		dq_from_rt(&ch.r[i], &ch.p[i], &k[i]);
 }
 
 void arm_fk(const struct arm *a, const sc_t q[ARM_DOF], struct dq *ee)
 {
-	struct dq k[ARM_DOF + 1];
+	struct arm_chain ch;
 
-	arm_fk_frames(a, q, k);
-	*ee = k[ARM_DOF];
+	arm_chain_eval(a, q, &ch, NULL);
+	dq_from_rt(&ch.r[ARM_DOF], &ch.p[ARM_DOF], ee);
 }
 
 void arm_fk_pose(const struct arm *a, const sc_t q[ARM_DOF], struct arm_pose *out)
 {
-	struct dq k[ARM_DOF + 1];
+	struct arm_chain ch;
 
-	arm_fk_frames(a, q, k);
-	dq_translation(&k[1], &out->shoulder);
-	dq_translation(&k[4], &out->elbow);
-	dq_translation(&k[5], &out->wrist);
-	dq_translation(&k[8], &out->hand);
-	out->upper_arm = k[4].r;
-	out->forearm = k[5].r;
-	out->hand_rot = k[8].r;
+	arm_chain_eval(a, q, &ch, NULL);
+	out->shoulder = ch.p[1];
+	out->elbow = ch.p[4];
+	out->wrist = ch.p[5];
+	out->hand = ch.p[8];
+	out->upper_arm = ch.r[4];
+	out->forearm = ch.r[5];
+	out->hand_rot = ch.r[8];
 }
 
 void arm_jacobian(const struct arm *a, const sc_t q[ARM_DOF], sc_t J[6][ARM_DOF], struct dq *ee)
 {
-	struct dq k[ARM_DOF + 1];
-	int i;
+	struct arm_chain ch;
 
-	arm_fk_frames(a, q, k);
-	for (i = 0; i < ARM_DOF; i++) {
-		/* the axis of joint i sits in k[i]: joints 1..i-1 and their translations */
-		struct vec3 l, p, m;
-
-		quat_rotate(&k[i].r, &a->axis[i], &l);
-		dq_translation(&k[i], &p);
-		v3_cross(&p, &l, &m);
-		J[0][i] = l.x;
-		J[1][i] = l.y;
-		J[2][i] = l.z;
-		J[3][i] = m.x;
-		J[4][i] = m.y;
-		J[5][i] = m.z;
-	}
+	arm_chain_eval(a, q, &ch, J);
 	if (ee)
-		*ee = k[ARM_DOF];
+		dq_from_rt(&ch.r[ARM_DOF], &ch.p[ARM_DOF], ee);
 }
 
 bool arm_in_limits(const struct arm *a, const sc_t q[ARM_DOF])
@@ -146,8 +291,12 @@ bool arm_clamp(const struct arm *a, sc_t q[ARM_DOF])
 	int i;
 
 	for (i = 0; i < ARM_DOF; i++) {
-		sc_t w = sc_clamp(sc_wrap_pi(q[i]), a->lim.lo[i], a->lim.hi[i]);
+		sc_t w;
 
+		/* inside the limits and in [-pi, pi) already (false for NaN): nothing to do */
+		if (q[i] >= a->lim.lo[i] && q[i] <= a->lim.hi[i] && q[i] >= -SC_PI && q[i] < SC_PI)
+			continue;
+		w = sc_clamp(sc_wrap_pi(q[i]), a->lim.lo[i], a->lim.hi[i]);
 		if (w != q[i]) {
 			q[i] = w;
 			moved = true;

@@ -6,63 +6,6 @@
 #include "ik/dq.h"
 #include "ik_private.h"
 
-sc_t v3_dot(const struct vec3 *a, const struct vec3 *b)
-{
-	sc_acc_t s = sc_acc0();
-
-	s = sc_mac(s, a->x, b->x);
-	s = sc_mac(s, a->y, b->y);
-	s = sc_mac(s, a->z, b->z);
-	return sc_acc_get(s);
-}
-
-void v3_cross(const struct vec3 *a, const struct vec3 *b, struct vec3 *out)
-{
-	struct vec3 c;
-
-	c.x = sc_acc_get(sc_msb(sc_mac(sc_acc0(), a->y, b->z), a->z, b->y));
-	c.y = sc_acc_get(sc_msb(sc_mac(sc_acc0(), a->z, b->x), a->x, b->z));
-	c.z = sc_acc_get(sc_msb(sc_mac(sc_acc0(), a->x, b->y), a->y, b->x));
-	*out = c;
-}
-
-sc_t v3_norm(const struct vec3 *a)
-{
-	return sc_sqrt(v3_dot(a, a));
-}
-
-void quat_mul(const struct quat *a, const struct quat *b, struct quat *out)
-{
-	struct quat c;
-	sc_acc_t s;
-
-	s = sc_mac(sc_acc0(), a->w, b->w);
-	s = sc_msb(s, a->x, b->x);
-	s = sc_msb(s, a->y, b->y);
-	c.w = sc_acc_get(sc_msb(s, a->z, b->z));
-	s = sc_mac(sc_acc0(), a->w, b->x);
-	s = sc_mac(s, a->x, b->w);
-	s = sc_mac(s, a->y, b->z);
-	c.x = sc_acc_get(sc_msb(s, a->z, b->y));
-	s = sc_mac(sc_acc0(), a->w, b->y);
-	s = sc_msb(s, a->x, b->z);
-	s = sc_mac(s, a->y, b->w);
-	c.y = sc_acc_get(sc_mac(s, a->z, b->x));
-	s = sc_mac(sc_acc0(), a->w, b->z);
-	s = sc_mac(s, a->x, b->y);
-	s = sc_msb(s, a->y, b->x);
-	c.z = sc_acc_get(sc_mac(s, a->z, b->w));
-	*out = c;
-}
-
-void quat_conj(const struct quat *a, struct quat *out)
-{
-	out->w = a->w;
-	out->x = -a->x;
-	out->y = -a->y;
-	out->z = -a->z;
-}
-
 static sc_t quat_dot(const struct quat *a, const struct quat *b)
 {
 	sc_acc_t s = sc_mac(sc_acc0(), a->w, b->w);
@@ -70,11 +13,6 @@ static sc_t quat_dot(const struct quat *a, const struct quat *b)
 	s = sc_mac(s, a->x, b->x);
 	s = sc_mac(s, a->y, b->y);
 	return sc_acc_get(sc_mac(s, a->z, b->z));
-}
-
-sc_t quat_norm(const struct quat *a)
-{
-	return sc_sqrt(quat_dot(a, a));
 }
 
 static void quat_scale(const struct quat *a, sc_t k, struct quat *out)
@@ -95,32 +33,6 @@ bool quat_normalize(const struct quat *a, struct quat *out)
 	}
 	quat_scale(a, sc_div(SC_C(1), n), out);
 	return true;
-}
-
-void quat_rotate(const struct quat *q, const struct vec3 *v, struct vec3 *out)
-{
-	/* v' = v + 2w (u x v) + 2 u x (u x v), u the vector part */
-	struct vec3 u = { q->x, q->y, q->z }, c, cc;
-
-	v3_cross(&u, v, &c);
-	c.x += c.x;
-	c.y += c.y;
-	c.z += c.z;
-	v3_cross(&u, &c, &cc);
-	out->x = v->x + sc_mul(q->w, c.x) + cc.x;
-	out->y = v->y + sc_mul(q->w, c.y) + cc.y;
-	out->z = v->z + sc_mul(q->w, c.z) + cc.z;
-}
-
-void quat_from_axis_angle(const struct vec3 *axis, sc_t angle, struct quat *out)
-{
-	sc_t s, c;
-
-	sc_sincos(sc_mul(angle, SC_C(0.5)), &s, &c);
-	out->w = c;
-	out->x = sc_mul(axis->x, s);
-	out->y = sc_mul(axis->y, s);
-	out->z = sc_mul(axis->z, s);
 }
 
 void quat_to_mat3(const struct quat *q, sc_t m[3][3])
@@ -192,30 +104,6 @@ sc_t quat_angle_between(const struct quat *a, const struct quat *b)
 	return 2 * sc_atan2(s, sc_abs(e.w));
 }
 
-void dq_identity(struct dq *out)
-{
-	*out = (struct dq){ { SC_C(1), 0, 0, 0 }, { 0, 0, 0, 0 } };
-}
-
-void dq_mul(const struct dq *a, const struct dq *b, struct dq *out)
-{
-	struct quat t1, t2;
-
-	quat_mul(&a->r, &b->r, &out->r);
-	quat_mul(&a->r, &b->d, &t1);
-	quat_mul(&a->d, &b->r, &t2);
-	out->d.w = t1.w + t2.w;
-	out->d.x = t1.x + t2.x;
-	out->d.y = t1.y + t2.y;
-	out->d.z = t1.z + t2.z;
-}
-
-void dq_conj(const struct dq *a, struct dq *out)
-{
-	quat_conj(&a->r, &out->r);
-	quat_conj(&a->d, &out->d);
-}
-
 bool dq_normalize(const struct dq *a, struct dq *out)
 {
 	sc_t n = quat_norm(&a->r), k, rd;
@@ -238,44 +126,12 @@ bool dq_normalize(const struct dq *a, struct dq *out)
 	return true;
 }
 
-void dq_from_rt(const struct quat *r, const struct vec3 *t, struct dq *out)
-{
-	struct quat tq = { 0, sc_mul(t->x, SC_C(0.5)), sc_mul(t->y, SC_C(0.5)), sc_mul(t->z, SC_C(0.5)) };
-	struct quat rr = *r;
-
-	quat_mul(&tq, &rr, &out->d);
-	out->r = rr;
-}
-
 void dq_from_axis_angle_t(const struct vec3 *axis, sc_t angle, const struct vec3 *t, struct dq *out)
 {
 	struct quat r;
 
 	quat_from_axis_angle(axis, angle, &r);
 	dq_from_rt(&r, t, out);
-}
-
-void dq_translation(const struct dq *a, struct vec3 *out)
-{
-	/* t = 2 d r* */
-	struct quat rc, t;
-
-	quat_conj(&a->r, &rc);
-	quat_mul(&a->d, &rc, &t);
-	out->x = 2 * t.x;
-	out->y = 2 * t.y;
-	out->z = 2 * t.z;
-}
-
-void dq_transform_point(const struct dq *a, const struct vec3 *p, struct vec3 *out)
-{
-	struct vec3 t, rp;
-
-	dq_translation(a, &t);
-	quat_rotate(&a->r, p, &rp);
-	out->x = rp.x + t.x;
-	out->y = rp.y + t.y;
-	out->z = rp.z + t.z;
 }
 
 void dq_transform_line(const struct dq *a, const struct line *in, struct line *out)
@@ -324,41 +180,55 @@ void dq_from_mat4(const sc_t m[4][4], struct dq *out)
 	dq_from_rt(&q, &t, out);
 }
 
-void dq_log_twist(const struct dq *a, struct twist *out)
+void dq_log_twist_rt(const struct quat *r, const struct vec3 *t, struct twist *out, sc_t *half_angle)
 {
-	struct dq e = *a;
-	struct quat rc, tq;
-	struct vec3 t, wt, wwt;
+	struct quat e = *r;
+	struct vec3 wt, wwt;
 	sc_t s, c, x, k, f;
 
-	if (e.r.w < 0) {
-		quat_scale(&e.r, SC_C(-1), &e.r);
-		quat_scale(&e.d, SC_C(-1), &e.d);
+	if (e.w < 0) {
+		/* the shortest path; t does not change with the sign of the dual quaternion */
+		e.w = -e.w;
+		e.x = -e.x;
+		e.y = -e.y;
+		e.z = -e.z;
 	}
-	s = sc_sqrt(sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), e.r.x, e.r.x), e.r.y, e.r.y), e.r.z, e.r.z)));
-	c = e.r.w;
-	x = sc_atan2(s, c); /* half the rotation angle, in [0, pi/2] */
+	s = sc_sqrt(sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), e.x, e.x), e.y, e.y), e.z, e.z)));
+	c = e.w;
 	if (s < sc_mul(SC_C(1e-3), c)) {
-		/* 2 x / s = (2 / c) (1 - (s/c)^2 / 3 + (s/c)^4 / 5) */
-		sc_t u = sc_div(s, c), u2 = sc_mul(u, u);
+		/*
+		 * x = atan(u), u = s/c < 1e-3: u (1 - u^2/3 + u^4/5), the next term
+		 * below 1e-21 u; 2 x / s = (2 / c) (1 - u^2/3 + u^4/5). Newton ends here.
+		 */
+		sc_t ic = sc_div(SC_C(1), c), u = sc_mul(s, ic), u2 = sc_mul(u, u);
+		sc_t g = SC_C(1) - sc_mul(u2, SC_C(1.0 / 3) - sc_mul(u2, SC_C(0.2)));
 
-		f = sc_mul(sc_div(SC_C(2), c), SC_C(1) - sc_mul(u2, SC_C(1.0 / 3) - sc_mul(u2, SC_C(0.2))));
+		x = sc_mul(u, g);
+		f = sc_mul(2 * ic, g);
 	} else {
+		x = sc_atan2(s, c); /* half the rotation angle, in [0, pi/2] */
 		f = sc_div(2 * x, s);
 	}
-	out->w.x = sc_mul(f, e.r.x);
-	out->w.y = sc_mul(f, e.r.y);
-	out->w.z = sc_mul(f, e.r.z);
-	quat_conj(&e.r, &rc);
-	quat_mul(&e.d, &rc, &tq);
-	t = (struct vec3){ 2 * tq.x, 2 * tq.y, 2 * tq.z };
+	out->w.x = sc_mul(f, e.x);
+	out->w.y = sc_mul(f, e.y);
+	out->w.z = sc_mul(f, e.z);
 	/* v = t - 1/2 w x t + k w x (w x t) */
 	k = ik_log_k(x, s, c);
-	v3_cross(&out->w, &t, &wt);
+	v3_cross(&out->w, t, &wt);
 	v3_cross(&out->w, &wt, &wwt);
-	out->v.x = t.x - sc_mul(SC_C(0.5), wt.x) + sc_mul(k, wwt.x);
-	out->v.y = t.y - sc_mul(SC_C(0.5), wt.y) + sc_mul(k, wwt.y);
-	out->v.z = t.z - sc_mul(SC_C(0.5), wt.z) + sc_mul(k, wwt.z);
+	out->v.x = t->x - sc_mul(SC_C(0.5), wt.x) + sc_mul(k, wwt.x);
+	out->v.y = t->y - sc_mul(SC_C(0.5), wt.y) + sc_mul(k, wwt.y);
+	out->v.z = t->z - sc_mul(SC_C(0.5), wt.z) + sc_mul(k, wwt.z);
+	*half_angle = x;
+}
+
+void dq_log_twist(const struct dq *a, struct twist *out)
+{
+	struct vec3 t;
+	sc_t x;
+
+	dq_translation(a, &t);
+	dq_log_twist_rt(&a->r, &t, out, &x);
 }
 
 void dq_exp_twist(const struct twist *tw, struct dq *out)

@@ -152,8 +152,8 @@ void encode_describe(const struct avatar *av, const char *name, double rate_hz, 
 	out->head_offset[1] = (float)av->body.head_offset.y;
 	out->head_offset[2] = (float)av->body.head_offset.z;
 	snprintf(out->avatar_name, sizeof(out->avatar_name), "%s", name);
-	snprintf(out->conventions, sizeof(out->conventions), "world z-up right-handed; m; rad; quat wxyz; "
-		 "chest x right y forward z up");
+	snprintf(out->conventions, sizeof(out->conventions), "z-up RH; m; rad; quat wxyz; "
+		 "chest x right y fwd z up");
 	snprintf(out->joint[0].name, sizeof(out->joint[0].name), "%s", wire_joint_names[0]);
 	out->joint[0].segment = WIRE_SEG_CHEST;
 	out->joint[0].lo = (float)-M_PI;

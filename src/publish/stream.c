@@ -247,6 +247,12 @@ static void stream_service(struct output *o)
 		}
 		if (s->type == CFG_OUT_TCP)
 			setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
+		{
+			/* a small kernel queue: a slow reader gets recent frames, not seconds-old ones */
+			int sndbuf = (int)s->buf_size;
+
+			setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &sndbuf, sizeof(sndbuf));
+		}
 		s->cl[slot].fd = fd;
 		s->cl[slot].off = s->cl[slot].len = 0;
 		ctr_add_out(&o->st.accepted, 1);

@@ -74,9 +74,13 @@ static void put_f32(struct wbuf *w, float f)
 	put_u32(w, v);
 }
 
-static void put_str(struct wbuf *w, const char *s)
+/* at most max bytes: what the decoder accepts for this field (no strnlen: plain C11) */
+static void put_str(struct wbuf *w, const char *s, size_t max)
 {
-	size_t len = strnlen(s, WIRE_NAME_MAX * 4);
+	size_t len = 0;
+
+	while (len < max && s[len])
+		len++;
 
 	put_u8(w, (uint8_t)len);
 	memcpy(w->p + w->n, s, len);
@@ -97,8 +101,11 @@ struct rbuf {
 	int err;
 };
 
+/* the first error sticks: later reads return 0 and keep it */
 static uint8_t get_u8(struct rbuf *r)
 {
+	if (r->err)
+		return 0;
 	if (r->n + 1 > r->len) {
 		r->err = WIRE_ESHORT;
 		return 0;
@@ -288,6 +295,13 @@ int wire_decode_frame(const uint8_t *buf, size_t len, struct wire_frame *f)
 
 /* ---- DESCRIBE ----------------------------------------------------------------- */
 
+/* the longest DESCRIBE, every string at its maximum, fits one datagram */
+#define WIRE_DESCRIBE_WORST                                                                                     \
+	(WIRE_HEADER_LEN + 32 + (1 + WIRE_NAME_MAX) + (1 + 4 * WIRE_NAME_MAX) +                                  \
+	 WIRE_JOINTS * (1 + WIRE_NAME_MAX + 1 + 8 * 4) + WIRE_SEGMENTS * (1 + WIRE_NAME_MAX + 1) +               \
+	 WIRE_SENSORS * (1 + WIRE_NAME_MAX))
+_Static_assert(WIRE_DESCRIBE_WORST <= WIRE_MAX_MSG, "a DESCRIBE can exceed WIRE_MAX_MSG");
+
 size_t wire_encode_describe(const struct wire_describe *d, uint8_t *buf)
 {
 	struct wbuf w = { buf, 0 };
@@ -298,12 +312,12 @@ size_t wire_encode_describe(const struct wire_describe *d, uint8_t *buf)
 		put_f32(&w, d->dims[i]);
 	for (int i = 0; i < 3; i++)
 		put_f32(&w, d->head_offset[i]);
-	put_str(&w, d->avatar_name);
-	put_str(&w, d->conventions);
+	put_str(&w, d->avatar_name, WIRE_NAME_MAX);
+	put_str(&w, d->conventions, WIRE_NAME_MAX * 4);
 	for (int i = 0; i < WIRE_JOINTS; i++) {
 		const struct wire_joint_desc *j = &d->joint[i];
 
-		put_str(&w, j->name);
+		put_str(&w, j->name, WIRE_NAME_MAX);
 		put_u8(&w, j->segment);
 		put_f32(&w, j->lo);
 		put_f32(&w, j->hi);
@@ -313,11 +327,11 @@ size_t wire_encode_describe(const struct wire_describe *d, uint8_t *buf)
 			put_f32(&w, j->trans[k]);
 	}
 	for (int i = 0; i < WIRE_SEGMENTS; i++) {
-		put_str(&w, d->segment[i].name);
+		put_str(&w, d->segment[i].name, WIRE_NAME_MAX);
 		put_u8(&w, d->segment[i].parent);
 	}
 	for (int i = 0; i < WIRE_SENSORS; i++)
-		put_str(&w, d->sensor[i]);
+		put_str(&w, d->sensor[i], WIRE_NAME_MAX);
 	return finish(&w);
 }
 

@@ -1,0 +1,427 @@
+# SPDX-License-Identifier: MIT
+"""End-to-end tests of the daemon: the real binary on loopback, subscribed
+with avatargw-dump (and raw sockets where a test needs to misbehave).
+
+Run from the repository root: python3 -m unittest tests/e2e/test_daemon.py
+(BUILD=build-san selects the sanitizer build)."""
+import csv
+import json
+import math
+import os
+import signal
+import socket
+import struct
+import subprocess
+import tempfile
+import time
+import unittest
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+BUILD = os.path.join(ROOT, os.environ.get("BUILD", "build"))
+DAEMON = os.path.join(BUILD, "avatargw")
+DUMP = os.path.join(BUILD, "avatargw-dump")
+CTL = os.path.join(BUILD, "avatargw-ctl")
+CLIENT = os.path.join(BUILD, "examples", "glm_client")
+CLIP = os.path.join(ROOT, "config", "clips", "cmu_141_16.csv")
+DEG = math.pi / 180
+# the default limits (config/avatargw.conf), degrees
+LIMITS = [(-30, 30), (-90, 30), (-60, 120), (-90, 90), (-90, 60), (-90, 90), (-70, 70), (-30, 30)]
+IK_REACHED = 0x01
+
+
+def free_port(kind=socket.SOCK_DGRAM):
+    s = socket.socket(socket.AF_INET, kind)
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
+
+
+class Daemon:
+    """avatargw in the background, on a configuration file of a temp dir."""
+
+    def __init__(self, tmp, conf_text=None, demo=False, sets=(), env=None):
+        self.tmp = tmp
+        self.ctl = os.path.join(tmp, "control")
+        self.conf = os.path.join(tmp, "avatargw.conf")
+        args = [DAEMON]
+        if demo:
+            args.append("--demo")
+        else:
+            with open(self.conf, "w") as f:
+                f.write(conf_text)
+            args += ["-c", self.conf]
+        args += ["--set", "daemon.control_socket=" + self.ctl]
+        for s in sets:
+            args += ["--set", s]
+        self.err_path = os.path.join(tmp, "daemon.err")
+        self.err = open(self.err_path, "w")
+        e = dict(os.environ)
+        e.update(env or {})
+        self.proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=self.err, env=e)
+        deadline = time.time() + 5
+        while not os.path.exists(self.ctl):
+            if self.proc.poll() is not None or time.time() > deadline:
+                raise AssertionError("daemon did not start: " + self.stderr())
+            time.sleep(0.02)
+
+    def stderr(self):
+        self.err.flush()
+        with open(self.err_path) as f:
+            return f.read()
+
+    def status(self):
+        out = subprocess.run([CTL, "-s", self.ctl, "status", "--json"], capture_output=True, text=True,
+                             timeout=5)
+        if out.returncode != 0:
+            raise AssertionError("avatargw-ctl failed: " + out.stderr)
+        return json.loads(out.stdout)
+
+    def stop(self):
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self.err.close()
+        return self.proc.returncode
+
+
+def dump(args, count, timeout=10):
+    """frames (and DESCRIBEs) from avatargw-dump, each with its arrival time"""
+    p = subprocess.Popen([DUMP] + args + ["--count", str(count), "--timeout", "5"], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, bufsize=1)
+    out = []
+    t_end = time.time() + timeout
+    for line in p.stdout:
+        out.append((time.monotonic(), json.loads(line)))
+        if time.time() > t_end:
+            break
+    p.wait(timeout=5)
+    err = p.stderr.read()
+    p.stdout.close()
+    p.stderr.close()
+    if p.returncode != 0:
+        raise AssertionError("avatargw-dump exited %d: %s" % (p.returncode, err))
+    return out
+
+
+def load_clip():
+    rows = []
+    with open(CLIP) as f:
+        for r in csv.DictReader(f):
+            rows.append({k: [float(r[k + "_" + a]) for a in ("x", "y", "z")] for k in ("head", "lhand", "rhand")})
+    return rows
+
+
+def dist(a, b):
+    return math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b)))
+
+
+SIM_CONF = """
+[daemon]
+rate = {rate}
+[source sim]
+type = sim
+people = 2
+[avatar a]
+person = sim/p0
+count = 2
+shoulder = {shoulder}
+[output udp]
+type = udp
+address = 127.0.0.1
+port = {port}
+[output tcp]
+type = tcp
+address = 127.0.0.1
+port = {tport}
+client_buffer = 4096
+"""
+
+
+class DemoTest(unittest.TestCase):
+    """the embedded demo, replaying the CMU clip, checked frame by frame"""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmpd = tempfile.TemporaryDirectory()
+        cls.port = free_port()
+        cls.tport = free_port(socket.SOCK_STREAM)
+        cls.d = Daemon(cls.tmpd.name, demo=True, sets=["output local.port=%d" % cls.port,
+                                                       "output stream.port=%d" % cls.tport])
+        cls.frames = dump(["--udp", "127.0.0.1:%d" % cls.port, "--describe"], 720)
+
+    @classmethod
+    def tearDownClass(cls):
+        rc = cls.d.stop()
+        cls.tmpd.cleanup()
+        assert rc == 0, "daemon exit status %s" % rc
+
+    def only(self, kind):
+        return [(t, m) for t, m in self.frames if m["type"] == kind]
+
+    def test_rate(self):
+        fr = self.only("frame")
+        self.assertGreaterEqual(len(fr), 700)
+        dt = fr[-1][0] - fr[0][0]
+        rate = (len(fr) - 1) / dt
+        self.assertAlmostEqual(rate, 240, delta=240 * 0.05, msg="frame rate %.1f Hz" % rate)
+
+    def test_sequence_continuity(self):
+        fr = [m for _, m in self.only("frame")]
+        gaps = [(a["seq"], b["seq"]) for a, b in zip(fr, fr[1:]) if b["seq"] != a["seq"] + 1]
+        self.assertEqual(gaps, [])
+        self.assertEqual(len({m["source"] for m in fr}), 1)
+
+    def test_describe_at_1hz(self):
+        ds = self.only("describe")
+        # 720 frames at 240 Hz = 3 s: 3 or 4 DESCRIBEs
+        self.assertIn(len(ds), (2, 3, 4))
+        d = ds[0][1]
+        self.assertEqual(d["avatar"], 0)
+        self.assertEqual(len(d["joints"]), 17)
+
+    def test_hands_match_replayed_sensors(self):
+        rows = load_clip()
+        checked = 0
+        for _, m in self.only("frame"):
+            sens = {s["name"]: s for s in m["sensors"]}
+            # the published sensors are rows of the clip
+            head = sens["head"]["p"]
+            row = min(rows, key=lambda r: dist(r["head"], head))
+            self.assertLess(dist(row["head"], head), 1e-5)
+            self.assertLess(dist(row["rhand"], sens["right_hand"]["p"]), 1e-5)
+            self.assertLess(dist(row["lhand"], sens["left_hand"]["p"]), 1e-5)
+            for side, seg, key in (("right", "r_hand", "rhand"), ("left", "l_hand", "lhand")):
+                arm = [a for a in m["arms"] if a["side"] == side][0]
+                if arm["ik_flags"] & IK_REACHED:
+                    e = dist(m["segments"][seg]["p"], row[key])
+                    self.assertLess(e, 1e-3, "%s hand %.2f mm from its sensor, seq %d" % (side, e * 1e3, m["seq"]))
+                    checked += 1
+        # the demo body reaches the whole clip: every arm of every frame was checked
+        self.assertEqual(checked, 2 * len(self.only("frame")))
+
+    def test_angles_inside_limits_and_finite(self):
+        for _, m in self.only("frame"):
+            for name, v in m["joints"].items():
+                self.assertIsNotNone(v, "%s is NaN in seq %d" % (name, m["seq"]))
+                self.assertTrue(math.isfinite(v))
+                if name == "chest_yaw":
+                    continue
+                j = int(name[2:] and ["girdle", "sh_abd", "sh_flex", "sh_rot", "elbow", "pronation", "wr_flex",
+                                      "wr_dev"].index(name[2:]))
+                lo, hi = LIMITS[j]
+                self.assertGreaterEqual(v, lo * DEG - 1e-6, name)
+                self.assertLessEqual(v, hi * DEG + 1e-6, name)
+            for seg in m["segments"].values():
+                for x in seg["p"] + seg["q"]:
+                    self.assertIsNotNone(x)
+
+    def test_describe_limits_match(self):
+        d = self.only("describe")[0][1]
+        joints = d["joints"]
+        names = list(joints) if isinstance(joints, dict) else [j["name"] for j in joints]
+        self.assertEqual(names[0], "chest_yaw")
+
+    def test_ctl_status(self):
+        st = self.d.status()
+        self.assertEqual(st["sources"][0]["state"], "OK")
+        self.assertEqual(st["avatars"][0]["state"], "OK")
+        self.assertGreater(st["avatars"][0]["latency_us"]["n"], 100)
+        self.assertEqual(st["avatars"][0]["nan_blocked"], 0)
+        txt = subprocess.run([CTL, "-s", self.d.ctl, "status"], capture_output=True, text=True).stdout
+        self.assertIn("AVATAR", txt)
+        self.assertIn("demo", txt)
+
+    def test_tcp_stream(self):
+        fr = dump(["--tcp", "127.0.0.1:%d" % self.tport], 100)
+        seqs = [m["seq"] for _, m in fr if m["type"] == "frame"]
+        self.assertEqual(len(seqs), 100)
+        self.assertEqual(seqs, list(range(seqs[0], seqs[0] + 100)))
+
+    @unittest.skipUnless(os.path.exists(CLIENT), "the GLM example client is not built")
+    def test_glm_client_agrees(self):
+        out = subprocess.run([CLIENT, "--port", str(self.port), "--count", "240"], capture_output=True,
+                             text=True, timeout=20)
+        self.assertEqual(out.returncode, 0, out.stdout + out.stderr)
+
+
+class ConfigErrorTest(unittest.TestCase):
+    def run_conf(self, text):
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "bad.conf")
+            with open(path, "w") as f:
+                f.write(text)
+            p = subprocess.run([DAEMON, "-c", path], capture_output=True, text=True, timeout=10)
+            return p, path
+
+    def test_unknown_key(self):
+        p, path = self.run_conf("[daemon]\nrate = 240\nspeed = 2\n")
+        self.assertEqual(p.returncode, 78)
+        self.assertIn("%s:3:" % path, p.stderr)
+        self.assertIn("speed", p.stderr)
+
+    def test_out_of_range(self):
+        p, path = self.run_conf("[daemon]\n\nrate = 0.5\n")
+        self.assertEqual(p.returncode, 78)
+        self.assertIn("%s:3: [daemon] rate" % path, p.stderr)
+
+    def test_missing_file(self):
+        p = subprocess.run([DAEMON, "-c", "/nonexistent/avatargw.conf"], capture_output=True, text=True)
+        self.assertEqual(p.returncode, 78)
+        self.assertIn("/nonexistent/avatargw.conf", p.stderr)
+
+    def test_bad_sensor(self):
+        p, path = self.run_conf("[source s]\ntype = sim\n[avatar a]\nhead = s/p0.head\nleft_hand = s/p0.left_hand\n"
+                                "right_hand = s/p7.right_hand\n")
+        self.assertEqual(p.returncode, 78)
+        self.assertIn("%s:6: [avatar a] right_hand" % path, p.stderr)
+
+
+class ReloadTest(unittest.TestCase):
+    def test_good_then_bad_reload(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            port, tport = free_port(), free_port(socket.SOCK_STREAM)
+            d = Daemon(tmp, SIM_CONF.format(rate=240, shoulder=0.17, port=port, tport=tport))
+            try:
+                before = dump(["--udp", "127.0.0.1:%d" % port, "--describe"], 240)
+                rev0 = [m for _, m in before if m["type"] == "frame"][-1]["rev"]
+                # a good change: a new body (DESCRIBE revision +1), sequence numbers go on
+                with open(d.conf, "w") as f:
+                    f.write(SIM_CONF.format(rate=240, shoulder=0.2, port=port, tport=tport))
+                p = subprocess.Popen([DUMP, "--udp", "127.0.0.1:%d" % port, "--describe", "--count", "480",
+                                      "--timeout", "5"], stdout=subprocess.PIPE, text=True)
+                time.sleep(0.5)
+                d.proc.send_signal(signal.SIGHUP)
+                out, _ = p.communicate(timeout=10)
+                msgs = [json.loads(l) for l in out.splitlines()]
+                fr = [m for m in msgs if m["type"] == "frame" and m["avatar"] == 0]
+                gaps = [(a["seq"], b["seq"]) for a, b in zip(fr, fr[1:]) if b["seq"] != a["seq"] + 1]
+                self.assertLessEqual(len(gaps), 0, gaps)
+                self.assertEqual(fr[-1]["rev"], rev0 + 1)
+                ds = [m for m in msgs if m["type"] == "describe" and m["avatar"] == 0 and m["rev"] == rev0 + 1]
+                self.assertTrue(ds, "no DESCRIBE of the new revision")
+                self.assertAlmostEqual(ds[0]["dims"][0], 0.2, places=6)
+                self.assertEqual(d.status()["reloads"], 1)
+                # a bad change: rejected with its error, the running configuration stays
+                with open(d.conf, "w") as f:
+                    f.write(SIM_CONF.format(rate=240, shoulder=5, port=port, tport=tport))
+                d.proc.send_signal(signal.SIGHUP)
+                time.sleep(0.5)
+                self.assertIsNone(d.proc.poll())
+                self.assertIn("reload rejected", d.stderr())
+                self.assertIn("%s:10: [avatar a] shoulder" % d.conf, d.stderr())
+                st = d.status()
+                self.assertEqual(st["reload_failures"], 1)
+                after = dump(["--udp", "127.0.0.1:%d" % port], 100)
+                self.assertEqual(len(after), 100)
+            finally:
+                self.assertEqual(d.stop(), 0)
+
+
+class SlowSubscriberTest(unittest.TestCase):
+    def test_stalled_and_vanished_subscribers_do_not_block(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            port, tport = free_port(), free_port(socket.SOCK_STREAM)
+            d = Daemon(tmp, SIM_CONF.format(rate=240, shoulder=0.17, port=port, tport=tport))
+            try:
+                stalled = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+                stalled.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+                stalled.connect(("127.0.0.1", tport))
+                gone = socket.create_connection(("127.0.0.1", tport))
+                time.sleep(0.2)
+                gone.close()
+                fr = dump(["--udp", "127.0.0.1:%d" % port], 960)  # 2 avatars, 2 s
+                seqs = {}
+                for _, m in fr:
+                    seqs.setdefault(m["avatar"], []).append(m["seq"])
+                for a, s in seqs.items():
+                    self.assertEqual(s, list(range(s[0], s[0] + len(s))), "avatar %d lost frames" % a)
+                st = d.status()
+                tcp = [o for o in st["outputs"] if o["name"] == "tcp"][0]
+                self.assertGreater(tcp["dropped"], 0)
+                self.assertEqual(tcp["clients"], 1)  # the stalled one stays, the gone one was retired
+                self.assertEqual(tcp["closed"], 1)
+                self.assertLessEqual(st["loop"]["overruns"], 2)
+                # a new reader still gets a clean stream
+                fr = dump(["--tcp", "127.0.0.1:%d" % tport], 50)
+                self.assertEqual(len(fr), 50)
+                stalled.close()
+            finally:
+                self.assertEqual(d.stop(), 0)
+
+
+class SignalTest(unittest.TestCase):
+    def test_sigterm_and_notify(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            ns = os.path.join(tmp, "notify")
+            sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+            sock.bind(ns)
+            sock.settimeout(3)
+            port, tport = free_port(), free_port(socket.SOCK_STREAM)
+            d = Daemon(tmp, SIM_CONF.format(rate=240, shoulder=0.17, port=port, tport=tport),
+                       env={"NOTIFY_SOCKET": ns, "WATCHDOG_USEC": "200000"})
+            got = []
+
+            def until(what):
+                t_end = time.time() + 3
+                while time.time() < t_end:
+                    m = sock.recv(4096).decode()
+                    got.append(m)
+                    if what in m:
+                        return m
+                raise AssertionError("no %s in %r" % (what, got))
+
+            until("READY=1")
+            until("WATCHDOG=1")
+            self.assertIn("STATUS=", "".join(got))
+            d.proc.send_signal(signal.SIGHUP)
+            until("RELOADING=1")
+            until("READY=1")
+            t0 = time.monotonic()
+            d.proc.send_signal(signal.SIGTERM)
+            d.proc.wait(timeout=5)
+            took = time.monotonic() - t0
+            until("STOPPING=1")
+            self.assertEqual(d.proc.returncode, 0)
+            self.assertLess(took, 1.0)
+            self.assertFalse(os.path.exists(d.ctl), "control socket left behind")
+            d.stop()
+            sock.close()
+
+    def test_sigint(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            d = Daemon(tmp, demo=True, sets=["output local.port=%d" % free_port(),
+                                             "output stream.port=%d" % free_port(socket.SOCK_STREAM)])
+            d.proc.send_signal(signal.SIGINT)
+            self.assertEqual(d.proc.wait(timeout=2), 0)
+            d.stop()
+
+
+class MulticastTest(unittest.TestCase):
+    def test_multicast(self):
+        group, port = "239.255.77.70", free_port()
+        probe = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            probe.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP,
+                             struct.pack("4s4s", socket.inet_aton(group), socket.inet_aton("0.0.0.0")))
+        except OSError as e:
+            self.skipTest("SKIPPED: this host cannot join IPv4 multicast groups (%s)" % e)
+        finally:
+            probe.close()
+        conf = ("[source s]\ntype = sim\n[avatar a]\nperson = s/p0\n"
+                "[output m]\ntype = multicast\naddress = %s\nport = %d\n" % (group, port))
+        with tempfile.TemporaryDirectory() as tmp:
+            d = Daemon(tmp, conf)
+            try:
+                fr = dump(["--udp", "%s:%d" % (group, port)], 100)
+                self.assertEqual(len(fr), 100)
+            finally:
+                self.assertEqual(d.stop(), 0)
+
+
+if __name__ == "__main__":
+    unittest.main()

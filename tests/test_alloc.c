@@ -1,0 +1,193 @@
+// SPDX-License-Identifier: MIT
+/*
+ * test_alloc.c - nothing is allocated after start-up.
+ *
+ * malloc, calloc, realloc and free are wrapped at link time
+ * (-Wl,--wrap=..., see the Makefile): every call from avatargw's own code
+ * and the IK core is counted. The gateway is built (allocation allowed),
+ * then the real loop thread runs for a while with a TCP and a Unix
+ * subscriber connected, a slow subscriber that never reads, several
+ * avatars, sim and replay sources, DESCRIBEs, and the counters must not
+ * move. mallinfo2() must not move either, which also catches allocations
+ * made inside libc on our behalf.
+ */
+#include "config/config.h"
+#include "daemon/gateway.h"
+#include "daemon/loop.h"
+
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <malloc.h>
+#include <netinet/in.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <time.h>
+#include <unistd.h>
+
+void *__real_malloc(size_t n);
+void *__real_calloc(size_t n, size_t m);
+void *__real_realloc(void *p, size_t n);
+void __real_free(void *p);
+
+static _Atomic int counting;
+static _Atomic long allocs;
+
+void *__wrap_malloc(size_t n);
+void *__wrap_calloc(size_t n, size_t m);
+void *__wrap_realloc(void *p, size_t n);
+void __wrap_free(void *p);
+
+void *__wrap_malloc(size_t n)
+{
+	if (atomic_load(&counting))
+		atomic_fetch_add(&allocs, 1);
+	return __real_malloc(n);
+}
+
+void *__wrap_calloc(size_t n, size_t m)
+{
+	if (atomic_load(&counting))
+		atomic_fetch_add(&allocs, 1);
+	return __real_calloc(n, m);
+}
+
+void *__wrap_realloc(void *p, size_t n)
+{
+	if (atomic_load(&counting))
+		atomic_fetch_add(&allocs, 1);
+	return __real_realloc(p, n);
+}
+
+void __wrap_free(void *p)
+{
+	if (atomic_load(&counting) && p)
+		atomic_fetch_add(&allocs, 1);
+	__real_free(p);
+}
+
+static const char conf[] =
+	"[daemon]\n"
+	"rate = 480\n"
+	"control_socket =\n"
+	"describe_interval = 0.1\n"
+	"stale_ms = 20\n"
+	"[source sim]\n"
+	"type = sim\n"
+	"people = 3\n"
+	"[source clip]\n"
+	"type = replay\n"
+	"file = builtin:cmu_141_16.csv\n"
+	"[avatar crowd]\n"
+	"person = sim/p0\n"
+	"count = 3\n"
+	"[avatar clip]\n"
+	"person = clip\n"
+	"[avatar mixed]\n"
+	"person = sim/p0\n"
+	"right_hand = clip/right_hand\n"
+	"[output udp]\n"
+	"type = udp\n"
+	"address = 127.0.0.1\n"
+	"port = 17770\n"
+	"[output tcp]\n"
+	"type = tcp\n"
+	"address = 127.0.0.1\n"
+	"port = 17771\n"
+	"client_buffer = 4096\n"
+	"[output unix]\n"
+	"type = unix\n"
+	"path = /tmp/avatargw-test-alloc.sock\n";
+
+static void sleep_ms(int ms)
+{
+	struct timespec ts = { ms / 1000, (ms % 1000) * 1000000L };
+
+	while (nanosleep(&ts, &ts))
+		;
+}
+
+static void test_loop_allocates_nothing(void **state)
+{
+	static struct gateway g;
+	struct config c;
+	char err[512];
+	struct loop *l = NULL;
+	struct sockaddr_in sin = { .sin_family = AF_INET, .sin_port = htons(17771),
+				   .sin_addr.s_addr = htonl(INADDR_LOOPBACK) };
+	struct sockaddr_un sun = { .sun_family = AF_UNIX, .sun_path = "/tmp/avatargw-test-alloc.sock" };
+	struct mallinfo2 before, after;
+	int tcp, ux, rx;
+	long n;
+	char buf[65536];
+	uint64_t frames = 0;
+
+	(void)state;
+	assert_int_equal(config_load_text(&c, "alloc.conf", conf, err, sizeof(err)), 0);
+	assert_int_equal(gw_open(&g, &c, NULL, 42, err, sizeof(err)), 0);
+	assert_int_equal(loop_start(&l, &g, err, sizeof(err)), 0);
+	/* subscribers: one that reads, one (TCP) that never reads and falls behind */
+	tcp = socket(AF_INET, SOCK_STREAM, 0);
+	ux = socket(AF_UNIX, SOCK_STREAM, 0);
+	assert_int_equal(connect(tcp, (struct sockaddr *)&sin, sizeof(sin)), 0);
+	assert_int_equal(connect(ux, (struct sockaddr *)&sun, sizeof(sun)), 0);
+	sleep_ms(300); /* warm: accepted, first DESCRIBEs out, the slow buffer full */
+	before = mallinfo2();
+	atomic_store(&counting, 1);
+	for (int i = 0; i < 20; i++) {
+		sleep_ms(50);
+		rx = (int)recv(ux, buf, sizeof(buf), MSG_DONTWAIT);
+		(void)rx;
+	}
+	atomic_store(&counting, 0);
+	after = mallinfo2();
+	n = atomic_load(&allocs);
+	loop_stop(l);
+	for (int i = 0; i < g.n_avatars; i++)
+		frames += stat_get(&g.av[i].st.frames);
+	print_message("cycles %llu, frames %llu, tcp dropped %llu, allocations while running: %ld\n",
+		      (unsigned long long)stat_get(&g.st.cycles), (unsigned long long)frames,
+		      (unsigned long long)stat_get(&g.out[1].st.dropped), n);
+	/* the loop did run, the slow subscriber did lose messages, and nothing was allocated */
+	assert_true(stat_get(&g.st.cycles) > 200);
+	assert_int_equal(g.n_avatars, 5);
+	assert_true(stat_get(&g.out[1].st.dropped) > 0);
+	assert_int_equal(stat_get(&g.out[1].st.clients), 1);
+	assert_int_equal(n, 0);
+	assert_int_equal(before.uordblks, after.uordblks);
+	assert_int_equal(before.hblkhd, after.hblkhd);
+	close(tcp);
+	close(ux);
+	gw_close(&g);
+}
+
+/* the wrapper counts: a control that the test can fail */
+static void test_wrapper_counts(void **state)
+{
+	void *volatile p; /* not elided by the compiler */
+
+	(void)state;
+	atomic_store(&allocs, 0);
+	atomic_store(&counting, 1);
+	p = malloc(16);
+	free(p);
+	atomic_store(&counting, 0);
+	assert_int_equal(atomic_load(&allocs), 2);
+	atomic_store(&allocs, 0);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_wrapper_counts),
+		cmocka_unit_test(test_loop_allocates_nothing),
+	};
+
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,106 @@
+#!/bin/sh
+# SPDX-License-Identifier: MIT
+# make bench, second part: the daemon's goals, measured on the real binary.
+#   1. sample arrival -> datagram sent, one avatar at 240 Hz (the daemon's own
+#      histogram, read with avatargw-ctl), p50/p99/p99.9/max;
+#   2. RSS with one avatar (the embedded demo);
+#   3. avatars one core carries at 240 Hz: the loop (one thread) runs N sim
+#      avatars for a few seconds; it carries N when no cycle overran and the
+#      cycle's work p99 fits in the period.
+# One JSON line per measurement in $BUILD/bench-daemon.jsonl, and a table.
+set -eu
+BUILD=${1:-build}
+OUT="$BUILD/bench-daemon.jsonl"
+TMP=$(mktemp -d)
+trap 'kill $(jobs -p) 2>/dev/null; rm -rf "$TMP"' EXIT
+: >"$OUT"
+PORT=17900
+
+conf() { # people rate
+	cat <<EOC
+[daemon]
+rate = $2
+control_socket = $TMP/ctl
+[source sim]
+type = sim
+people = $1
+[avatar a]
+person = sim/p0
+count = $1
+[output udp]
+type = udp
+address = 127.0.0.1
+port = $PORT
+EOC
+}
+
+json() { # field path in python syntax
+	python3 -c "import json,sys; d=json.load(sys.stdin); print($1)"
+}
+
+# run N people at 240 Hz for $2 seconds (after 1 s of warm-up); prints the status JSON
+run() {
+	conf "$1" 240 >"$TMP/a.conf"
+	"$BUILD/avatargw-dump" --udp "127.0.0.1:$PORT" --stats >/dev/null 2>&1 &
+	dump=$!
+	"$BUILD/avatargw" -c "$TMP/a.conf" 2>"$TMP/err" &
+	d=$!
+	sleep 1
+	"$BUILD/avatargw-ctl" -s "$TMP/ctl" status --json >"$TMP/s0.json"
+	sleep "$2"
+	"$BUILD/avatargw-ctl" -s "$TMP/ctl" status --json >"$TMP/s1.json"
+	rss=$(awk '/VmRSS/ {print $2}' "/proc/$d/status")
+	kill "$d" "$dump"
+	wait "$d" "$dump" 2>/dev/null || true
+	echo "$rss"
+}
+
+echo "machine: $(uname -srm), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) cores; $(date -u +%Y-%m-%d)"
+
+# 1. latency, one avatar at 240 Hz, 10 s
+run 1 10 >/dev/null
+lat=$(json '"%.1f %.1f %.1f %.1f %d" % tuple([d["avatars"][0]["latency_us"][k] for k in ("p50","p99","p999","max")] + [d["avatars"][0]["latency_us"]["n"]])' <"$TMP/s1.json")
+echo "$lat" | awk '{printf "{\"set\":\"latency\",\"avatars\":1,\"rate_hz\":240,\"p50_us\":%s,\"p99_us\":%s,\"p999_us\":%s,\"max_us\":%s,\"n\":%s}\n", $1,$2,$3,$4,$5}' >>"$OUT"
+
+# 2. RSS of the demo
+"$BUILD/avatargw" --demo --set "daemon.control_socket=$TMP/demo.ctl" --set "output local.port=$PORT" \
+	--set "output stream.port=$((PORT + 1))" 2>/dev/null &
+d=$!
+sleep 2
+rss=$(awk '/VmRSS/ {print $2}' "/proc/$d/status")
+hwm=$(awk '/VmHWM/ {print $2}' "/proc/$d/status")
+kill "$d"
+wait "$d" 2>/dev/null || true
+echo "{\"set\":\"rss\",\"avatars\":1,\"rss_kib\":$rss,\"hwm_kib\":$hwm}" >>"$OUT"
+
+# 3. capacity: N avatars at 240 Hz, 4 s each
+for n in 250 500 750 1000 1250 1500; do
+	rss=$(run "$n" 4)
+	c0=$(json 'd["loop"]["cycles"]' <"$TMP/s0.json")
+	o0=$(json 'd["loop"]["overruns"]' <"$TMP/s0.json")
+	c1=$(json 'd["loop"]["cycles"]' <"$TMP/s1.json")
+	o1=$(json 'd["loop"]["overruns"]' <"$TMP/s1.json")
+	w=$(json '"%.1f %.1f" % (d["loop"]["work_us"]["p50"], d["loop"]["work_us"]["p99"])' <"$TMP/s1.json")
+	echo "$n $((c1 - c0)) $((o1 - o0)) $w $rss" | awk '{printf "{\"set\":\"capacity\",\"avatars\":%s,\"rate_hz\":240,\"cycles\":%s,\"overruns\":%s,\"work_p50_us\":%s,\"work_p99_us\":%s,\"period_us\":4166.7,\"rss_kib\":%s}\n", $1,$2,$3,$4,$5,$6}' >>"$OUT"
+done
+
+printf '\n| measurement | result |\n|---|---|\n'
+python3 - "$OUT" <<'EOPY'
+import json, sys
+rows = [json.loads(l) for l in open(sys.argv[1])]
+for r in rows:
+    if r["set"] == "latency":
+        print("| sample -> datagram, 1 avatar, 240 Hz | p50 %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us (%d frames; goal p99 <= 50 us) |"
+              % (r["p50_us"], r["p99_us"], r["p999_us"], r["max_us"], r["n"]))
+    elif r["set"] == "rss":
+        print("| RSS, demo (1 avatar) | %d KiB (peak %d KiB; goal <= 8192 KiB) |" % (r["rss_kib"], r["hwm_kib"]))
+best = 0
+for r in rows:
+    if r["set"] == "capacity":
+        ok = r["overruns"] == 0 and r["work_p99_us"] < r["period_us"]
+        best = r["avatars"] if ok else best
+        print("| %d avatars at 240 Hz | work p50 %.0f us, p99 %.0f us of 4167 us; %d overruns in %d cycles; RSS %d KiB; %s |"
+              % (r["avatars"], r["work_p50_us"], r["work_p99_us"], r["overruns"], r["cycles"], r["rss_kib"],
+                 "carried" if ok else "NOT carried"))
+print("| avatars one core carries at 240 Hz | %d (goal >= 1000) |" % best)
+EOPY
