@@ -67,7 +67,11 @@ struct arm {
 	enum arm_side side;
 	struct arm_dims dims;
 	struct arm_limits lim;
-	/* derived by arm_init(): local joint axis and translation after it */
+	/*
+	 * derived by arm_init(): local joint axis and translation after it. The
+	 * kinematics rely on this layout (axes +-z y x z x y x z, translations
+	 * along x, z, y, y after J1, J4, J5, J8): build an arm with arm_init only.
+	 */
 	struct vec3 axis[ARM_DOF];
 	struct vec3 trans[ARM_DOF];
 	sc_t lim_cs[ARM_DOF][4]; /* cos lo, sin lo, cos hi, sin hi: limit tests without atan2 */

@@ -184,7 +184,7 @@ void dq_log_twist_rt(const struct quat *r, const struct vec3 *t, struct twist *o
 {
 	struct quat e = *r;
 	struct vec3 wt, wwt;
-	sc_t s, c, x, k, f;
+	sc_t s, c, x, k, f, ic, g;
 
 	if (e.w < 0) {
 		/* the shortest path; t does not change with the sign of the dual quaternion */
@@ -195,20 +195,9 @@ void dq_log_twist_rt(const struct quat *r, const struct vec3 *t, struct twist *o
 	}
 	s = sc_sqrt(sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), e.x, e.x), e.y, e.y), e.z, e.z)));
 	c = e.w;
-	if (s < sc_mul(SC_C(1e-3), c)) {
-		/*
-		 * x = atan(u), u = s/c < 1e-3: u (1 - u^2/3 + u^4/5), the next term
-		 * below 1e-21 u; 2 x / s = (2 / c) (1 - u^2/3 + u^4/5). Newton ends here.
-		 */
-		sc_t ic = sc_div(SC_C(1), c), u = sc_mul(s, ic), u2 = sc_mul(u, u);
-		sc_t g = SC_C(1) - sc_mul(u2, SC_C(1.0 / 3) - sc_mul(u2, SC_C(0.2)));
-
-		x = sc_mul(u, g);
-		f = sc_mul(2 * ic, g);
-	} else {
-		x = sc_atan2(s, c); /* half the rotation angle, in [0, pi/2] */
-		f = sc_div(2 * x, s);
-	}
+	x = ik_half_angle(s, c, &ic, &g); /* half the rotation angle, in [0, pi/2] */
+	/* 2 x / s; at small angles (2 / c) (1 - u^2/3 + u^4/5) */
+	f = g != 0 ? sc_mul(2 * ic, g) : sc_div(2 * x, s);
 	out->w.x = sc_mul(f, e.x);
 	out->w.y = sc_mul(f, e.y);
 	out->w.z = sc_mul(f, e.z);

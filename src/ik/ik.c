@@ -28,7 +28,21 @@ void ik_target_set(struct ik_target *t, const struct vec3 *p, const struct quat 
 	ok = quat_normalize(r, &t->r) && ok;
 	t->p = ok ? *p : (struct vec3){ 0, 0, 0 };
 	dq_from_rt(&t->r, &t->p, &t->d);
-	dq_to_mat4(&t->d, t->m);
+	{
+		/* dq_to_mat4(&t->d) with the translation p itself (not 2 d r* again) */
+		sc_t rm[3][3];
+		int i, j;
+
+		quat_to_mat3(&t->r, rm);
+		for (i = 0; i < 3; i++)
+			for (j = 0; j < 3; j++)
+				t->m[i][j] = rm[i][j];
+		t->m[0][3] = t->p.x;
+		t->m[1][3] = t->p.y;
+		t->m[2][3] = t->p.z;
+		t->m[3][0] = t->m[3][1] = t->m[3][2] = 0;
+		t->m[3][3] = SC_C(1);
+	}
 	t->valid = ok;
 }
 
@@ -66,11 +80,10 @@ static bool kin_dq(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_t
 	err->pos = v3_norm(&dp);
 	if (check && err->pos < tol_pos) {
 		/* the rotation error alone, as the logarithm would compute it */
-		struct quat e = re;
-		sc_t s, c = sc_abs(e.w);
+		sc_t s, c = sc_abs(re.w), ic, g;
 
-		s = sc_sqrt(sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), e.x, e.x), e.y, e.y), e.z, e.z)));
-		err->rot = 2 * sc_atan2(s, c);
+		s = sc_sqrt(sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), re.x, re.x), re.y, re.y), re.z, re.z)));
+		err->rot = 2 * ik_half_angle(s, c, &ic, &g);
 		if (err->rot < tol_rot)
 			return true;
 	}
@@ -110,7 +123,7 @@ const struct ik_kin ik_kin_dq = {
 
 #define IK_RCOND SC_C(1e-6)
 
-/* sum of a[i] b[i] for i = j..7, in two interleaved partial sums (half the dependency chain) */
+/* sum of a[i] b[i] for i = j..n-1, in two interleaved partial sums (half the dependency chain) */
 static inline sc_t dot_from(int j, const sc_t a[ARM_DOF], const sc_t b[ARM_DOF], int n)
 {
 	sc_acc_t s0 = sc_acc0(), s1 = sc_acc0();
@@ -258,50 +271,63 @@ static inline sc_t dot8(const sc_t a[ARM_DOF], const sc_t b[ARM_DOF])
  */
 static bool lsq_normal_eq(const sc_t J[6][ARM_DOF], const sc_t V[6], sc_t x[ARM_DOF])
 {
-	sc_t M[6][6], L[6][6], inv[6], z[6], y[6], tr = 0, det = SC_C(1), t2;
+	sc_t M[6][6], L[6][6], inv[6], z[6], y[6], tr = 0, det = SC_C(1), t2, t6;
 	int i, j, k;
 
+	IK_UNROLL
 	for (i = 0; i < 6; i++)
+		IK_UNROLL
 		for (j = 0; j <= i; j++)
 			M[i][j] = dot8(J[i], J[j]);
 	/* M[i][j] (i > j) becomes W_ij = L_ij d_j */
+	IK_UNROLL
 	for (j = 0; j < 6; j++) {
 		sc_t d = M[j][j];
 
 		tr += d;
+		IK_UNROLL
 		for (k = 0; k < j; k++)
 			d -= sc_mul(L[j][k], M[j][k]);
 		if (!(d > 0))
 			return false;
 		det = sc_mul(det, d);
 		inv[j] = sc_div(SC_C(1), d);
+		IK_UNROLL
 		for (i = j + 1; i < 6; i++) {
 			sc_t w = M[i][j];
 
+			IK_UNROLL
 			for (k = 0; k < j; k++)
 				w -= sc_mul(M[i][k], L[j][k]);
 			M[i][j] = w;
 			L[i][j] = sc_mul(w, inv[j]);
 		}
 	}
+	/* det <= prod M_jj <= trace^6: a finite bound also rules out an overflowed det */
 	t2 = sc_mul(tr, tr);
-	if (!(sc_mul(det, SC_NE_COND) >= sc_mul(sc_mul(t2, t2), t2)))
+	t6 = sc_mul(sc_mul(t2, t2), t2);
+	if (!(sc_isfinite(t6) && sc_mul(det, SC_NE_COND) >= t6))
 		return false;
 	/* L z = V, then L^T y = D^-1 z */
+	IK_UNROLL
 	for (i = 0; i < 6; i++) {
 		sc_t s = V[i];
 
+		IK_UNROLL
 		for (k = 0; k < i; k++)
 			s -= sc_mul(L[i][k], z[k]);
 		z[i] = s;
 	}
+	IK_UNROLL
 	for (i = 5; i >= 0; i--) {
 		sc_t s = sc_mul(z[i], inv[i]);
 
+		IK_UNROLL
 		for (k = i + 1; k < 6; k++)
 			s -= sc_mul(L[k][i], y[k]);
 		y[i] = s;
 	}
+	IK_UNROLL
 	for (k = 0; k < ARM_DOF; k++) {
 		sc_acc_t s0 = sc_mac(sc_acc0(), J[0][k], y[0]), s1 = sc_mac(sc_acc0(), J[1][k], y[1]);
 
@@ -333,6 +359,17 @@ int ik_lsq_step(const sc_t J[6][ARM_DOF], const sc_t V[6], const bool *free, sc_
 		return rank;
 	}
 	if (n >= 6) {
+		/* the held joints' columns zeroed add nothing to J J^T and get x = 0 */
+		if (SC_NE_COND > 0) {
+			for (j = 0; j < 6; j++)
+				for (i = 0; i < ARM_DOF; i++)
+					a[j][i] = free[i] ? J[j][i] : SC_C(0);
+			if (lsq_normal_eq((const sc_t(*)[ARM_DOF])a, V, y)) {
+				for (i = 0; i < ARM_DOF; i++)
+					x[i] = free[i] ? y[i] : SC_C(0);
+				return 6;
+			}
+		}
 		for (j = 0; j < 6; j++)
 			for (i = 0; i < n; i++)
 				a[j][i] = J[j][col[i]];

@@ -3,63 +3,71 @@
  * kin_mat.c - the same kinematics with 4x4 homogeneous matrices, for the
  * comparison the paper promised: FK as a product of 4x4 joint matrices, the
  * Jacobian from the frames' rotation columns and origins, the error twist
- * from the matrix logarithm of D C^-1.
+ * from the matrix logarithm of D C^-1. Like the dual-quaternion backend, the
+ * product is evaluated in its rotation-and-translation form and exploits
+ * that each joint turns about a coordinate axis and moves along one: the
+ * product with a joint matrix changes two columns of the rotation, and the
+ * translation moves along one column.
  */
 #include "ik/ik.h"
 #include "ik_private.h"
 
-typedef sc_t m4[4][4];
+/* a rotation matrix by its columns: c[k] = R e_k */
+struct m3c {
+	struct vec3 c[3];
+};
 
-static void m4_mul(const m4 a, const m4 b, m4 out)
+/* a <- a cos + b sin, b <- b cos - a sin: two columns of R Rot(e_k, q) */
+static inline void turn(struct vec3 *a, struct vec3 *b, sc_t s, sc_t c)
 {
-	int i, j;
+	struct vec3 na, nb;
 
-	for (i = 0; i < 4; i++)
-		for (j = 0; j < 4; j++) {
-			sc_acc_t s = sc_mac(sc_acc0(), a[i][0], b[0][j]);
-
-			s = sc_mac(s, a[i][1], b[1][j]);
-			s = sc_mac(s, a[i][2], b[2][j]);
-			out[i][j] = sc_acc_get(sc_mac(s, a[i][3], b[3][j]));
-		}
+	na.x = sc_mul(a->x, c) + sc_mul(b->x, s);
+	na.y = sc_mul(a->y, c) + sc_mul(b->y, s);
+	na.z = sc_mul(a->z, c) + sc_mul(b->z, s);
+	nb.x = sc_mul(b->x, c) - sc_mul(a->x, s);
+	nb.y = sc_mul(b->y, c) - sc_mul(a->y, s);
+	nb.z = sc_mul(b->z, c) - sc_mul(a->z, s);
+	*a = na;
+	*b = nb;
 }
 
-/* Rot(axis, q) Trans(t) as a matrix: [R, R t; 0 0 0 1] */
-static void joint_m4(const struct arm *a, int i, sc_t q, m4 out)
+/* R Rx: columns (c0, c c1 + s c2, c c2 - s c1); R Ry: (c c0 - s c2, c1, c c2 + s c0); R Rz: (c c0 + s c1, c c1 - s c0, c2) */
+static inline void rot_mx(struct m3c *r, sc_t s, sc_t c)
 {
-	const struct vec3 *ax = &a->axis[i], *t = &a->trans[i];
-	sc_t s, c, R[3][3] = { { 0 } };
-	int r;
+	turn(&r->c[1], &r->c[2], s, c);
+}
 
-	sc_sincos(q, &s, &c);
-	/* axis is +-e_k: Rodrigues with a unit basis vector */
-	if (ax->x != 0) {
-		sc_t sg = ax->x;
+static inline void rot_my(struct m3c *r, sc_t s, sc_t c)
+{
+	turn(&r->c[2], &r->c[0], s, c);
+}
 
-		R[0][0] = SC_C(1);
-		R[1][1] = c, R[1][2] = -sc_mul(sg, s);
-		R[2][1] = sc_mul(sg, s), R[2][2] = c;
-	} else if (ax->y != 0) {
-		sc_t sg = ax->y;
+static inline void rot_mz(struct m3c *r, sc_t s, sc_t c)
+{
+	turn(&r->c[0], &r->c[1], s, c);
+}
 
-		R[1][1] = SC_C(1);
-		R[0][0] = c, R[0][2] = sc_mul(sg, s);
-		R[2][0] = -sc_mul(sg, s), R[2][2] = c;
-	} else {
-		sc_t sg = ax->z;
+/* p + k u */
+static inline void madd(const struct vec3 *p, sc_t k, const struct vec3 *u, struct vec3 *out)
+{
+	out->x = p->x + sc_mul(k, u->x);
+	out->y = p->y + sc_mul(k, u->y);
+	out->z = p->z + sc_mul(k, u->z);
+}
 
-		R[2][2] = SC_C(1);
-		R[0][0] = c, R[0][1] = -sc_mul(sg, s);
-		R[1][0] = sc_mul(sg, s), R[1][1] = c;
-	}
-	for (r = 0; r < 3; r++) {
-		out[r][0] = R[r][0];
-		out[r][1] = R[r][1];
-		out[r][2] = R[r][2];
-		out[r][3] = sc_mul(R[r][0], t->x) + sc_mul(R[r][1], t->y) + sc_mul(R[r][2], t->z);
-		out[3][r] = 0;
-	}
-	out[3][3] = SC_C(1);
+/* Jacobian column i: the joint's line (l, p x l), l = sgn u */
+static inline void mcol(sc_t J[6][ARM_DOF], int i, const struct vec3 *p, sc_t sgn, const struct vec3 *u)
+{
+	struct vec3 l = { sc_mul(sgn, u->x), sc_mul(sgn, u->y), sc_mul(sgn, u->z) }, m;
+
+	v3_cross(p, &l, &m);
+	J[0][i] = l.x;
+	J[1][i] = l.y;
+	J[2][i] = l.z;
+	J[3][i] = m.x;
+	J[4][i] = m.y;
+	J[5][i] = m.z;
 }
 
 /* rotation angle and axis-times-angle of a rotation matrix */
@@ -101,68 +109,117 @@ static void rot_log(const sc_t R[3][3], struct vec3 *w, sc_t *angle)
 	*w = (struct vec3){ sc_mul(f, k.x), sc_mul(f, k.y), sc_mul(f, k.z) };
 }
 
-static void kin_mat_eval(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_target *t, sc_t J[6][ARM_DOF],
-			 sc_t V[6], struct ik_err *err)
+/*
+ * The frames T1 ... Ti (rotation R[i], origin p[i]); column i of J is the
+ * axis of joint i in frame T1 ... T(i-1), i.e. sgn_i times column k_i of
+ * R[i] (or of R[i+1]: turning about e_k keeps column k). With check, J and V
+ * are skipped once the errors are within tolerance.
+ */
+static bool kin_mat(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_target *t, bool check, sc_t tol_pos,
+		    sc_t tol_rot, sc_t J[6][ARM_DOF], sc_t V[6], struct ik_err *err)
 {
-	m4 k[2], ji, e;
-	sc_t R[3][3];
-	struct vec3 w, tr, wt, wwt, dp;
-	sc_t th, x, s, c, kk;
-	int i, r, cur = 0;
+	const sc_t sg[ARM_DOF] = { a->axis[0].z, a->axis[1].y, a->axis[2].x, a->axis[3].z,
+				   a->axis[4].x, a->axis[5].y, a->axis[6].x, a->axis[7].z };
+	struct m3c R[ARM_DOF + 1];
+	struct vec3 p[ARM_DOF + 1], w, tr, wt, wwt, dp;
+	sc_t s[ARM_DOF], c[ARM_DOF], E[3][3], th, x, kk;
+	int i, r;
 
-	/* k = T1 ... Ti; column i of J is the axis of joint i in frame T1 ... T(i-1) */
-	for (r = 0; r < 4; r++)
-		for (i = 0; i < 4; i++)
-			k[0][r][i] = r == i ? SC_C(1) : SC_C(0);
 	for (i = 0; i < ARM_DOF; i++) {
-		const struct vec3 *ax = &a->axis[i];
-		struct vec3 l, p = { k[cur][0][3], k[cur][1][3], k[cur][2][3] }, m;
-
-		l.x = sc_mul(k[cur][0][0], ax->x) + sc_mul(k[cur][0][1], ax->y) + sc_mul(k[cur][0][2], ax->z);
-		l.y = sc_mul(k[cur][1][0], ax->x) + sc_mul(k[cur][1][1], ax->y) + sc_mul(k[cur][1][2], ax->z);
-		l.z = sc_mul(k[cur][2][0], ax->x) + sc_mul(k[cur][2][1], ax->y) + sc_mul(k[cur][2][2], ax->z);
-		v3_cross(&p, &l, &m);
-		J[0][i] = l.x, J[1][i] = l.y, J[2][i] = l.z;
-		J[3][i] = m.x, J[4][i] = m.y, J[5][i] = m.z;
-		joint_m4(a, i, q[i], ji);
-		m4_mul((const sc_t(*)[4])k[cur], (const sc_t(*)[4])ji, k[1 - cur]);
-		cur = 1 - cur;
+		sc_sincos(q[i], &s[i], &c[i]);
+		s[i] = sc_mul(sg[i], s[i]);
 	}
-	/* E = D C^-1, C^-1 = [R^T, -R^T t] */
+	/* J1 about z, then (S, 0, 0) */
+	R[1].c[0] = (struct vec3){ c[0], s[0], 0 };
+	R[1].c[1] = (struct vec3){ -s[0], c[0], 0 };
+	R[1].c[2] = (struct vec3){ 0, 0, SC_C(1) };
+	p[0] = (struct vec3){ 0, 0, 0 };
+	madd(&p[0], a->trans[0].x, &R[1].c[0], &p[1]);
+	/* J2 y, J3 x, J4 z then (0, 0, -A); J5 x then (0, F, 0); J6 y, J7 x, J8 z then (0, H, 0) */
+	R[2] = R[1];
+	rot_my(&R[2], s[1], c[1]);
+	R[3] = R[2];
+	rot_mx(&R[3], s[2], c[2]);
+	R[4] = R[3];
+	rot_mz(&R[4], s[3], c[3]);
+	p[2] = p[3] = p[1];
+	madd(&p[3], a->trans[3].z, &R[4].c[2], &p[4]);
+	R[5] = R[4];
+	rot_mx(&R[5], s[4], c[4]);
+	madd(&p[4], a->trans[4].y, &R[5].c[1], &p[5]);
+	R[6] = R[5];
+	rot_my(&R[6], s[5], c[5]);
+	R[7] = R[6];
+	rot_mx(&R[7], s[6], c[6]);
+	R[8] = R[7];
+	rot_mz(&R[8], s[7], c[7]);
+	p[6] = p[7] = p[5];
+	madd(&p[7], a->trans[7].y, &R[8].c[1], &p[8]);
+	/* E = D C^-1: rotation R_t R_c^T, translation p_t - R_e p_c */
 	{
-		m4 ci;
-		const sc_t(*C)[4] = (const sc_t(*)[4])k[cur];
+		const struct vec3 *cc = R[ARM_DOF].c;
+		const sc_t C[3][3] = { { cc[0].x, cc[1].x, cc[2].x },
+				       { cc[0].y, cc[1].y, cc[2].y },
+				       { cc[0].z, cc[1].z, cc[2].z } };
 
-		for (r = 0; r < 3; r++) {
+		for (r = 0; r < 3; r++)
 			for (i = 0; i < 3; i++)
-				ci[r][i] = C[i][r];
-			ci[r][3] = -(sc_mul(C[0][r], C[0][3]) + sc_mul(C[1][r], C[1][3]) + sc_mul(C[2][r], C[2][3]));
-			ci[3][r] = 0;
-		}
-		ci[3][3] = SC_C(1);
-		m4_mul((const sc_t(*)[4])t->m, (const sc_t(*)[4])ci, e);
-		dp = (struct vec3){ t->m[0][3] - C[0][3], t->m[1][3] - C[1][3], t->m[2][3] - C[2][3] };
+				E[r][i] = sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), t->m[r][0], C[i][0]), t->m[r][1], C[i][1]),
+							 t->m[r][2], C[i][2]));
 	}
-	for (r = 0; r < 3; r++)
-		for (i = 0; i < 3; i++)
-			R[r][i] = e[r][i];
-	rot_log((const sc_t(*)[3])R, &w, &th);
+	dp = (struct vec3){ t->m[0][3] - p[8].x, t->m[1][3] - p[8].y, t->m[2][3] - p[8].z };
+	err->pos = v3_norm(&dp);
+	rot_log((const sc_t(*)[3])E, &w, &th);
+	err->rot = th;
+	if (check && err->pos < tol_pos && err->rot < tol_rot)
+		return true;
+	tr.x = t->m[0][3] - (sc_mul(E[0][0], p[8].x) + sc_mul(E[0][1], p[8].y) + sc_mul(E[0][2], p[8].z));
+	tr.y = t->m[1][3] - (sc_mul(E[1][0], p[8].x) + sc_mul(E[1][1], p[8].y) + sc_mul(E[1][2], p[8].z));
+	tr.z = t->m[2][3] - (sc_mul(E[2][0], p[8].x) + sc_mul(E[2][1], p[8].y) + sc_mul(E[2][2], p[8].z));
 	/* v = t - 1/2 w x t + k w x (w x t) */
-	tr = (struct vec3){ e[0][3], e[1][3], e[2][3] };
 	x = sc_mul(th, SC_C(0.5));
-	sc_sincos(x, &s, &c);
-	kk = ik_log_k(x, s, c);
+	if (x < SC_C(0.05)) {
+		kk = ik_log_k(x, 0, SC_C(1)); /* the series: no sine needed */
+	} else {
+		sc_t sx, cx;
+
+		sc_sincos(x, &sx, &cx);
+		kk = ik_log_k(x, sx, cx);
+	}
 	v3_cross(&w, &tr, &wt);
 	v3_cross(&w, &wt, &wwt);
 	V[0] = w.x, V[1] = w.y, V[2] = w.z;
 	V[3] = tr.x - sc_mul(SC_C(0.5), wt.x) + sc_mul(kk, wwt.x);
 	V[4] = tr.y - sc_mul(SC_C(0.5), wt.y) + sc_mul(kk, wwt.y);
 	V[5] = tr.z - sc_mul(SC_C(0.5), wt.z) + sc_mul(kk, wwt.z);
-	err->pos = v3_norm(&dp);
-	err->rot = th;
+	/* the axis of J1 passes through the origin: (0, 0, sgn), no moment */
+	J[0][0] = J[1][0] = 0;
+	J[2][0] = sg[0];
+	J[3][0] = J[4][0] = J[5][0] = 0;
+	mcol(J, 1, &p[1], sg[1], &R[1].c[1]);
+	mcol(J, 2, &p[2], sg[2], &R[2].c[0]);
+	mcol(J, 3, &p[3], sg[3], &R[4].c[2]);
+	mcol(J, 4, &p[4], sg[4], &R[5].c[0]);
+	mcol(J, 5, &p[5], sg[5], &R[5].c[1]);
+	mcol(J, 6, &p[6], sg[6], &R[6].c[0]);
+	mcol(J, 7, &p[7], sg[7], &R[8].c[2]);
+	return check && err->pos < tol_pos && err->rot < tol_rot;
+}
+
+static void kin_mat_eval(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_target *t, sc_t J[6][ARM_DOF],
+			 sc_t V[6], struct ik_err *err)
+{
+	kin_mat(a, q, t, false, 0, 0, J, V, err);
+}
+
+static bool kin_mat_eval_tol(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_target *t, sc_t tol_pos,
+			     sc_t tol_rot, sc_t J[6][ARM_DOF], sc_t V[6], struct ik_err *err)
+{
+	return kin_mat(a, q, t, true, tol_pos, tol_rot, J, V, err);
 }
 
 const struct ik_kin ik_kin_mat = {
 	.name = "matrix",
 	.eval = kin_mat_eval,
+	.eval_tol = kin_mat_eval_tol,
 };
