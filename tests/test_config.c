@@ -545,7 +545,7 @@ static void test_defaults(void **state)
 	assert_int_equal(c->daemon.realtime_priority, 0);
 	assert_int_equal(c->daemon.cpu, -1);
 	assert_true(c->daemon.lock_memory);
-	assert_string_equal(c->daemon.control_socket, "/run/avatargw/control");
+	assert_string_equal(c->daemon.control_socket, "auto");
 	assert_near(c->daemon.describe_interval, 1, 0);
 	assert_int_equal(c->daemon.log_level, CFG_LOG_INFO);
 

@@ -186,11 +186,17 @@ static int sim_poll(struct tracker *t, const struct tracker_clock *now)
 		/* each person at its own place in the cycle: a stride coprime with most table sizes */
 		int64_t i = (n + (int64_t)k * 7919) % s->n_table;
 		const struct dq *row = &s->table[i * SIM_ROLES];
-		struct dq shift, placed;
+		/* a pure translation along x: the dual part gains x/2 times the rotation */
+		sc_t hx = SC_C(0.5) * k * t->cfg->spacing;
 
-		dq_from_rt(&(struct quat){ 1, 0, 0, 0 }, &(struct vec3){ k * t->cfg->spacing, 0, 0 }, &shift);
 		for (int r = 0; r < SIM_ROLES; r++) {
-			dq_mul(&shift, &row[r], &placed);
+			struct dq placed = row[r];
+			const struct quat *q = &row[r].r;
+
+			placed.d.w -= hx * q->x;
+			placed.d.x += hx * q->w;
+			placed.d.y -= hx * q->z;
+			placed.d.z += hx * q->y;
 			tracker_put(t, k * SIM_ROLES + r, &placed, t_ns, now->mono_ns);
 		}
 	}

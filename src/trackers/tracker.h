@@ -70,6 +70,7 @@ struct tracker {
 	int n_sensors;
 	struct sensor_slot *slot;
 	struct dq world;          /* tracker frame -> world */
+	bool world_identity;      /* the tracker's frame is the world's: no product per sample */
 	struct tracker_stats st;
 	void *priv;               /* the driver's state */
 };

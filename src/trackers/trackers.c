@@ -50,6 +50,7 @@ int tracker_open(struct tracker *t, const struct cfg_source *cfg, char *err, siz
 	t->cfg = cfg;
 	snprintf(t->name, sizeof(t->name), "%s", cfg->name);
 	dq_from_rt(&r, &o, &t->world);
+	t->world_identity = cfg->yaw == 0 && o.x == 0 && o.y == 0 && o.z == 0;
 	t->n_sensors = t->drv->sensor_count(cfg);
 	t->slot = calloc((size_t)t->n_sensors, sizeof(*t->slot));
 	if (!t->slot) {
@@ -77,7 +78,10 @@ void tracker_put(struct tracker *t, int sensor, const struct dq *local, uint64_t
 {
 	struct sensor_slot *s = &t->slot[sensor];
 
-	dq_mul(&t->world, local, &s->pose);
+	if (t->world_identity)
+		s->pose = *local;
+	else
+		dq_mul(&t->world, local, &s->pose);
 	s->t_ns = t_ns;
 	s->arrival_ns = arrival_ns;
 	s->count++;

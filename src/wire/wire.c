@@ -48,25 +48,39 @@ static void put_u8(struct wbuf *w, uint8_t v)
 	w->p[w->n++] = v;
 }
 
-static void put_u16(struct wbuf *w, uint16_t v)
+/*
+ * Bytes go through a local pointer and the count moves once: a uint8_t
+ * store may alias w->n, so writing through w->p[w->n++] would reload the
+ * count after every byte. This way the compiler emits one store per field
+ * on a little-endian host.
+ */
+static inline void put_u16(struct wbuf *w, uint16_t v)
 {
-	put_u8(w, (uint8_t)v);
-	put_u8(w, (uint8_t)(v >> 8));
+	uint8_t *d = w->p + w->n;
+
+	d[0] = (uint8_t)v;
+	d[1] = (uint8_t)(v >> 8);
+	w->n += 2;
 }
 
-static void put_u32(struct wbuf *w, uint32_t v)
+static inline void put_u32(struct wbuf *w, uint32_t v)
 {
-	put_u16(w, (uint16_t)v);
-	put_u16(w, (uint16_t)(v >> 16));
+	uint8_t *d = w->p + w->n;
+
+	d[0] = (uint8_t)v;
+	d[1] = (uint8_t)(v >> 8);
+	d[2] = (uint8_t)(v >> 16);
+	d[3] = (uint8_t)(v >> 24);
+	w->n += 4;
 }
 
-static void put_u64(struct wbuf *w, uint64_t v)
+static inline void put_u64(struct wbuf *w, uint64_t v)
 {
 	put_u32(w, (uint32_t)v);
 	put_u32(w, (uint32_t)(v >> 32));
 }
 
-static void put_f32(struct wbuf *w, float f)
+static inline void put_f32(struct wbuf *w, float f)
 {
 	uint32_t v;
 
@@ -87,7 +101,7 @@ static void put_str(struct wbuf *w, const char *s, size_t max)
 	w->n += len;
 }
 
-static void put_pose(struct wbuf *w, const struct wire_pose *p)
+static inline void put_pose(struct wbuf *w, const struct wire_pose *p)
 {
 	for (int i = 0; i < 3; i++)
 		put_f32(w, p->p[i]);
