@@ -656,7 +656,7 @@ static int apply_section(struct section_ctx *s)
 		if (k->kind == K_SENSOR || k->kind == K_PERSON || !strcmp(k->name, "count") ||
 		    (s->sect == S_SOURCE && !strcmp(k->name, "type")))
 			continue;
-		if (!strcmp(k->def, "auto"))
+		if (s->sect == S_AVATAR && !strcmp(k->name, "id"))
 			continue;
 		if (set_value(s, k, k->def, (struct cfg_where){ -1, 0 }))
 			return -1;
@@ -673,7 +673,7 @@ static int apply_section(struct section_ctx *s)
 			return failf(p, e->where, "[%s] %s: unknown key%s%s%s (known: %s)", s->full, e->key,
 				     s->type ? " for type " : "", s->type ? s->type : "", "", known);
 		}
-		if (k->kind == K_SENSOR || k->kind == K_PERSON || (k->def && !strcmp(k->def, "auto")) ||
+		if (k->kind == K_SENSOR || k->kind == K_PERSON || (s->sect == S_AVATAR && !strcmp(k->name, "id")) ||
 		    !strcmp(k->name, "count") || (s->sect == S_SOURCE && !strcmp(k->name, "type")))
 			continue;
 		if (set_value(s, k, e->value, e->where))
