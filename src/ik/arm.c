@@ -126,27 +126,7 @@ static inline void col_z(const struct quat *q, struct vec3 *o)
 	o->z = SC_C(1) - 2 * (sc_mul(q->x, q->x) + sc_mul(q->y, q->y));
 }
 
-/* p + k u */
-static inline void add_scaled(const struct vec3 *p, sc_t k, const struct vec3 *u, struct vec3 *out)
-{
-	out->x = p->x + sc_mul(k, u->x);
-	out->y = p->y + sc_mul(k, u->y);
-	out->z = p->z + sc_mul(k, u->z);
-}
 
-/* Jacobian column i: the joint's line (l, p x l), l = sgn u */
-static inline void jac_col(sc_t J[6][ARM_DOF], int i, const struct vec3 *p, sc_t sgn, const struct vec3 *u)
-{
-	struct vec3 l = { sc_mul(sgn, u->x), sc_mul(sgn, u->y), sc_mul(sgn, u->z) }, m;
-
-	v3_cross(p, &l, &m);
-	J[0][i] = l.x;
-	J[1][i] = l.y;
-	J[2][i] = l.z;
-	J[3][i] = m.x;
-	J[4][i] = m.y;
-	J[5][i] = m.z;
-}
 
 void arm_chain_eval(const struct arm *a, const sc_t q[ARM_DOF], struct arm_chain *ch, sc_t J[6][ARM_DOF])
 {
@@ -176,7 +156,7 @@ void arm_chain_eval(const struct arm *a, const sc_t q[ARM_DOF], struct arm_chain
 	r[1].x = r[1].y = 0;
 	r[1].z = s[0];
 	col_x(&r[1], &u1x);
-	add_scaled(&p[0], a->trans[0].x, &u1x, &p[1]);
+	ik_add_scaled(&p[0], a->trans[0].x, &u1x, &p[1]);
 	/* J2 about y, J3 about x, J4 about z then (0, 0, -A) */
 	r[2] = r[1];
 	rot_y(&r[2], s[1], c[1]);
@@ -186,12 +166,12 @@ void arm_chain_eval(const struct arm *a, const sc_t q[ARM_DOF], struct arm_chain
 	rot_z(&r[4], s[3], c[3]);
 	p[2] = p[3] = p[1];
 	col_z(&r[4], &u4z);
-	add_scaled(&p[3], a->trans[3].z, &u4z, &p[4]);
+	ik_add_scaled(&p[3], a->trans[3].z, &u4z, &p[4]);
 	/* J5 about x then (0, F, 0) */
 	r[5] = r[4];
 	rot_x(&r[5], s[4], c[4]);
 	col_y(&r[5], &u5y);
-	add_scaled(&p[4], a->trans[4].y, &u5y, &p[5]);
+	ik_add_scaled(&p[4], a->trans[4].y, &u5y, &p[5]);
 	/* J6 about y, J7 about x, J8 about z then (0, H, 0) */
 	r[6] = r[5];
 	rot_y(&r[6], s[5], c[5]);
@@ -201,7 +181,7 @@ void arm_chain_eval(const struct arm *a, const sc_t q[ARM_DOF], struct arm_chain
 	rot_z(&r[8], s[7], c[7]);
 	p[6] = p[7] = p[5];
 	col_y(&r[8], &u8y);
-	add_scaled(&p[7], a->trans[7].y, &u8y, &p[8]);
+	ik_add_scaled(&p[7], a->trans[7].y, &u8y, &p[8]);
 	if (J)
 		arm_chain_jacobian(a, ch, J);
 }
@@ -222,19 +202,19 @@ void arm_chain_jacobian(const struct arm *a, const struct arm_chain *ch, sc_t J[
 	J[2][0] = a->axis[0].z;
 	J[3][0] = J[4][0] = J[5][0] = 0;
 	col_y(&r[1], &u);
-	jac_col(J, 1, &p[1], a->axis[1].y, &u);
+	ik_jac_col(J, 1, &p[1], a->axis[1].y, &u);
 	col_x(&r[2], &u);
-	jac_col(J, 2, &p[2], a->axis[2].x, &u);
+	ik_jac_col(J, 2, &p[2], a->axis[2].x, &u);
 	col_z(&r[4], &u);
-	jac_col(J, 3, &p[3], a->axis[3].z, &u);
+	ik_jac_col(J, 3, &p[3], a->axis[3].z, &u);
 	col_x(&r[5], &u);
-	jac_col(J, 4, &p[4], a->axis[4].x, &u);
+	ik_jac_col(J, 4, &p[4], a->axis[4].x, &u);
 	col_y(&r[5], &u);
-	jac_col(J, 5, &p[5], a->axis[5].y, &u);
+	ik_jac_col(J, 5, &p[5], a->axis[5].y, &u);
 	col_x(&r[6], &u);
-	jac_col(J, 6, &p[6], a->axis[6].x, &u);
+	ik_jac_col(J, 6, &p[6], a->axis[6].x, &u);
 	col_z(&r[8], &u);
-	jac_col(J, 7, &p[7], a->axis[7].z, &u);
+	ik_jac_col(J, 7, &p[7], a->axis[7].z, &u);
 }
 
 void arm_fk_frames(const struct arm *a, const sc_t q[ARM_DOF], struct dq k[ARM_DOF + 1])

@@ -17,6 +17,28 @@
 #define IK_UNROLL
 #endif
 
+/* p + k u */
+static inline void ik_add_scaled(const struct vec3 *p, sc_t k, const struct vec3 *u, struct vec3 *out)
+{
+	out->x = p->x + sc_mul(k, u->x);
+	out->y = p->y + sc_mul(k, u->y);
+	out->z = p->z + sc_mul(k, u->z);
+}
+
+/* Jacobian column i: the joint's line (l, p x l), l = sgn u */
+static inline void ik_jac_col(sc_t J[6][ARM_DOF], int i, const struct vec3 *p, sc_t sgn, const struct vec3 *u)
+{
+	struct vec3 l = { sc_mul(sgn, u->x), sc_mul(sgn, u->y), sc_mul(sgn, u->z) }, m;
+
+	v3_cross(p, &l, &m);
+	J[0][i] = l.x;
+	J[1][i] = l.y;
+	J[2][i] = l.z;
+	J[3][i] = m.x;
+	J[4][i] = m.y;
+	J[5][i] = m.z;
+}
+
 /*
  * (1 - x cot x) / (4 x^2): the coefficient of [w]^2 in the inverse of the
  * SE(3) left Jacobian at rotation angle 2x; s = sin x, c = cos x.

@@ -48,27 +48,7 @@ static inline void rot_mz(struct m3c *r, sc_t s, sc_t c)
 	turn(&r->c[0], &r->c[1], s, c);
 }
 
-/* p + k u */
-static inline void madd(const struct vec3 *p, sc_t k, const struct vec3 *u, struct vec3 *out)
-{
-	out->x = p->x + sc_mul(k, u->x);
-	out->y = p->y + sc_mul(k, u->y);
-	out->z = p->z + sc_mul(k, u->z);
-}
 
-/* Jacobian column i: the joint's line (l, p x l), l = sgn u */
-static inline void mcol(sc_t J[6][ARM_DOF], int i, const struct vec3 *p, sc_t sgn, const struct vec3 *u)
-{
-	struct vec3 l = { sc_mul(sgn, u->x), sc_mul(sgn, u->y), sc_mul(sgn, u->z) }, m;
-
-	v3_cross(p, &l, &m);
-	J[0][i] = l.x;
-	J[1][i] = l.y;
-	J[2][i] = l.z;
-	J[3][i] = m.x;
-	J[4][i] = m.y;
-	J[5][i] = m.z;
-}
 
 /* rotation angle and axis-times-angle of a rotation matrix */
 static void rot_log(const sc_t R[3][3], struct vec3 *w, sc_t *angle)
@@ -134,7 +114,7 @@ static bool kin_mat(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_
 	R[1].c[1] = (struct vec3){ -s[0], c[0], 0 };
 	R[1].c[2] = (struct vec3){ 0, 0, SC_C(1) };
 	p[0] = (struct vec3){ 0, 0, 0 };
-	madd(&p[0], a->trans[0].x, &R[1].c[0], &p[1]);
+	ik_add_scaled(&p[0], a->trans[0].x, &R[1].c[0], &p[1]);
 	/* J2 y, J3 x, J4 z then (0, 0, -A); J5 x then (0, F, 0); J6 y, J7 x, J8 z then (0, H, 0) */
 	R[2] = R[1];
 	rot_my(&R[2], s[1], c[1]);
@@ -143,10 +123,10 @@ static bool kin_mat(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_
 	R[4] = R[3];
 	rot_mz(&R[4], s[3], c[3]);
 	p[2] = p[3] = p[1];
-	madd(&p[3], a->trans[3].z, &R[4].c[2], &p[4]);
+	ik_add_scaled(&p[3], a->trans[3].z, &R[4].c[2], &p[4]);
 	R[5] = R[4];
 	rot_mx(&R[5], s[4], c[4]);
-	madd(&p[4], a->trans[4].y, &R[5].c[1], &p[5]);
+	ik_add_scaled(&p[4], a->trans[4].y, &R[5].c[1], &p[5]);
 	R[6] = R[5];
 	rot_my(&R[6], s[5], c[5]);
 	R[7] = R[6];
@@ -154,7 +134,7 @@ static bool kin_mat(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_
 	R[8] = R[7];
 	rot_mz(&R[8], s[7], c[7]);
 	p[6] = p[7] = p[5];
-	madd(&p[7], a->trans[7].y, &R[8].c[1], &p[8]);
+	ik_add_scaled(&p[7], a->trans[7].y, &R[8].c[1], &p[8]);
 	/* E = D C^-1: rotation R_t R_c^T, translation p_t - R_e p_c */
 	{
 		const struct vec3 *cc = R[ARM_DOF].c;
@@ -196,13 +176,13 @@ static bool kin_mat(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_
 	J[0][0] = J[1][0] = 0;
 	J[2][0] = sg[0];
 	J[3][0] = J[4][0] = J[5][0] = 0;
-	mcol(J, 1, &p[1], sg[1], &R[1].c[1]);
-	mcol(J, 2, &p[2], sg[2], &R[2].c[0]);
-	mcol(J, 3, &p[3], sg[3], &R[4].c[2]);
-	mcol(J, 4, &p[4], sg[4], &R[5].c[0]);
-	mcol(J, 5, &p[5], sg[5], &R[5].c[1]);
-	mcol(J, 6, &p[6], sg[6], &R[6].c[0]);
-	mcol(J, 7, &p[7], sg[7], &R[8].c[2]);
+	ik_jac_col(J, 1, &p[1], sg[1], &R[1].c[1]);
+	ik_jac_col(J, 2, &p[2], sg[2], &R[2].c[0]);
+	ik_jac_col(J, 3, &p[3], sg[3], &R[4].c[2]);
+	ik_jac_col(J, 4, &p[4], sg[4], &R[5].c[0]);
+	ik_jac_col(J, 5, &p[5], sg[5], &R[5].c[1]);
+	ik_jac_col(J, 6, &p[6], sg[6], &R[6].c[0]);
+	ik_jac_col(J, 7, &p[7], sg[7], &R[8].c[2]);
 	return check && err->pos < tol_pos && err->rot < tol_rot;
 }
 
