@@ -58,7 +58,14 @@ $(LIBIK): $(CORE_OBJ)
 # drivers), frames (latest samples -> pose frames), publish (outputs), daemon
 # (loop, control, systemd). main.c alone makes the program.
 INIH_LIBS = $(shell pkg-config --libs inih 2>/dev/null || echo -linih)
-LIBS = $(INIH_LIBS) -lpthread -lm
+# one line per library the daemon links (each from its Debian -dev package)
+HIDAPI_LIBS = $(shell pkg-config --libs hidapi-hidraw 2>/dev/null || echo -lhidapi-hidraw)
+LIBUSB_LIBS = $(shell pkg-config --libs libusb-1.0 2>/dev/null || echo -lusb-1.0)
+MODBUS_LIBS = $(shell pkg-config --libs libmodbus 2>/dev/null || echo -lmodbus)
+LWS_LIBS = $(shell pkg-config --libs libwebsockets 2>/dev/null || echo -lwebsockets)
+LO_LIBS = $(shell pkg-config --libs liblo 2>/dev/null || echo -llo)
+DEP_LIBS = $(INIH_LIBS)
+LIBS = $(DEP_LIBS) -lpthread -lm
 GW_SRC = $(filter-out src/daemon/main.c,$(wildcard src/wire/*.c src/config/*.c src/trackers/*.c \
 	src/frames/*.c src/publish/*.c src/daemon/*.c))
 GW_OBJ = $(patsubst src/%.c,$(BUILD)/obj/%.o,$(GW_SRC)) $(BUILD)/obj/gen/builtin.o

@@ -16,6 +16,24 @@ python3
 systemd
 man-db
 groff-base
+libhidapi-dev
+libusb-1.0-0-dev
+libmodbus-dev
+python3-pymodbus
+libwebsockets-dev
+liblo-dev
+liblo-tools
+libjs-three
+chromium
+python3-matplotlib
+python3-numpy
+gcc-arm-none-eabi
+libnewlib-arm-none-eabi
+gcc-aarch64-linux-gnu
+libc6-dev-arm64-cross
+qemu-user
+qemu-system-arm
+can-utils
 "
 
 missing=""

@@ -87,8 +87,9 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 	g->av = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*g->av));
 	g->arena = malloc(((size_t)g->cfg.n_avatars * 2 + 1) * WIRE_MAX_MSG);
 	g->msgs = calloc((size_t)g->cfg.n_avatars * 2 + 1, sizeof(*g->msgs));
+	g->frames = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*g->frames));
 	ids = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*ids));
-	if (!g->av || !g->arena || !g->msgs || !ids) {
+	if (!g->av || !g->arena || !g->msgs || !g->frames || !ids) {
 		free(ids);
 		snprintf(err, errlen, "out of memory");
 		rc = -ENOMEM;
@@ -143,6 +144,7 @@ void gw_close(struct gateway *g)
 	for (int i = g->n_trackers - 1; i >= 0; i--)
 		tracker_close(&g->trk[i]);
 	free(g->msgs);
+	free(g->frames);
 	free(g->arena);
 	free(g->av);
 	config_free(&g->cfg);
@@ -201,22 +203,22 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 	poll_trackers(g, now);
 	for (int i = 0; i < g->n_avatars; i++) {
 		struct gw_avatar *a = &g->av[i];
-		struct pose_frame pf;
+		struct pose_frame *pf = &g->frames[i];
 		struct wire_frame wf;
-		struct encode_in in = { &a->av, &pf, NULL, false };
+		struct encode_in in = { &a->av, pf, NULL, false };
 		const struct dq *s[FRAME_SENSORS];
 
-		frame_gather(&a->fs, now->mono_ns, g->stale_ns, &pf);
+		frame_gather(&a->fs, now->mono_ns, g->stale_ns, pf);
 		{
 			uint32_t worst = 0;
 
 			for (int r = 0; r < FRAME_SENSORS; r++)
-				worst = pf.state[r] > worst ? pf.state[r] : worst;
+				worst = pf->state[r] > worst ? pf->state[r] : worst;
 			atomic_store_explicit(&a->st.state, worst, memory_order_relaxed);
 		}
 		for (int r = 0; r < FRAME_SENSORS; r++)
-			s[r] = pf.state[r] == WIRE_SENSOR_MISSING ? &nan_dq : &pf.sensor[r];
-		if (pf.state[0] != WIRE_SENSOR_MISSING) {
+			s[r] = pf->state[r] == WIRE_SENSOR_MISSING ? &nan_dq : &pf->sensor[r];
+		if (pf->state[0] != WIRE_SENSOR_MISSING) {
 			struct avatar_pose next;
 
 			avatar_solve(&a->av, a->kin, &a->opts, s[0], s[1], s[2], a->have_pose ? &a->pose : NULL, &next);
@@ -245,16 +247,16 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		wf.h.source_id = g->source_id;
 		wf.h.seq = a->seq++;
 		wf.h.describe_rev = a->describe_rev;
-		wf.h.sample_time_ns = pf.t_ns;
+		wf.h.sample_time_ns = pf->t_ns;
 		wf.h.avatar_id = a->cfg->id;
-		g->msgs[n] = (struct out_msg){ slot_of(g, n), 0, (uint16_t)i };
+		g->msgs[n] = (struct out_msg){ slot_of(g, n), 0, (uint16_t)i, pf };
 		g->msgs[n].len = (uint16_t)wire_encode_frame(&wf, slot_of(g, n));
 		n++;
 		frames++;
 		stat_add(&a->st.frames, 1);
-		if (pf.new_sample) {
+		if (pf->new_sample) {
 			stat_add(&a->st.new_frames, 1);
-			a->pose_arrival_ns = pf.arrival_ns;
+			a->pose_arrival_ns = pf->arrival_ns;
 		}
 		if (wf.h.flags & WIRE_F_STALE)
 			stat_add(&a->st.stale_frames, 1);
@@ -268,7 +270,7 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 				d[20 + b] = (uint8_t)(a->describe_rev >> (8 * b));
 			}
 			a->dseq++;
-			g->msgs[n++] = (struct out_msg){ d, a->describe_len, (uint16_t)i };
+			g->msgs[n++] = (struct out_msg){ d, a->describe_len, (uint16_t)i, NULL };
 			a->next_describe_ns = now->mono_ns + g->describe_ns;
 		}
 	}

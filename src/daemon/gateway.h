@@ -65,6 +65,7 @@ struct gateway {
 	struct output out[CFG_MAX_OUTPUTS];
 	uint8_t *arena;           /* one message per avatar and cycle, WIRE_MAX_MSG each, + DESCRIBEs */
 	struct out_msg *msgs;
+	struct pose_frame *frames; /* per avatar, the frame of this cycle */
 	uint32_t source_id;
 	uint64_t stale_ns;
 	uint64_t describe_ns;

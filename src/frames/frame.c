@@ -18,10 +18,16 @@ void frame_gather(struct frame_source *src, uint64_t now_mono, uint64_t stale_ns
 
 		if (!s->seen || tstate == TRACKER_FAULTY) {
 			out->state[i] = WIRE_SENSOR_MISSING;
+			out->buttons[i] = 0;
+			for (int k = 0; k < SENSOR_ANALOG_MAX; k++)
+				out->analog[i][k] = 0;
 			out->age_ns[i] = s->seen && now_mono > s->arrival_ns ? now_mono - s->arrival_ns : 0;
 			continue;
 		}
 		out->sensor[i] = s->pose;
+		out->buttons[i] = s->buttons;
+		for (int k = 0; k < SENSOR_ANALOG_MAX; k++)
+			out->analog[i][k] = s->analog[k];
 		out->age_ns[i] = now_mono > s->arrival_ns ? now_mono - s->arrival_ns : 0;
 		out->state[i] = out->age_ns[i] > stale_ns ? WIRE_SENSOR_STALE : WIRE_SENSOR_OK;
 		if (s->count != src->last_count[i]) {

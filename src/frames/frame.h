@@ -14,6 +14,8 @@
 struct pose_frame {
 	struct dq sensor[FRAME_SENSORS]; /* world; meaningful when state != MISSING */
 	uint8_t state[FRAME_SENSORS];    /* enum wire_sensor_state */
+	uint32_t buttons[FRAME_SENSORS]; /* the sensor's buttons (bit i: button i), 0 when it has none */
+	float analog[FRAME_SENSORS][SENSOR_ANALOG_MAX]; /* its analog values, 0 when absent */
 	uint64_t age_ns[FRAME_SENSORS];  /* now - arrival */
 	uint64_t t_ns;                   /* newest tracker sample time, CLOCK_REALTIME */
 	uint64_t arrival_ns;             /* CLOCK_MONOTONIC arrival of the newest sample */

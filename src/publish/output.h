@@ -12,6 +12,7 @@
 #define AGW_OUTPUT_H
 
 #include "config/config.h"
+#include "frames/frame.h"
 
 #include <stdatomic.h>
 #include <stdint.h>
@@ -20,6 +21,12 @@ struct out_msg {
 	const uint8_t *data;
 	uint16_t len;
 	uint16_t avatar;  /* index into the gateway's avatars */
+	/*
+	 * FRAME messages: the pose frame the message was made from (its
+	 * buttons and analog values, which the v1 FRAME does not carry);
+	 * NULL for DESCRIBE. Valid during send() only.
+	 */
+	const struct pose_frame *frame;
 };
 
 struct output_stats {

@@ -26,8 +26,12 @@ enum tracker_state {
 	TRACKER_ENDED = 3,  /* a replay that reached its end */
 };
 
+#define SENSOR_ANALOG_MAX 4 /* analog values a sensor may carry (joystick x, y, trigger, ...) */
+
 struct sensor_slot {
 	struct dq pose;      /* world */
+	uint32_t buttons;    /* bit i: button i pressed (devices that have buttons) */
+	float analog[SENSOR_ANALOG_MAX]; /* -1..1 for axes, 0..1 for triggers; 0 when absent */
 	uint64_t t_ns;       /* tracker sample time, CLOCK_REALTIME */
 	uint64_t arrival_ns; /* CLOCK_MONOTONIC when the daemon took it in */
 	uint32_t count;      /* samples taken in */
