@@ -143,6 +143,7 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
 
 # test_alloc counts every allocation made by our code: wrapped at link time
 $(BUILD)/tests/test_alloc: TEST_LDFLAGS = -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free
+$(BUILD)/tests/test_udp: TEST_LDFLAGS = -Wl,--wrap=sendmmsg
 
 # ---- top-level targets --------------------------------------------------------
 .SECONDARY:

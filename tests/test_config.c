@@ -657,7 +657,7 @@ static void test_err_key_of_other_type(void **state)
 			"(known: type, origin, yaw, file, speed, loop, start)", NULL);
 	expect_text_err(*state, "[output o]\ntype = udp\npath = /tmp/x\n",
 			"e.conf:3: [output o] path: unknown key for type udp",
-			"(known: type, address, port, decimate, avatars)", NULL);
+			"(known: type, address, port, gso, decimate, avatars)", NULL);
 }
 
 static void test_err_unknown_section(void **state)

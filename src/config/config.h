@@ -86,6 +86,7 @@ struct cfg_avatar {
 	int solver;
 	int max_iter;
 	double tol_mm;
+	double tol_rot_deg;
 	int max_evals;
 	int warm_iter;
 };
@@ -101,6 +102,7 @@ struct cfg_output {
 	char interface[CFG_NAME_MAX];
 	int ttl;
 	bool mcast_loop;
+	bool gso;
 	char path[CFG_PATH_MAX];    /* unix */
 	int max_clients;
 	int client_buffer;          /* bytes per stream client */

@@ -146,10 +146,13 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 			(unsigned long long)info->reloads, (unsigned long long)info->reload_failures);
 		fprintf(out, "\"loop\":{\"cycles\":%llu,\"overruns\":%llu,\"poll_errors\":%llu,"
 			"\"work_us\":{\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f},"
+			"\"work_cpu_us\":{\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f},"
 			"\"wake_late_us\":{\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f}},",
 			(unsigned long long)stat_get(&g->st.cycles), (unsigned long long)stat_get(&g->st.overruns),
 			(unsigned long long)stat_get(&g->st.poll_errors), us(hist_percentile(wk, 0.5)),
-			us(hist_percentile(wk, 0.99)), us(stat_get(&wk->max_ns)), us(hist_percentile(wa, 0.5)),
+			us(hist_percentile(wk, 0.99)), us(stat_get(&wk->max_ns)), us(hist_percentile(&g->st.work_cpu, 0.5)),
+			us(hist_percentile(&g->st.work_cpu, 0.99)), us(stat_get(&g->st.work_cpu.max_ns)),
+			us(hist_percentile(wa, 0.5)),
 			us(hist_percentile(wa, 0.99)), us(stat_get(&wa->max_ns)));
 		fputs("\"sources\":[", out);
 		for (int i = 0; i < g->n_trackers; i++) {
@@ -188,11 +191,12 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 			struct output *o = &g->out[i];
 
 			fprintf(out, "%s{\"name\":\"%s\",\"type\":\"%s\",\"sent\":%llu,\"dropped\":%llu,\"errors\":%llu,"
-				"\"clients\":%llu,\"accepted\":%llu,\"refused\":%llu,\"closed\":%llu}",
+				"\"clients\":%llu,\"accepted\":%llu,\"refused\":%llu,\"closed\":%llu,\"gso_off\":%llu}",
 				i ? "," : "", o->name, out_types[o->cfg->type], (unsigned long long)stat_get(&o->st.sent),
 				(unsigned long long)stat_get(&o->st.dropped), (unsigned long long)stat_get(&o->st.errors),
 				(unsigned long long)stat_get(&o->st.clients), (unsigned long long)stat_get(&o->st.accepted),
-				(unsigned long long)stat_get(&o->st.refused), (unsigned long long)stat_get(&o->st.closed));
+				(unsigned long long)stat_get(&o->st.refused), (unsigned long long)stat_get(&o->st.closed),
+				(unsigned long long)stat_get(&o->st.gso_off));
 		}
 		fputs("]}\n", out);
 		return;

@@ -30,30 +30,40 @@ void gw_clock(struct tracker_clock *c)
 	c->real_off_ns = (int64_t)((uint64_t)r.tv_sec * 1000000000ull + (uint64_t)r.tv_nsec) - (int64_t)c->mono_ns;
 }
 
-static void avatar_setup(struct gateway *g, struct gw_avatar *a, const struct cfg_avatar *c)
+static void avatar_setup(struct gateway *g, struct gw_avatar *a, const struct cfg_avatar *c, uint8_t *describe)
 {
 	struct arm_dims dims = { c->dims[0], c->dims[1], c->dims[2], c->dims[3] };
 	struct vec3 off = { c->head_offset[0], c->head_offset[1], c->head_offset[2] };
 	struct arm_limits lim;
 	struct wire_describe d;
+	struct avatar *body = &g->bodies[g->n_bodies];
 
 	a->cfg = c;
 	for (int j = 0; j < ARM_DOF; j++) {
 		lim.lo[j] = c->lo[j];
 		lim.hi[j] = c->hi[j];
 	}
-	avatar_init(&a->av, &dims, &off, &lim);
+	memset(body, 0, sizeof(*body));
+	avatar_init(body, &dims, &off, &lim);
+	/* avatars made by one section's `count` have one body: share it */
+	if (g->n_bodies && !memcmp(&g->bodies[g->n_bodies - 1], body, sizeof(*body)))
+		body = &g->bodies[g->n_bodies - 1];
+	else
+		g->n_bodies++;
+	a->av = body;
+	a->describe_msg = describe;
 	a->kin = c->solver == CFG_SOLVER_MATRIX ? &ik_kin_mat : &ik_kin_dq;
 	ik_default_opts(&a->opts);
 	a->opts.max_iter = c->max_iter;
 	a->opts.tol_pos = c->tol_mm * 1e-3;
+	a->opts.tol_rot = c->tol_rot_deg * (M_PI / 180);
 	a->opts.max_evals = c->max_evals;
 	a->opts.warm_iter = c->warm_iter;
 	for (int r = 0; r < FRAME_SENSORS; r++) {
 		a->fs.trk[r] = &g->trk[c->sensor[r].source];
 		a->fs.sensor[r] = c->sensor[r].sensor;
 	}
-	encode_describe(&a->av, c->name, g->cfg.daemon.rate, &d);
+	encode_describe(a->av, c->name, g->cfg.daemon.rate, &d);
 	d.h.source_id = g->source_id;
 	d.h.avatar_id = c->id;
 	a->describe_len = (uint16_t)wire_encode_describe(&d, a->describe_msg);
@@ -65,6 +75,16 @@ static bool describe_changed(const struct gw_avatar *a, const struct gw_avatar *
 	return a->describe_len != b->describe_len ||
 	       memcmp(a->describe_msg + WIRE_HEADER_LEN, b->describe_msg + WIRE_HEADER_LEN,
 		      (size_t)a->describe_len - WIRE_HEADER_LEN);
+}
+
+/* the bytes of an encoded FRAME, rounded up to a cache line: the arena's stride */
+static size_t frame_slot(void)
+{
+	static uint8_t buf[WIRE_MAX_MSG];
+	struct wire_frame f;
+
+	memset(&f, 0, sizeof(f));
+	return (wire_encode_frame(&f, buf) + 63) & ~(size_t)63;
 }
 
 int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t source_id, char *err, size_t errlen)
@@ -84,12 +104,15 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 			goto fail;
 		g->n_trackers++;
 	}
+	g->frame_slot = frame_slot();
 	g->av = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*g->av));
-	g->arena = malloc(((size_t)g->cfg.n_avatars * 2 + 1) * WIRE_MAX_MSG);
+	g->arena = malloc(((size_t)g->cfg.n_avatars + 1) * g->frame_slot);
+	g->describe = malloc(((size_t)g->cfg.n_avatars + 1) * WIRE_MAX_MSG);
+	g->bodies = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*g->bodies));
 	g->msgs = calloc((size_t)g->cfg.n_avatars * 2 + 1, sizeof(*g->msgs));
 	g->frames = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*g->frames));
 	ids = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*ids));
-	if (!g->av || !g->arena || !g->msgs || !g->frames || !ids) {
+	if (!g->av || !g->arena || !g->describe || !g->bodies || !g->msgs || !g->frames || !ids) {
 		free(ids);
 		snprintf(err, errlen, "out of memory");
 		rc = -ENOMEM;
@@ -98,7 +121,7 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 	for (int i = 0; i < g->cfg.n_avatars; i++) {
 		struct gw_avatar *a = &g->av[i];
 
-		avatar_setup(g, a, &g->cfg.avatar[i]);
+		avatar_setup(g, a, &g->cfg.avatar[i], g->describe + (size_t)i * WIRE_MAX_MSG);
 		ids[i] = a->cfg->id;
 		for (int j = 0; old && j < old->n_avatars; j++) {
 			const struct gw_avatar *o = &old->av[j];
@@ -146,6 +169,8 @@ void gw_close(struct gateway *g)
 	free(g->msgs);
 	free(g->frames);
 	free(g->arena);
+	free(g->describe);
+	free(g->bodies);
 	free(g->av);
 	config_free(&g->cfg);
 	memset(g, 0, sizeof(*g));
@@ -191,7 +216,7 @@ static void poll_trackers(struct gateway *g, const struct tracker_clock *now)
 
 static uint8_t *slot_of(struct gateway *g, int k)
 {
-	return g->arena + (size_t)k * WIRE_MAX_MSG;
+	return g->arena + (size_t)k * g->frame_slot;
 }
 
 int gw_cycle(struct gateway *g, const struct tracker_clock *now)
@@ -205,7 +230,7 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		struct gw_avatar *a = &g->av[i];
 		struct pose_frame *pf = &g->frames[i];
 		struct wire_frame wf;
-		struct encode_in in = { &a->av, pf, NULL, false };
+		struct encode_in in = { a->av, pf, NULL, false };
 		const struct dq *s[FRAME_SENSORS];
 
 		frame_gather(&a->fs, now->mono_ns, g->stale_ns, pf);
@@ -221,7 +246,7 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		if (pf->state[0] != WIRE_SENSOR_MISSING) {
 			struct avatar_pose next;
 
-			avatar_solve(&a->av, a->kin, &a->opts, s[0], s[1], s[2], a->have_pose ? &a->pose : NULL, &next);
+			avatar_solve(a->av, a->kin, &a->opts, s[0], s[1], s[2], a->have_pose ? &a->pose : NULL, &next);
 			a->pose = next;
 			a->have_pose = true;
 			in.pose = &a->pose;
@@ -249,8 +274,8 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		wf.h.describe_rev = a->describe_rev;
 		wf.h.sample_time_ns = pf->t_ns;
 		wf.h.avatar_id = a->cfg->id;
-		g->msgs[n] = (struct out_msg){ slot_of(g, n), 0, (uint16_t)i, pf };
-		g->msgs[n].len = (uint16_t)wire_encode_frame(&wf, slot_of(g, n));
+		g->msgs[n] = (struct out_msg){ slot_of(g, frames), 0, (uint16_t)i, pf };
+		g->msgs[n].len = (uint16_t)wire_encode_frame(&wf, slot_of(g, frames));
 		n++;
 		frames++;
 		stat_add(&a->st.frames, 1);
@@ -261,9 +286,8 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		if (wf.h.flags & WIRE_F_STALE)
 			stat_add(&a->st.stale_frames, 1);
 		if (now->mono_ns >= a->next_describe_ns) {
-			uint8_t *d = slot_of(g, n);
+			uint8_t *d = a->describe_msg;
 
-			memcpy(d, a->describe_msg, a->describe_len);
 			/* seq (offset 16) and revision (20) change; the rest was encoded at start-up */
 			for (int b = 0; b < 4; b++) {
 				d[16 + b] = (uint8_t)(a->dseq >> (8 * b));
@@ -271,7 +295,19 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 			}
 			a->dseq++;
 			g->msgs[n++] = (struct out_msg){ d, a->describe_len, (uint16_t)i, NULL };
-			a->next_describe_ns = now->mono_ns + g->describe_ns;
+			/*
+			 * Each avatar keeps its own phase within the period, so that
+			 * the DESCRIBEs of many avatars spread over the second instead
+			 * of all leaving in one cycle (1000 avatars: 1.2 MB at once,
+			 * the longest cycle of the second). After a forced round (start,
+			 * a new subscriber) the phases are dealt out again.
+			 */
+			if (a->next_describe_ns == 0)
+				a->next_describe_ns = now->mono_ns + g->describe_ns * (uint64_t)(i + 1) / (uint64_t)g->n_avatars;
+			else if (now->mono_ns - a->next_describe_ns < g->describe_ns)
+				a->next_describe_ns += g->describe_ns;
+			else
+				a->next_describe_ns = now->mono_ns + g->describe_ns;
 		}
 	}
 	for (int o = 0; o < g->n_outputs; o++) {

@@ -30,9 +30,15 @@ struct gw_avatar_stats {
 	struct hist latency;           /* newest sample's arrival -> datagrams sent */
 };
 
+/*
+ * One avatar's state across cycles. What every cycle touches is kept here
+ * and small (1000 avatars fit a core's caches better); the body (struct
+ * avatar, read-only after start-up and shared by avatars whose bodies are
+ * the same, as with `count`) and the DESCRIBE bytes live apart.
+ */
 struct gw_avatar {
 	const struct cfg_avatar *cfg;
-	struct avatar av;
+	const struct avatar *av;
 	const struct ik_kin *kin;
 	struct ik_opts opts;
 	struct frame_source fs;
@@ -43,7 +49,7 @@ struct gw_avatar {
 	uint64_t next_describe_ns;
 	uint64_t pose_arrival_ns;   /* arrival of the newest sample of the frame just queued, 0: none */
 	uint16_t describe_len;
-	uint8_t describe_msg[WIRE_MAX_MSG];
+	uint8_t *describe_msg;      /* WIRE_MAX_MSG bytes in the gateway's describe arena */
 	struct gw_avatar_stats st;
 };
 
@@ -52,6 +58,7 @@ struct gw_stats {
 	_Atomic uint64_t overruns;     /* cycles that started after their deadline had passed the next one */
 	_Atomic uint64_t poll_errors;
 	struct hist work;              /* time of one cycle's work */
+	struct hist work_cpu;          /* CPU time of the loop thread in it (wall minus preemption) */
 	struct hist wake;              /* lateness of the wake-up after the deadline */
 };
 
@@ -63,7 +70,11 @@ struct gateway {
 	struct gw_avatar *av;
 	int n_outputs;
 	struct output out[CFG_MAX_OUTPUTS];
-	uint8_t *arena;           /* one message per avatar and cycle, WIRE_MAX_MSG each, + DESCRIBEs */
+	uint8_t *arena;           /* one FRAME per avatar and cycle, frame_slot bytes apart */
+	size_t frame_slot;
+	uint8_t *describe;        /* one DESCRIBE per avatar, sent from here */
+	struct avatar *bodies;    /* the distinct bodies the avatars point to */
+	int n_bodies;
 	struct out_msg *msgs;
 	struct pose_frame *frames; /* per avatar, the frame of this cycle */
 	uint32_t source_id;

@@ -36,6 +36,15 @@ struct loop {
 	int epfd;
 };
 
+/* the CPU time of the calling thread: what a cycle cost, whatever preempted it */
+static uint64_t thread_cpu_ns(void)
+{
+	struct timespec ts;
+
+	clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+	return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+}
+
 static void ts_from_ns(uint64_t ns, struct timespec *ts)
 {
 	ts->tv_sec = (time_t)(ns / 1000000000ull);
@@ -83,7 +92,7 @@ static void *loop_main(void *arg)
 {
 	struct loop *l = arg;
 	struct gateway *g = l->g;
-	uint64_t period = 0, next = 0;
+	uint64_t period = 0, next = 0, cpu0;
 	struct tracker_clock now;
 
 	for (;;) {
@@ -118,11 +127,13 @@ static void *loop_main(void *arg)
 			woke = now.mono_ns;
 			hist_add(&g->st.wake, woke > next ? woke - next : 0);
 		}
+		cpu0 = thread_cpu_ns();
 		gw_cycle(g, &now);
 		{
-			uint64_t end = gw_mono_ns();
+			uint64_t end = gw_mono_ns(), cpu1 = thread_cpu_ns();
 
 			hist_add(&g->st.work, end - now.mono_ns);
+			hist_add(&g->st.work_cpu, cpu1 > cpu0 ? cpu1 - cpu0 : 0);
 			if (l->epfd < 0) {
 				next += period;
 				if (end > next) {

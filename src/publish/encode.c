@@ -6,7 +6,10 @@
  * sits at k[3]'s origin with k[4]'s rotation (the upper arm), the elbow at
  * k[4] with k[5]'s rotation (the forearm), the wrist at k[7] with k[8]'s
  * rotation (the hand), the hand at k[8] (the end effector, which tracks the
- * hand sensor).
+ * hand sensor). arm_fk_pose() gives exactly these, as positions and
+ * rotations in the chest frame; each is taken to the world with one
+ * rotation and one quaternion product (no dual-quaternion products here:
+ * this runs for every avatar at every cycle).
  */
 #include "publish/encode.h"
 
@@ -28,19 +31,22 @@ static void put_pose(const struct dq *d, struct wire_pose *p)
 	p->q[3] = (float)d->r.z;
 }
 
-static void put_pose_rt(const struct dq *chest, const struct dq *at, const struct dq *rot, struct wire_pose *p)
+/* a segment of the chest frame (position p, rotation r) in the world */
+static void put_pose_chest(const struct quat *cr, const struct vec3 *cp, const struct vec3 *p, const struct quat *r,
+			   struct wire_pose *out)
 {
-	struct vec3 t;
-	struct dq mix;
+	struct vec3 w;
+	struct quat q;
 
-	dq_translation(at, &t);
-	dq_from_rt(&rot->r, &t, &mix);
-	{
-		struct dq w;
-
-		dq_mul(chest, &mix, &w);
-		put_pose(&w, p);
-	}
+	quat_rotate(cr, p, &w);
+	quat_mul(cr, r, &q);
+	out->p[0] = (float)(cp->x + w.x);
+	out->p[1] = (float)(cp->y + w.y);
+	out->p[2] = (float)(cp->z + w.z);
+	out->q[0] = (float)q.w;
+	out->q[1] = (float)q.x;
+	out->q[2] = (float)q.y;
+	out->q[3] = (float)q.z;
 }
 
 static void nan_pose(struct wire_pose *p)
@@ -57,6 +63,7 @@ void encode_frame(const struct encode_in *in, struct wire_frame *out)
 	const struct avatar_pose *pose = in->pose;
 	static const int seg0[2] = { WIRE_SEG_R_SHOULDER, WIRE_SEG_L_SHOULDER };
 	uint16_t flags = 0;
+	struct vec3 cp;
 
 	for (int i = 0; i < WIRE_SENSORS; i++) {
 		struct wire_sensor_sample *s = &out->sensor[i];
@@ -84,6 +91,7 @@ void encode_frame(const struct encode_in *in, struct wire_frame *out)
 		out->h.flags = flags | WIRE_F_UNREACHED;
 		return;
 	}
+	dq_translation(&pose->chest, &cp);
 	out->joint[0] = (float)pose->head_yaw;
 	put_pose(&pose->chest, &out->segment[WIRE_SEG_CHEST]);
 	if (pf->state[WIRE_S_HEAD] == WIRE_SENSOR_MISSING)
@@ -92,7 +100,7 @@ void encode_frame(const struct encode_in *in, struct wire_frame *out)
 		put_pose(&pf->sensor[WIRE_S_HEAD], &out->segment[WIRE_SEG_HEAD]);
 	for (int side = 0; side < 2; side++) {
 		const struct ik_result *r = &pose->res[side];
-		struct dq k[ARM_DOF + 1];
+		struct arm_pose ap;
 		struct wire_pose *seg = &out->segment[seg0[side]];
 
 		out->arm[side].ik_flags = (uint16_t)r->flags;
@@ -102,11 +110,11 @@ void encode_frame(const struct encode_in *in, struct wire_frame *out)
 			flags |= WIRE_F_UNREACHED;
 		for (int j = 0; j < ARM_DOF; j++)
 			out->joint[1 + side * ARM_DOF + j] = (float)pose->q[side][j];
-		arm_fk_frames(&in->av->arm[side], pose->q[side], k);
-		put_pose_rt(&pose->chest, &k[3], &k[4], &seg[0]);
-		put_pose_rt(&pose->chest, &k[4], &k[5], &seg[1]);
-		put_pose_rt(&pose->chest, &k[7], &k[8], &seg[2]);
-		put_pose_rt(&pose->chest, &k[8], &k[8], &seg[3]);
+		arm_fk_pose(&in->av->arm[side], pose->q[side], &ap);
+		put_pose_chest(&pose->chest.r, &cp, &ap.shoulder, &ap.upper_arm, &seg[0]);
+		put_pose_chest(&pose->chest.r, &cp, &ap.elbow, &ap.forearm, &seg[1]);
+		put_pose_chest(&pose->chest.r, &cp, &ap.wrist, &ap.hand_rot, &seg[2]);
+		put_pose_chest(&pose->chest.r, &cp, &ap.hand, &ap.hand_rot, &seg[3]);
 	}
 	out->h.flags = flags;
 }

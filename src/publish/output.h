@@ -37,6 +37,7 @@ struct output_stats {
 	_Atomic uint64_t accepted;  /* stream subscribers ever */
 	_Atomic uint64_t refused;   /* over max_clients */
 	_Atomic uint64_t closed;    /* subscribers that went away or were too slow for too long */
+	_Atomic uint64_t gso_off;   /* UDP segmentation offload refused by the kernel: now off */
 	_Atomic int32_t last_errno;
 };
 
