@@ -77,6 +77,21 @@ static bool describe_changed(const struct gw_avatar *a, const struct gw_avatar *
 		      (size_t)a->describe_len - WIRE_HEADER_LEN);
 }
 
+/*
+ * Every avatar's DESCRIBE goes out soon: at the next cycle when there are
+ * few avatars; spread over GW_DESCRIBE_BURST_NS when there are many, so that
+ * no cycle carries them all (1000 avatars: 1.2 MB).
+ */
+#define GW_DESCRIBE_BURST_NS 100000000ull
+#define GW_DESCRIBE_AT_ONCE 32
+
+static void describe_soon(struct gateway *g, uint64_t now_ns)
+{
+	for (int i = 0; i < g->n_avatars; i++)
+		g->av[i].next_describe_ns = g->n_avatars <= GW_DESCRIBE_AT_ONCE ? 0 :
+			now_ns + GW_DESCRIBE_BURST_NS * (uint64_t)i / (uint64_t)g->n_avatars;
+}
+
 /* the bytes of an encoded FRAME, rounded up to a cache line: the arena's stride */
 static size_t frame_slot(void)
 {
@@ -134,6 +149,7 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 		}
 		g->n_avatars++;
 	}
+	describe_soon(g, gw_mono_ns());
 	for (int i = 0; i < g->cfg.n_outputs; i++) {
 		struct output *prev = NULL;
 
@@ -296,18 +312,17 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 			a->dseq++;
 			g->msgs[n++] = (struct out_msg){ d, a->describe_len, (uint16_t)i, NULL };
 			/*
-			 * Each avatar keeps its own phase within the period, so that
-			 * the DESCRIBEs of many avatars spread over the second instead
-			 * of all leaving in one cycle (1000 avatars: 1.2 MB at once,
-			 * the longest cycle of the second). After a forced round (start,
-			 * a new subscriber) the phases are dealt out again.
+			 * Each avatar keeps its own phase within the period, i/n of it,
+			 * so that the DESCRIBEs of many avatars spread over the second
+			 * instead of all leaving in one cycle; after a burst (start, a
+			 * new subscriber) each goes back to its phase.
 			 */
-			if (a->next_describe_ns == 0)
-				a->next_describe_ns = now->mono_ns + g->describe_ns * (uint64_t)(i + 1) / (uint64_t)g->n_avatars;
-			else if (now->mono_ns - a->next_describe_ns < g->describe_ns)
-				a->next_describe_ns += g->describe_ns;
-			else
-				a->next_describe_ns = now->mono_ns + g->describe_ns;
+			{
+				uint64_t phase = g->describe_ns * (uint64_t)i / (uint64_t)g->n_avatars;
+				uint64_t k = now->mono_ns > phase ? (now->mono_ns - phase) / g->describe_ns : 0;
+
+				a->next_describe_ns = phase + (k + 1) * g->describe_ns;
+			}
 		}
 	}
 	for (int o = 0; o < g->n_outputs; o++) {
@@ -315,10 +330,9 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 
 		g->out[o].ops->service(&g->out[o]);
 		g->out[o].ops->send(&g->out[o], g->msgs, n);
-		/* a new stream subscriber gets every DESCRIBE at the next cycle, not a second later */
+		/* a new stream subscriber gets every DESCRIBE now, not a second later */
 		if (stat_get(&g->out[o].st.accepted) != acc)
-			for (int i = 0; i < g->n_avatars; i++)
-				g->av[i].next_describe_ns = 0;
+			describe_soon(g, now->mono_ns);
 	}
 	sent_ns = gw_mono_ns();
 	for (int i = 0; i < g->n_avatars; i++) {
