@@ -115,6 +115,7 @@ static void *loop_main(void *arg)
 			int n = epoll_wait(l->epfd, ev, CFG_MAX_SOURCES, EVENT_TIMEOUT_MS);
 
 			(void)n;
+			cpu0 = thread_cpu_ns();
 			gw_clock(&now);
 		} else {
 			struct timespec ts;
@@ -123,11 +124,12 @@ static void *loop_main(void *arg)
 			ts_from_ns(next, &ts);
 			while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR)
 				;
+			/* before the clock that stamps the samples: outside the latency it measures */
+			cpu0 = thread_cpu_ns();
 			gw_clock(&now);
 			woke = now.mono_ns;
 			hist_add(&g->st.wake, woke > next ? woke - next : 0);
 		}
-		cpu0 = thread_cpu_ns();
 		gw_cycle(g, &now);
 		{
 			uint64_t end = gw_mono_ns(), cpu1 = thread_cpu_ns();
