@@ -92,6 +92,20 @@ static void describe_soon(struct gateway *g, uint64_t now_ns)
 			now_ns + GW_DESCRIBE_BURST_NS * (uint64_t)i / (uint64_t)g->n_avatars;
 }
 
+/*
+ * Makes every page of a fresh allocation resident (a write per page; the
+ * contents stay): with mlockall(MCL_ONFAULT) it is then locked too.
+ */
+static void touch(void *p, size_t n)
+{
+	volatile char *c = p;
+
+	for (size_t i = 0; i < n; i += 4096)
+		c[i] = c[i];
+	if (n)
+		c[n - 1] = c[n - 1];
+}
+
 /* the bytes of an encoded FRAME, rounded up to a cache line: the arena's stride */
 static size_t frame_slot(void)
 {
@@ -133,6 +147,10 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 		rc = -ENOMEM;
 		goto fail;
 	}
+	/* written now, so that the loop never takes a first-touch page fault in them */
+	touch(g->arena, ((size_t)g->cfg.n_avatars + 1) * g->frame_slot);
+	touch(g->msgs, ((size_t)g->cfg.n_avatars * 2 + 1) * sizeof(*g->msgs));
+	touch(g->frames, ((size_t)g->cfg.n_avatars + 1) * sizeof(*g->frames));
 	for (int i = 0; i < g->cfg.n_avatars; i++) {
 		struct gw_avatar *a = &g->av[i];
 

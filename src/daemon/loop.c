@@ -88,6 +88,15 @@ static void arm_events(struct loop *l)
 	}
 }
 
+/* touches the stack the loop may use, so that it never faults a page in later (mlockall MCL_ONFAULT) */
+static __attribute__((noinline)) void prefault_stack(void)
+{
+	volatile char buf[LOOP_STACK - 64 * 1024];
+
+	for (size_t i = 0; i < sizeof(buf); i += 4096)
+		buf[i] = 0;
+}
+
 static void *loop_main(void *arg)
 {
 	struct loop *l = arg;
@@ -95,6 +104,7 @@ static void *loop_main(void *arg)
 	uint64_t period = 0, next = 0, cpu0;
 	struct tracker_clock now;
 
+	prefault_stack();
 	for (;;) {
 		if (atomic_load_explicit(&l->cmd, memory_order_acquire) != CMD_RUN) {
 			if (!checkpoint(l))

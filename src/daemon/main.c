@@ -166,6 +166,32 @@ static void status_line(struct gateway *g)
 		     g->n_trackers, g->n_outputs, (unsigned long long)stat_get(&g->st.overruns));
 }
 
+/*
+ * Locks what the daemon uses in memory, not everything it maps: with
+ * MCL_ONFAULT a page is locked when first touched, so the libraries linked
+ * for outputs or trackers a configuration does not use (and their own
+ * dependencies: libwebsockets brings OpenSSL) cost no RAM. What the loop
+ * touches is faulted in before it runs: the gateway's buffers are written
+ * at gw_open(), the loop thread's stack at its start, and our own code here
+ * (the libraries' few pages on the loop's path are taken, and locked, in
+ * its first cycle).
+ */
+static int lock_memory(void)
+{
+	extern const char __executable_start[], etext[];
+	long page = sysconf(_SC_PAGESIZE);
+	int flags = MCL_CURRENT | MCL_FUTURE;
+
+#ifdef MCL_ONFAULT
+	flags |= MCL_ONFAULT;
+#endif
+	if (mlockall(flags))
+		return -1;
+	for (const char *p = __executable_start; p < etext; p += page)
+		(void)*(const volatile char *)p;
+	return 0;
+}
+
 int main(int argc, char **argv)
 {
 	static const struct option opts[] = {
@@ -262,7 +288,7 @@ int main(int argc, char **argv)
 		/* the configuration was valid: what failed is the system (a port in use...), worth a retry */
 		return 1;
 	}
-	if (gws[cur].cfg.daemon.lock_memory && mlockall(MCL_CURRENT | MCL_FUTURE))
+	if (gws[cur].cfg.daemon.lock_memory && lock_memory())
 		pr_warning("mlockall: %s: memory may be paged out (raise LimitMEMLOCK)", strerror(errno));
 	if (loop_start(&loop, &gws[cur], err, sizeof(err))) {
 		pr_err("%s", err);

@@ -236,6 +236,24 @@ class DemoTest(unittest.TestCase):
         self.assertIn("AVATAR", txt)
         self.assertIn("demo", txt)
 
+    def test_loop_takes_no_page_faults(self):
+        """the loop thread's memory is resident and locked before it runs: in the steady
+        state its minor and major page-fault counts stay still (/proc/PID/task/TID/stat)"""
+        def faults():
+            for tid in os.listdir("/proc/%d/task" % self.d.proc.pid):
+                with open("/proc/%d/task/%s/comm" % (self.d.proc.pid, tid)) as f:
+                    if f.read().strip() != "avatargw-loop":
+                        continue
+                with open("/proc/%d/task/%s/stat" % (self.d.proc.pid, tid)) as f:
+                    fields = f.read().rsplit(")", 1)[1].split()
+                # after the comm: state(0) ... minflt(7) cminflt(8) majflt(9)
+                return int(fields[7]), int(fields[9])
+            self.fail("no avatargw-loop thread")
+        before = faults()
+        time.sleep(1.0)
+        after = faults()
+        self.assertEqual(before, after, "page faults in the loop thread (minor, major): %s -> %s" % (before, after))
+
     def test_tcp_stream(self):
         fr = dump(["--tcp", "127.0.0.1:%d" % self.tport], 100)
         seqs = [m["seq"] for _, m in fr if m["type"] == "frame"]
