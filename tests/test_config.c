@@ -757,7 +757,7 @@ static void test_err_source_type(void **state)
 	expect_text_err(*state, "[daemon]\nrate = 100\n[source s]\npeople = 2\n",
 			"e.conf:4: [source s] type: missing (sim or replay)", NULL);
 	expect_text_err(*state, "[source s]\n\ntype = hydra\n",
-			"e.conf:3: [source s] type: unknown driver 'hydra' (known: sim, replay)", NULL);
+			"e.conf:3: [source s] type: unknown driver 'hydra' (known: sim, replay, ", NULL);
 }
 
 static void test_err_replay_file(void **state)
