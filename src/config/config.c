@@ -957,6 +957,32 @@ static int resolve_output_avatars(struct parse *p, const char *full, struct cfg_
 	return 0;
 }
 
+/* the identifiers (can) or registers (modbus) of all the output's avatars must exist */
+static int check_bus_output(struct parse *p, const char *full, const struct cfg_output *o)
+{
+	const struct config *c = p->c;
+	const struct cfg_entry *t = entry_of(c, full, "type");
+	long n = o->n_avatars ? o->n_avatars : c->n_avatars, last;
+
+	if (!n)
+		return 0;
+	if (o->type == CFG_OUT_CAN) {
+		long max = o->extended_ids ? 0x1FFFFFFFL : 0x7FFL;
+
+		last = o->base_id + 8 * (n - 1) + 4; /* 8 identifiers per avatar, 5 used (docs/CAN.md) */
+		if (last > max)
+			return failf(p, t->where, "[%s] base_id: %ld avatars need identifiers up to 0x%lX, above 0x%lX%s",
+				     full, n, last, max, o->extended_ids ? "" : " (extended_ids = yes gives 29 bits)");
+	}
+	if (o->type == CFG_OUT_MODBUS) {
+		last = o->reg_base + (long)o->reg_stride * (n - 1) + 66 - 1; /* a block is 66 registers (docs/MODBUS.md) */
+		if (last > 65535)
+			return failf(p, t->where, "[%s] register_base, register_stride: %ld avatars need registers up "
+				     "to %ld, above 65535", full, n, last);
+	}
+	return 0;
+}
+
 static int build(struct parse *p)
 {
 	struct config *c = p->c;
@@ -1091,7 +1117,8 @@ static int build(struct parse *p)
 				if (o->type == CFG_OUT_CAN && !entry_of(c, e->section, "interface"))
 					return failf(p, t->where, "[%s] interface: missing (a CAN interface such as can0)",
 						     e->section);
-				if (apply_section(&s) || resolve_output_avatars(p, e->section, o)) {
+				if (apply_section(&s) || resolve_output_avatars(p, e->section, o) ||
+				    check_bus_output(p, e->section, o)) {
 					free(o->avatar_ids); /* not counted in n_outputs: config_free would miss it */
 					o->avatar_ids = NULL;
 					return -1;

@@ -118,7 +118,7 @@ static void can_out_close(struct output *o)
 	o->priv = NULL;
 }
 
-static void take_describe(struct can_out *c, struct output *o, struct can_avatar *a, const struct out_msg *m)
+static void take_describe(struct output *o, struct can_avatar *a, const struct out_msg *m)
 {
 	struct wire_describe d;
 
@@ -130,7 +130,6 @@ static void take_describe(struct can_out *c, struct output *o, struct can_avatar
 	}
 	a->period_s = d.rate_hz > 0 ? (o->cfg->decimate > 1 ? o->cfg->decimate : 1) / (double)d.rate_hz : 0;
 	a->have_limits = a->period_s > 0;
-	(void)c;
 }
 
 /* the command of one frame; false: withheld (safe mode) */
@@ -249,7 +248,7 @@ static void can_out_send(struct output *o, const struct out_msg *m, int n)
 			continue;
 		a = &c->av[k];
 		if (m[i].data[5] == WIRE_DESCRIBE) {
-			take_describe(c, o, a, &m[i]);
+			take_describe(o, a, &m[i]);
 			continue;
 		}
 		if (!frames || wire_decode_frame(m[i].data, m[i].len, &wf))

@@ -373,8 +373,10 @@ static void *mb_thread(void *arg)
 			s->pfd_client[n] = i;
 			s->pfd[n++] = (struct pollfd){ s->cl[i].fd, POLLIN, 0 };
 		}
-		if (poll(s->pfd, (nfds_t)n, MB_TICK_MS) < 0 && errno != EINTR)
+		if (poll(s->pfd, (nfds_t)n, MB_TICK_MS) < 0 && errno != EINTR) {
+			pr_err("modbus server %s: poll: %s: the server stops", s->addr, strerror(errno));
 			break;
+		}
 		if (s->pfd[0].revents)
 			break;
 		now = mono_ns();
