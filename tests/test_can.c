@@ -661,11 +661,22 @@ static void test_out_safe_speed_limit(void **state)
 		assert_int_equal(a.joint[3], 90 * i);
 		assert_true(a.flags & CANCODEC_F_LIMITED);
 	}
-	/* commands closer together than a period move less */
-	prev = a.joint[3];
-	send_frame(x, 0, deg, 0);
-	assert_true(read_command(x, 0x100, &a));
-	assert_true(a.joint[3] >= prev && a.joint[3] < prev + 90);
+	/* commands closer together than a period move less: max_speed times the time between them */
+	{
+		struct timespec t0, t1;
+		double dt;
+
+		prev = a.joint[3];
+		clock_gettime(CLOCK_MONOTONIC, &t0);
+		send_frame(x, 0, deg, 0);
+		clock_gettime(CLOCK_MONOTONIC, &t1);
+		/* at most the time since the previous command: from before that sleep_ms() ended */
+		dt = (double)(t1.tv_sec - t0.tv_sec) + (t1.tv_nsec - t0.tv_nsec) * 1e-9;
+		assert_true(read_command(x, 0x100, &a));
+		print_message("a command %.3f ms after the previous one moved %d\n", dt * 1e3, a.joint[3] - (int)prev);
+		assert_true(a.joint[3] >= prev);
+		assert_true(a.joint[3] <= prev + 9000 * fmin(dt, 0.01) + 1);
+	}
 	/* back down, as fast as allowed */
 	deg[3] = -5;
 	prev = a.joint[3];
