@@ -13,11 +13,14 @@ status=0
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
 skipped=0
+# Debian's interpreter, where Debian's Python packages (python3-pymodbus) are,
+# even when another python3 comes first in PATH; PYTHON overrides.
+PYTHON=${PYTHON:-$(command -v /usr/bin/python3 || command -v python3)}
 for t in "$@"; do
 	echo "== $t"
 	case "$t" in
 	*.py)
-		python3 -m unittest -v "$t" >"$out" 2>&1
+		"$PYTHON" -m unittest -v "$t" >"$out" 2>&1
 		rc=$?
 		cat "$out"
 		n=$(sed -n 's/^Ran \([0-9]*\) test.*/\1/p' "$out" | tail -n 1)

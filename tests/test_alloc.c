@@ -31,6 +31,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "publish/output.h"
+
 void *__real_malloc(size_t n);
 void *__real_calloc(size_t n, size_t m);
 void *__real_realloc(void *p, size_t n);
@@ -167,6 +169,124 @@ static void test_loop_allocates_nothing(void **state)
 	gw_close(&g);
 }
 
+/* a TCP port nobody listens on now */
+static int free_tcp_port(void)
+{
+	struct sockaddr_in sin = { .sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK) };
+	socklen_t len = sizeof(sin);
+	int fd = socket(AF_INET, SOCK_STREAM, 0), port;
+
+	assert_true(fd >= 0);
+	assert_int_equal(bind(fd, (struct sockaddr *)&sin, sizeof(sin)), 0);
+	assert_int_equal(getsockname(fd, (struct sockaddr *)&sin, &len), 0);
+	port = ntohs(sin.sin_port);
+	close(fd);
+	return port;
+}
+
+static uint64_t count_in(struct output *o, const char *key)
+{
+	char buf[1024], pat[64], *s;
+	FILE *m = fmemopen(buf, sizeof(buf), "w");
+
+	assert_non_null(m);
+	o->ops->report(o, m, true);
+	fclose(m);
+	snprintf(pat, sizeof(pat), "\"%s\":", key);
+	s = strstr(buf, pat);
+	assert_non_null(s);
+	return strtoull(s + strlen(pat), NULL, 10);
+}
+
+/*
+ * The industrial outputs and sources: a Modbus server answering a client
+ * and the daemon's own Modbus source (which polls that server from its
+ * thread), a CAN output and a CAN source on socketpairs the test feeds and
+ * drains. Nothing is allocated by anyone once they run: the loop thread,
+ * the Modbus server's thread, the Modbus source's thread.
+ */
+static void test_bus_loop_allocates_nothing(void **state)
+{
+	static struct gateway g;
+	static const uint8_t fc4[] = { 0, 1, 0, 0, 0, 6, 1, 4, 0, 0, 0, 66 };
+	struct config c;
+	char err[512], conf_text[2048];
+	struct loop *l = NULL;
+	struct mallinfo2 before, after;
+	int can_in[2], can_out[2], port = free_tcp_port(), cl;
+	struct sockaddr_in sin = { .sin_family = AF_INET, .sin_port = htons((uint16_t)port),
+				   .sin_addr.s_addr = htonl(INADDR_LOOPBACK) };
+	uint64_t req0, cmd0, samples0, mbin0;
+	long n;
+	uint8_t buf[4096];
+
+	(void)state;
+	assert_int_equal(socketpair(AF_UNIX, SOCK_SEQPACKET, 0, can_in), 0);
+	assert_int_equal(socketpair(AF_UNIX, SOCK_SEQPACKET, 0, can_out), 0);
+	snprintf(conf_text, sizeof(conf_text),
+		 "[daemon]\nrate = 480\ncontrol_socket =\ndescribe_interval = 0.1\n"
+		 "[source sim]\ntype = sim\npeople = 2\n"
+		 "[source bus]\ntype = can\ninterface = fd:%d\nposition_id = -1\n"
+		 "[source plc]\ntype = modbus\naddress = 127.0.0.1\nport = %d\nregister_type = input\n"
+		 "position_register = 12\norientation = none\npoll_rate = 200\n"
+		 "[avatar crowd]\nperson = sim/p0\ncount = 2\n"
+		 "[avatar mixed]\nperson = sim/p0\nleft_hand = bus/pose0\nright_hand = plc/pose0\n"
+		 "[output mb]\ntype = modbus\nport = %d\n"
+		 "[output arm]\ntype = can\ninterface = fd:%d\n"
+		 "[output plain]\ntype = can\ninterface = fd:%d\nsafe = no\nbase_id = 0x200\n",
+		 can_in[0], port, port, can_out[0], can_out[0]);
+	assert_int_equal(config_load_text(&c, "bus.conf", conf_text, err, sizeof(err)), 0);
+	assert_int_equal(gw_open(&g, &c, NULL, 42, err, sizeof(err)), 0);
+	assert_int_equal(loop_start(&l, &g, err, sizeof(err)), 0);
+	cl = socket(AF_INET, SOCK_STREAM, 0);
+	assert_int_equal(connect(cl, (struct sockaddr *)&sin, sizeof(sin)), 0);
+	sleep_ms(400); /* warm: the source connected, DESCRIBEs out, a client served */
+	req0 = count_in(&g.out[0], "requests");
+	cmd0 = count_in(&g.out[1], "commands");
+	samples0 = stat_get(&g.trk[1].st.samples);
+	mbin0 = stat_get(&g.trk[2].st.samples);
+	before = mallinfo2();
+	atomic_store(&allocs, 0);
+	atomic_store(&counting, 1);
+	for (int i = 0; i < 40; i++) {
+		/* a sensor frame in, an avatar block read over Modbus, the CAN commands drained */
+		uint8_t ori[16] = { 0x00, 0x02, 0, 0, 8, 0, 0, 0, 0xff, 0x7f, 0, 0, 0, 0, 0, 0 };
+
+		assert_int_equal(send(can_in[1], ori, sizeof(ori), 0), sizeof(ori));
+		assert_int_equal(send(cl, fc4, sizeof(fc4), 0), sizeof(fc4));
+		assert_true(recv(cl, buf, 9 + 132, MSG_WAITALL) == 9 + 132);
+		while (recv(can_out[1], buf, sizeof(buf), MSG_DONTWAIT) > 0)
+			;
+		sleep_ms(10);
+	}
+	atomic_store(&counting, 0);
+	after = mallinfo2();
+	n = atomic_load(&allocs);
+	print_message("modbus requests %llu, can commands %llu, can samples %llu, modbus samples %llu, "
+		      "allocations while running: %ld\n",
+		      (unsigned long long)(count_in(&g.out[0], "requests") - req0),
+		      (unsigned long long)(count_in(&g.out[1], "commands") - cmd0),
+		      (unsigned long long)(stat_get(&g.trk[1].st.samples) - samples0),
+		      (unsigned long long)(stat_get(&g.trk[2].st.samples) - mbin0), n);
+	loop_stop(l);
+	/* everything ran */
+	assert_true(count_in(&g.out[0], "requests") - req0 > 40); /* ours and the modbus source's */
+	assert_true(count_in(&g.out[1], "commands") - cmd0 > 50);
+	assert_true(count_in(&g.out[2], "commands") > 50);
+	assert_int_equal(stat_get(&g.trk[1].st.samples) - samples0, 40);
+	assert_true(stat_get(&g.trk[2].st.samples) - mbin0 > 10);
+	/* and allocated nothing */
+	assert_int_equal(n, 0);
+	assert_int_equal(before.uordblks, after.uordblks);
+	assert_int_equal(before.hblkhd, after.hblkhd);
+	close(cl);
+	gw_close(&g);
+	for (int i = 0; i < 2; i++) {
+		close(can_in[i]);
+		close(can_out[i]);
+	}
+}
+
 /* the wrapper counts: a control that the test can fail */
 static void test_wrapper_counts(void **state)
 {
@@ -187,6 +307,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_wrapper_counts),
 		cmocka_unit_test(test_loop_allocates_nothing),
+		cmocka_unit_test(test_bus_loop_allocates_nothing),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

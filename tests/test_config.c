@@ -757,7 +757,7 @@ static void test_err_source_type(void **state)
 	expect_text_err(*state, "[daemon]\nrate = 100\n[source s]\npeople = 2\n",
 			"e.conf:4: [source s] type: missing (sim or replay)", NULL);
 	expect_text_err(*state, "[source s]\n\ntype = hydra\n",
-			"e.conf:3: [source s] type: unknown driver 'hydra' (known: sim, replay)", NULL);
+			"e.conf:3: [source s] type: unknown driver 'hydra' (known: sim, replay, ", NULL);
 }
 
 static void test_err_replay_file(void **state)
@@ -830,6 +830,157 @@ static void test_err_multicast_without_address(void **state)
 {
 	expect_text_err(*state, "[output lan]\ntype = multicast\nport = 7770\n",
 			"e.conf:2: [output lan] address: missing (a multicast group)", NULL);
+}
+
+/* ---- the industrial buses: modbus and can sources and outputs ----------------------------------- */
+
+static void test_values_bus(void **state)
+{
+	struct fx *f = *state;
+	const struct config *c = load_text_ok(f, "[source robot]\ntype = modbus\naddress = robot.local\nport = 5020\n"
+						 "unit_id = 255\nregister_type = input\nsensors = 2\nsensor_stride = 16\n"
+						 "position_register = 400\nposition_format = float32\nposition_scale = 1\n"
+						 "orientation_register = 406\norientation_format = int32\n"
+						 "orientation_scale = 0.0001\norientation = quat_xyzw\nword_order = dcba\n"
+						 "poll_rate = 125\ntimeout_ms = 50\n"
+						 "[source imu]\ntype = can\ninterface = fd:3\nsensors = 3\n"
+						 "orientation_id = 0x18FF0000\nposition_id = -1\nquaternion_scale = 16384\n"
+						 "quaternion_order = xyzw\nposition_scale = 0.0005\nextended_ids = yes\n"
+						 "[avatar a]\nhead = robot/pose0\nleft_hand = robot/pose1\nright_hand = imu/pose2\n"
+						 "[output plc]\ntype = modbus\naddress = 0.0.0.0\nport = 1502\nmax_clients = 3\n"
+						 "register_base = 1000\nregister_stride = 66\nword_order = cdab\n"
+						 "writable_registers = 8\nidle_timeout = 0\n"
+						 "[output arm]\ntype = can\ninterface = can1\nbase_id = 0x7F8\nsafe = no\n"
+						 "max_speed = 45\ndecimate = 2\n");
+	const struct cfg_source *r = &c->source[0], *i = &c->source[1];
+	const struct cfg_output *m = &c->output[0], *a = &c->output[1];
+
+	assert_int_equal(r->driver, trackers_find("modbus"));
+	assert_string_equal(r->address, "robot.local");
+	assert_int_equal(r->port, 5020);
+	assert_int_equal(r->unit_id, 255);
+	assert_int_equal(r->register_type, CFG_REGS_INPUT);
+	assert_int_equal(r->sensors, 2);
+	assert_int_equal(r->sensor_stride, 16);
+	assert_int_equal(r->pos_register, 400);
+	assert_int_equal(r->pos_format, CFG_REG_FLOAT32);
+	assert_near(r->pos_scale, 1, 0);
+	assert_int_equal(r->ori_register, 406);
+	assert_int_equal(r->ori_format, CFG_REG_INT32);
+	assert_near(r->ori_scale, 0.0001, 0);
+	assert_int_equal(r->orientation, CFG_ORI_QUAT_XYZW);
+	assert_int_equal(r->word_order, CFG_WORD_DCBA);
+	assert_near(r->poll_rate, 125, 0);
+	assert_near(r->timeout_ms, 50, 0);
+	assert_int_equal(i->driver, trackers_find("can"));
+	assert_string_equal(i->interface, "fd:3");
+	assert_int_equal(i->sensors, 3);
+	assert_int_equal(i->ori_id, 0x18FF0000);
+	assert_int_equal(i->pos_id, -1);
+	assert_near(i->quat_scale, 16384, 0);
+	assert_int_equal(i->quat_order, CFG_QUAT_XYZW);
+	assert_near(i->pos_scale, 0.0005, 0);
+	assert_true(i->extended_ids);
+	assert_sensor(&c->avatar[0], 2, 1, 2);
+	assert_int_equal(m->type, CFG_OUT_MODBUS);
+	assert_string_equal(m->address, "0.0.0.0");
+	assert_int_equal(m->port, 1502);
+	assert_int_equal(m->max_clients, 3);
+	assert_int_equal(m->reg_base, 1000);
+	assert_int_equal(m->reg_stride, 66);
+	assert_int_equal(m->word_order, CFG_WORD_CDAB);
+	assert_int_equal(m->writable_regs, 8);
+	assert_near(m->idle_timeout, 0, 0);
+	assert_int_equal(a->type, CFG_OUT_CAN);
+	assert_string_equal(a->interface, "can1");
+	assert_int_equal(a->base_id, 0x7F8);
+	assert_false(a->safe);
+	set_ctx("max_speed 45 deg/s");
+	assert_near(a->max_speed, 45 * DEG, ANG_TOL);
+	assert_int_equal(a->decimate, 2);
+}
+
+static void test_defaults_bus(void **state)
+{
+	struct fx *f = *state;
+	const struct config *c = load_text_ok(f, "[source robot]\ntype = modbus\naddress = 192.0.2.1\n"
+						 "[source imu]\ntype = can\ninterface = can0\n"
+						 "[avatar a]\nhead = robot/pose0\nleft_hand = imu/pose0\nright_hand = robot/pose0\n"
+						 "[output plc]\ntype = modbus\nport = 1502\n"
+						 "[output arm]\ntype = can\ninterface = can0\n");
+	const struct cfg_source *r = &c->source[0], *i = &c->source[1];
+	const struct cfg_output *m = &c->output[0], *a = &c->output[1];
+
+	assert_int_equal(r->port, 502);
+	assert_int_equal(r->unit_id, 1);
+	assert_int_equal(r->register_type, CFG_REGS_HOLDING);
+	assert_int_equal(r->sensors, 1);
+	assert_int_equal(r->sensor_stride, 0);
+	assert_int_equal(r->pos_register, 0);
+	assert_int_equal(r->pos_format, CFG_REG_INT16);
+	assert_near(r->pos_scale, 0.001, 0);
+	assert_int_equal(r->ori_register, 3);
+	assert_int_equal(r->ori_format, CFG_REG_INT16);
+	assert_near(r->ori_scale, 0.001, 0);
+	assert_int_equal(r->orientation, CFG_ORI_ROTVEC);
+	assert_int_equal(r->word_order, CFG_WORD_ABCD);
+	assert_near(r->poll_rate, 50, 0);
+	assert_near(r->timeout_ms, 200, 0);
+	assert_int_equal(i->sensors, 1);
+	assert_int_equal(i->ori_id, 0x200);
+	assert_int_equal(i->pos_id, 0x280);
+	assert_near(i->quat_scale, 32768, 0);
+	assert_int_equal(i->quat_order, CFG_QUAT_WXYZ);
+	assert_false(i->extended_ids);
+	assert_string_equal(m->address, "127.0.0.1");
+	assert_int_equal(m->max_clients, 8);
+	assert_int_equal(m->reg_base, 0);
+	assert_int_equal(m->reg_stride, 100);
+	assert_int_equal(m->word_order, CFG_WORD_ABCD);
+	assert_int_equal(m->writable_regs, 0);
+	assert_near(m->idle_timeout, 60, 0);
+	assert_int_equal(a->base_id, 0x100);
+	assert_false(a->extended_ids);
+	assert_true(a->safe);
+	set_ctx("max_speed 90 deg/s");
+	assert_near(a->max_speed, 90 * DEG, ANG_TOL);
+}
+
+static void test_err_bus(void **state)
+{
+	static const char people[] = "[source s]\ntype = sim\npeople = 300\n[avatar a]\nperson = s/p0\ncount = 300\n";
+	char text[1024];
+
+	expect_text_err(*state, "[output plc]\ntype = modbus\n", "e.conf:2: [output plc] port: missing", "1502", NULL);
+	expect_text_err(*state, "[output arm]\ntype = can\nport = 1\n", "e.conf:2: [output arm] interface: missing",
+			NULL);
+	expect_text_err(*state, "[output u]\ntype = udp\nsafe = no\n", "e.conf:3: [output u] safe: unknown key", NULL);
+	expect_text_err(*state, "[output plc]\ntype = modbus\nport = 1502\nregister_stride = 65\n",
+			"e.conf:4: [output plc] register_stride: 65 is out of range [66, 65536]", NULL);
+	expect_text_err(*state, "[output plc]\ntype = modbus\nport = 1502\nword_order = big\n",
+			"e.conf:4: [output plc] word_order: 'big' is not one of: abcd, cdab, badc, dcba", NULL);
+	snprintf(text, sizeof(text), "%s[output arm]\ntype = can\ninterface = can0\n", people);
+	expect_text_err(*state, text, "e.conf:8: [output arm] base_id: 300 avatars need identifiers up to 0xA5C",
+			"extended_ids", NULL);
+	snprintf(text, sizeof(text), "%s[output plc]\ntype = modbus\nport = 1502\nregister_base = 40000\n", people);
+	expect_text_err(*state, text, "e.conf:8: [output plc] register_base, register_stride: 300 avatars need "
+			"registers up to 69965", NULL);
+	expect_text_err(*state, "[source r]\ntype = modbus\n", "e.conf:2: [source r] address: missing", NULL);
+	expect_text_err(*state, "[source r]\ntype = modbus\naddress = h\nunit_id = 248\n", "e.conf:2: [source r] unit_id: 248",
+			NULL);
+	expect_text_err(*state, "[source r]\ntype = modbus\naddress = h\nsensors = 3\n", "e.conf:2: [source r] sensor_stride",
+			NULL);
+	expect_text_err(*state, "[source r]\ntype = modbus\naddress = h\norientation_register = 2\n",
+			"e.conf:2: [source r] position_register, orientation_register: sensor 0's", "overlap", NULL);
+	expect_text_err(*state, "[source r]\ntype = modbus\naddress = h\norientation = euler\n",
+			"e.conf:4: [source r] orientation: 'euler' is not one of", NULL);
+	expect_text_err(*state, "[source c]\ntype = can\n", "e.conf:2: [source c] interface: missing", NULL);
+	expect_text_err(*state, "[source c]\ntype = can\ninterface = a_name_longer_than_31_characters\n",
+			"e.conf:3: [source c] interface: longer than 31 characters", NULL);
+	expect_text_err(*state, "[source c]\ntype = can\ninterface = can0\nposition_id = -2\n",
+			"e.conf:4: [source c] position_id: -2 is out of range", NULL);
+	expect_text_err(*state, "[source c]\ntype = can\ninterface = can0\npoll_rate = 5\n",
+			"e.conf:4: [source c] poll_rate: unknown key for type can", NULL);
 }
 
 static void test_err_syntax(void **state)
@@ -1307,6 +1458,9 @@ int main(void)
 		T(test_err_duplicate_avatar_id),
 		T(test_err_output_unknown_avatar),
 		T(test_err_multicast_without_address),
+		T(test_values_bus),
+		T(test_defaults_bus),
+		T(test_err_bus),
 		T(test_err_syntax),
 		T(test_err_long_line),
 		T(test_err_nul_byte),

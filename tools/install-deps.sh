@@ -20,6 +20,7 @@ libhidapi-dev
 libusb-1.0-0-dev
 libmodbus-dev
 python3-pymodbus
+python3-serial-asyncio
 libwebsockets-dev
 liblo-dev
 liblo-tools

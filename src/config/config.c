@@ -54,7 +54,12 @@ enum kind {
 static const char *const e_mode[] = { "deadline", "events", NULL };
 static const char *const e_log[] = { "err", "warning", "info", "debug", NULL };
 static const char *const e_solver[] = { "dq", "matrix", NULL };
-static const char *const e_out[] = { "udp", "multicast", "tcp", "unix", NULL };
+static const char *const e_out[] = { "udp", "multicast", "tcp", "unix", "modbus", "can", NULL };
+static const char *const e_word[] = { "abcd", "cdab", "badc", "dcba", NULL };
+static const char *const e_regtype[] = { "holding", "input", NULL };
+static const char *const e_regfmt[] = { "int16", "uint16", "int32", "uint32", "float32", NULL };
+static const char *const e_ori[] = { "rotvec", "quat_wxyz", "quat_xyzw", "rpy", "none", NULL };
+static const char *const e_quat[] = { "wxyz", "xyzw", NULL };
 
 struct key_def {
 	int sect;
@@ -95,7 +100,7 @@ static const struct key_def keys[] = {
 	  "least important messages logged" },
 
 	{ S_SOURCE, "type", K_STR, 0, 0, 0, 0, NULL, NULL, NULL, NULL,
-	  "the driver: sim or replay" },
+	  "the driver: sim, replay, modbus or can" },
 	{ S_SOURCE, "origin", K_VEC3, SRC(origin), 0, -1e4, 1e4, "0 0 0", "m", NULL, NULL,
 	  "position of the tracker's frame in the world (x y z)" },
 	{ S_SOURCE, "yaw", K_DEG, SRC(yaw), 0, -360, 360, "0", "deg", NULL, NULL,
@@ -117,6 +122,50 @@ static const struct key_def keys[] = {
 	  "start again at the end; otherwise the sensors go STALE" },
 	{ S_SOURCE, "start", K_DOUBLE, SRC(start), 0, 0, 1e6, "0", "s", NULL, "replay",
 	  "begin this far into the recording" },
+	{ S_SOURCE, "address", K_STR, SRC(address), 0, 0, 0, NULL, NULL, NULL, "modbus",
+	  "host name or address of the Modbus TCP device (required)" },
+	{ S_SOURCE, "port", K_INT, SRC(port), 0, 1, 65535, "502", NULL, NULL, "modbus",
+	  "TCP port of the Modbus device" },
+	{ S_SOURCE, "unit_id", K_INT, SRC(unit_id), 0, 0, 255, "1", NULL, NULL, "modbus",
+	  "Modbus unit identifier of the requests" },
+	{ S_SOURCE, "register_type", K_ENUM, SRC(register_type), 0, 0, 0, "holding", NULL, e_regtype, "modbus",
+	  "holding (function 3) or input (function 4) registers" },
+	{ S_SOURCE, "sensors", K_INT, SRC(sensors), 0, 1, 16, "1", NULL, NULL, "modbus can",
+	  "poses the device reports; they are sensors pose0, pose1, ..." },
+	{ S_SOURCE, "sensor_stride", K_INT, SRC(sensor_stride), 0, 0, 65535, "0", NULL, NULL, "modbus",
+	  "registers from one sensor's position (and orientation) to the next's; needed when sensors > 1" },
+	{ S_SOURCE, "position_register", K_INT, SRC(pos_register), 0, 0, 65535, "0", NULL, NULL, "modbus",
+	  "first register of the position x, y, z (0-based protocol address)" },
+	{ S_SOURCE, "position_format", K_ENUM, SRC(pos_format), 0, 0, 0, "int16", NULL, e_regfmt, "modbus",
+	  "type of each position value (32-bit types take two registers)" },
+	{ S_SOURCE, "position_scale", K_DOUBLE, SRC(pos_scale), 0, 1e-9, 1e3, "0.001", "m", NULL, "modbus can",
+	  "metres per count of a position value (0.0001 for 0.1 mm)" },
+	{ S_SOURCE, "orientation_register", K_INT, SRC(ori_register), 0, 0, 65535, "3", NULL, NULL, "modbus",
+	  "first register of the orientation values (0-based protocol address)" },
+	{ S_SOURCE, "orientation_format", K_ENUM, SRC(ori_format), 0, 0, 0, "int16", NULL, e_regfmt, "modbus",
+	  "type of each orientation value" },
+	{ S_SOURCE, "orientation_scale", K_DOUBLE, SRC(ori_scale), 0, 1e-12, 1e3, "0.001", NULL, NULL, "modbus",
+	  "radians per count (rotvec, rpy) or quaternion units per count (quat_*)" },
+	{ S_SOURCE, "orientation", K_ENUM, SRC(orientation), 0, 0, 0, "rotvec", NULL, e_ori, "modbus",
+	  "rotvec (rx ry rz, axis times angle), quat_wxyz, quat_xyzw, rpy (roll pitch yaw about fixed x, y, z) or none" },
+	{ S_SOURCE, "word_order", K_ENUM, SRC(word_order), 0, 0, 0, "abcd", NULL, e_word, "modbus",
+	  "byte order of 32-bit values over two registers, A = most significant byte" },
+	{ S_SOURCE, "poll_rate", K_DOUBLE, SRC(poll_rate), 0, 0.1, 1000, "50", "Hz", NULL, "modbus",
+	  "requests per second" },
+	{ S_SOURCE, "timeout_ms", K_DOUBLE, SRC(timeout_ms), 0, 1, 60000, "200", "ms", NULL, "modbus",
+	  "a response (or a connection) taking longer fails; the connection is then made again" },
+	{ S_SOURCE, "interface", K_STR, SRC(interface), 0, 0, 0, NULL, NULL, NULL, "can",
+	  "SocketCAN interface (can0), or fd:N for an inherited descriptor (required)" },
+	{ S_SOURCE, "orientation_id", K_INT, SRC(ori_id), 0, 0, 536870911, "0x200", NULL, NULL, "can",
+	  "CAN identifier of sensor 0's orientation frame; sensor k uses orientation_id + k" },
+	{ S_SOURCE, "position_id", K_INT, SRC(pos_id), 0, -1, 536870911, "0x280", NULL, NULL, "can",
+	  "CAN identifier of sensor 0's position frame; sensor k uses position_id + k; -1: orientation only" },
+	{ S_SOURCE, "quaternion_scale", K_DOUBLE, SRC(quat_scale), 0, 1, 1e9, "32768", NULL, NULL, "can",
+	  "the count that stands for 1.0 in a quaternion component (16384 for a BNO055)" },
+	{ S_SOURCE, "quaternion_order", K_ENUM, SRC(quat_order), 0, 0, 0, "wxyz", NULL, e_quat, "can",
+	  "order of the four components in the orientation frame" },
+	{ S_SOURCE, "extended_ids", K_BOOL, SRC(extended_ids), 0, 0, 0, "no", NULL, NULL, "can",
+	  "29-bit CAN identifiers instead of 11-bit" },
 
 	{ S_AVATAR, "id", K_INT, AV(id), 0, 0, 65535, "auto", NULL, NULL, NULL,
 	  "avatar id on the wire (auto: one more than the previous avatar's)" },
@@ -167,13 +216,14 @@ static const struct key_def keys[] = {
 	  "Newton iterations tried from the previous frame before the closed-form search" },
 
 	{ S_OUTPUT, "type", K_ENUM, OUT(type), 0, 0, 0, NULL, NULL, e_out, NULL,
-	  "udp (unicast), multicast, tcp or unix (streams: u32 length + message)" },
-	{ S_OUTPUT, "address", K_STR, OUT(address), 0, 0, 0, "127.0.0.1", NULL, NULL, "udp multicast tcp",
-	  "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp: listen address" },
-	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "7770", NULL, NULL, "udp multicast tcp",
-	  "UDP destination port or TCP listening port" },
-	{ S_OUTPUT, "interface", K_STR, OUT(interface), 0, 0, 0, "", NULL, NULL, "multicast",
-	  "network interface for multicast (empty: the kernel's choice)" },
+	  "udp (unicast), multicast, tcp or unix (streams: u32 length + message), modbus (a Modbus TCP server) "
+	  "or can (SocketCAN frames)" },
+	{ S_OUTPUT, "address", K_STR, OUT(address), 0, 0, 0, "127.0.0.1", NULL, NULL, "udp multicast tcp modbus",
+	  "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: listen address" },
+	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "7770", NULL, NULL, "udp multicast tcp modbus",
+	  "UDP destination port or TCP listening port (modbus: required)" },
+	{ S_OUTPUT, "interface", K_STR, OUT(interface), 0, 0, 0, "", NULL, NULL, "multicast can",
+	  "multicast: network interface (empty: the kernel's choice); can: CAN interface or fd:N (required)" },
 	{ S_OUTPUT, "ttl", K_INT, OUT(ttl), 0, 0, 255, "1", NULL, NULL, "multicast",
 	  "multicast hop limit" },
 	{ S_OUTPUT, "loopback", K_BOOL, OUT(mcast_loop), 0, 0, 0, "yes", NULL, NULL, "multicast",
@@ -182,12 +232,30 @@ static const struct key_def keys[] = {
 	  "send runs of equal-length messages as one buffer the kernel cuts into datagrams (UDP_SEGMENT); off by itself where refused" },
 	{ S_OUTPUT, "path", K_PATH, OUT(path), 0, 0, 0, "/run/avatargw/stream", NULL, NULL, "unix",
 	  "Unix socket path to listen on" },
-	{ S_OUTPUT, "max_clients", K_INT, OUT(max_clients), 0, 1, 256, "8", NULL, NULL, "tcp unix",
-	  "stream subscribers at most; more are refused" },
+	{ S_OUTPUT, "max_clients", K_INT, OUT(max_clients), 0, 1, 256, "8", NULL, NULL, "tcp unix modbus",
+	  "stream subscribers (Modbus clients) at most; more are refused" },
 	{ S_OUTPUT, "client_buffer", K_INT, OUT(client_buffer), 0, 4096, 16777216, "65536", "bytes", NULL,
 	  "tcp unix", "per-subscriber buffer; messages that do not fit are dropped and counted" },
 	{ S_OUTPUT, "decimate", K_INT, OUT(decimate), 0, 1, 1000, "1", NULL, NULL, NULL,
 	  "publish every n-th frame" },
+	{ S_OUTPUT, "register_base", K_INT, OUT(reg_base), 0, 0, 65535, "0", NULL, NULL, "modbus",
+	  "input register (0-based) where the first avatar's block starts (docs/MODBUS.md)" },
+	{ S_OUTPUT, "register_stride", K_INT, OUT(reg_stride), 0, 66, 65536, "100", NULL, NULL, "modbus",
+	  "registers from one avatar's block to the next's (a block uses 66)" },
+	{ S_OUTPUT, "word_order", K_ENUM, OUT(word_order), 0, 0, 0, "abcd", NULL, e_word, "modbus",
+	  "byte order of 32-bit values over two registers, A = most significant byte" },
+	{ S_OUTPUT, "writable_registers", K_INT, OUT(writable_regs), 0, 0, 10000, "0", NULL, NULL, "modbus",
+	  "holding registers clients may write and read back (the daemon acts on none); 0: writes refused" },
+	{ S_OUTPUT, "idle_timeout", K_DOUBLE, OUT(idle_timeout), 0, 0, 86400, "60", "s", NULL, "modbus",
+	  "a client that sends no request for this long is disconnected; 0: never" },
+	{ S_OUTPUT, "base_id", K_INT, OUT(base_id), 0, 0, 536870911, "0x100", NULL, NULL, "can",
+	  "CAN identifier of the first avatar's status frame; its joint frames follow (docs/CAN.md)" },
+	{ S_OUTPUT, "extended_ids", K_BOOL, OUT(extended_ids), 0, 0, 0, "no", NULL, NULL, "can",
+	  "29-bit CAN identifiers instead of 11-bit" },
+	{ S_OUTPUT, "safe", K_BOOL, OUT(safe), 0, 0, 0, "yes", NULL, NULL, "can",
+	  "clamp to the joint limits, limit the speed, send nothing stale, held, unreached or unknown" },
+	{ S_OUTPUT, "max_speed", K_DEG, OUT(max_speed), 0, 1, 3600, "90", "deg/s", NULL, "can",
+	  "safe mode: fastest change of any joint's command" },
 	{ S_OUTPUT, "avatars", K_LIST, OUT(avatar_list), 0, 0, 0, "all", NULL, NULL, NULL,
 	  "avatar names to publish (space separated), or all" },
 };
@@ -585,8 +653,7 @@ static int set_value(struct section_ctx *s, const struct key_def *k, const char 
 	case K_STR:
 	case K_PATH:
 	case K_LIST: {
-		size_t cap = k->kind == K_STR && s->sect == S_OUTPUT && !strcmp(k->name, "interface") ? CFG_NAME_MAX
-											       : CFG_PATH_MAX;
+		size_t cap = k->kind == K_STR && !strcmp(k->name, "interface") ? CFG_NAME_MAX : CFG_PATH_MAX;
 		char *dst = obj + k->off;
 
 		if (strlen(value) >= cap)
@@ -894,6 +961,32 @@ static int resolve_output_avatars(struct parse *p, const char *full, struct cfg_
 	return 0;
 }
 
+/* the identifiers (can) or registers (modbus) of all the output's avatars must exist */
+static int check_bus_output(struct parse *p, const char *full, const struct cfg_output *o)
+{
+	const struct config *c = p->c;
+	const struct cfg_entry *t = entry_of(c, full, "type");
+	long n = o->n_avatars ? o->n_avatars : c->n_avatars, last;
+
+	if (!n)
+		return 0;
+	if (o->type == CFG_OUT_CAN) {
+		long max = o->extended_ids ? 0x1FFFFFFFL : 0x7FFL;
+
+		last = o->base_id + 8 * (n - 1) + 4; /* 8 identifiers per avatar, 5 used (docs/CAN.md) */
+		if (last > max)
+			return failf(p, t->where, "[%s] base_id: %ld avatars need identifiers up to 0x%lX, above 0x%lX%s",
+				     full, n, last, max, o->extended_ids ? "" : " (extended_ids = yes gives 29 bits)");
+	}
+	if (o->type == CFG_OUT_MODBUS) {
+		last = o->reg_base + (long)o->reg_stride * (n - 1) + 66 - 1; /* a block is 66 registers (docs/MODBUS.md) */
+		if (last > 65535)
+			return failf(p, t->where, "[%s] register_base, register_stride: %ld avatars need registers up "
+				     "to %ld, above 65535", full, n, last);
+	}
+	return 0;
+}
+
 static int build(struct parse *p)
 {
 	struct config *c = p->c;
@@ -1002,7 +1095,7 @@ static int build(struct parse *p)
 					return failf(p, e->where, "[%s]: more than %d outputs", e->section,
 						     CFG_MAX_OUTPUTS);
 				if (!t)
-					return failf(p, e->where, "[%s] type: missing (udp, multicast, tcp or unix)",
+					return failf(p, e->where, "[%s] type: missing (udp, multicast, tcp, unix, modbus or can)",
 						     e->section);
 				o = &c->output[c->n_outputs];
 				memset(o, 0, sizeof(*o));
@@ -1022,7 +1115,14 @@ static int build(struct parse *p)
 						return failf(p, t->where, "[%s] address: missing (a multicast group)",
 							     e->section);
 				}
-				if (apply_section(&s) || resolve_output_avatars(p, e->section, o)) {
+				if (o->type == CFG_OUT_MODBUS && !entry_of(c, e->section, "port"))
+					return failf(p, t->where, "[%s] port: missing (Modbus TCP's own port 502 needs "
+						     "CAP_NET_BIND_SERVICE; 1502 is usual otherwise)", e->section);
+				if (o->type == CFG_OUT_CAN && !entry_of(c, e->section, "interface"))
+					return failf(p, t->where, "[%s] interface: missing (a CAN interface such as can0)",
+						     e->section);
+				if (apply_section(&s) || resolve_output_avatars(p, e->section, o) ||
+				    check_bus_output(p, e->section, o)) {
 					free(o->avatar_ids); /* not counted in n_outputs: config_free would miss it */
 					o->avatar_ids = NULL;
 					return -1;

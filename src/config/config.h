@@ -64,7 +64,38 @@ struct cfg_source {
 	double speed;
 	bool loop;
 	double start;           /* s into the file */
+	/* modbus (a Modbus TCP device polled for poses) */
+	char address[CFG_PATH_MAX]; /* host of the device */
+	int port;
+	int unit_id;
+	int register_type;      /* enum cfg_reg_type */
+	int sensors;            /* modbus, can: poses read */
+	int sensor_stride;      /* registers from one sensor's block to the next */
+	int pos_register;
+	int pos_format;         /* enum cfg_reg_format */
+	double pos_scale;       /* modbus, can: m per count */
+	int ori_register;
+	int ori_format;
+	double ori_scale;       /* rad (or unit quaternion) per count */
+	int orientation;        /* enum cfg_orientation */
+	int word_order;         /* enum cfg_word_order: 32-bit values */
+	double poll_rate;       /* Hz */
+	double timeout_ms;
+	/* can (SocketCAN frames) */
+	char interface[CFG_NAME_MAX]; /* "can0", or "fd:N" for an inherited descriptor */
+	int ori_id;             /* sensor k's orientation frame: ori_id + k */
+	int pos_id;             /* sensor k's position frame: pos_id + k; -1: none */
+	double quat_scale;      /* the count that stands for 1.0 */
+	int quat_order;         /* enum cfg_quat_order */
+	bool extended_ids;      /* 29-bit identifiers */
 };
+
+/* how 32-bit values lie in two 16-bit registers (A = most significant byte) */
+enum cfg_word_order { CFG_WORD_ABCD, CFG_WORD_CDAB, CFG_WORD_BADC, CFG_WORD_DCBA };
+enum cfg_reg_type { CFG_REGS_HOLDING, CFG_REGS_INPUT };
+enum cfg_reg_format { CFG_REG_INT16, CFG_REG_UINT16, CFG_REG_INT32, CFG_REG_UINT32, CFG_REG_FLOAT32 };
+enum cfg_orientation { CFG_ORI_ROTVEC, CFG_ORI_QUAT_WXYZ, CFG_ORI_QUAT_XYZW, CFG_ORI_RPY, CFG_ORI_NONE };
+enum cfg_quat_order { CFG_QUAT_WXYZ, CFG_QUAT_XYZW };
 
 /* a sensor reference: a source and one of its sensors */
 struct cfg_sensor_ref {
@@ -91,7 +122,7 @@ struct cfg_avatar {
 	int warm_iter;
 };
 
-enum cfg_output_type { CFG_OUT_UDP, CFG_OUT_MULTICAST, CFG_OUT_TCP, CFG_OUT_UNIX };
+enum cfg_output_type { CFG_OUT_UDP, CFG_OUT_MULTICAST, CFG_OUT_TCP, CFG_OUT_UNIX, CFG_OUT_MODBUS, CFG_OUT_CAN };
 
 struct cfg_output {
 	char name[CFG_NAME_MAX];
@@ -99,7 +130,7 @@ struct cfg_output {
 	struct cfg_where where;
 	char address[CFG_PATH_MAX]; /* udp/multicast: destination; tcp: listen address */
 	int port;
-	char interface[CFG_NAME_MAX];
+	char interface[CFG_NAME_MAX]; /* multicast: network interface; can: CAN interface or fd:N */
 	int ttl;
 	bool mcast_loop;
 	bool gso;
@@ -107,6 +138,17 @@ struct cfg_output {
 	int max_clients;
 	int client_buffer;          /* bytes per stream client */
 	int decimate;               /* publish every n-th frame */
+	/* modbus */
+	int reg_base;               /* input register of the first avatar's block */
+	int reg_stride;             /* registers from one avatar's block to the next */
+	int word_order;             /* enum cfg_word_order */
+	int writable_regs;          /* holding registers clients may write, 0: writes refused */
+	double idle_timeout;        /* s, 0: never */
+	/* can */
+	int base_id;                /* first CAN identifier */
+	bool extended_ids;
+	bool safe;                  /* clamp, limit the speed, send nothing stale */
+	double max_speed;           /* rad/s per joint (safe mode) */
 	/* which avatars: all when n_avatars == 0 */
 	int n_avatars;
 	uint16_t *avatar_ids;       /* resolved ids */

@@ -17,7 +17,7 @@
 
 static const char *const tracker_states[] = { "OK", "STALE", "FAULTY", "ENDED" };
 static const char *const sensor_states[] = { "OK", "STALE", "FAULTY" };
-static const char *const out_types[] = { "udp", "multicast", "tcp", "unix" };
+static const char *const out_types[] = { "udp", "multicast", "tcp", "unix", "modbus", "can" };
 
 void ctl_resolve_path(const char *configured, char *out, size_t len)
 {
@@ -159,11 +159,14 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 			struct tracker *t = &g->trk[i];
 
 			fprintf(out, "%s{\"name\":\"%s\",\"driver\":\"%s\",\"state\":\"%s\",\"sensors\":%d,"
-				"\"samples\":%llu,\"rate_hz\":%.2f,\"malformed\":%llu,\"faults\":%llu}",
+				"\"samples\":%llu,\"rate_hz\":%.2f,\"malformed\":%llu,\"faults\":%llu",
 				i ? "," : "", t->name, t->drv->name,
 				tracker_states[atomic_load_explicit(&t->st.state, memory_order_relaxed) & 3], t->n_sensors,
 				(unsigned long long)stat_get(&t->st.samples), r && i < r->n_trackers ? r->trk_rate[i] : 0.0,
 				(unsigned long long)stat_get(&t->st.malformed), (unsigned long long)stat_get(&t->st.faults));
+			if (t->drv->report)
+				t->drv->report(t, out, true);
+			fputc('}', out);
 		}
 		fputs("],\"avatars\":[", out);
 		for (int i = 0; i < g->n_avatars; i++) {
@@ -191,12 +194,15 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 			struct output *o = &g->out[i];
 
 			fprintf(out, "%s{\"name\":\"%s\",\"type\":\"%s\",\"sent\":%llu,\"dropped\":%llu,\"errors\":%llu,"
-				"\"clients\":%llu,\"accepted\":%llu,\"refused\":%llu,\"closed\":%llu,\"gso_off\":%llu}",
+				"\"clients\":%llu,\"accepted\":%llu,\"refused\":%llu,\"closed\":%llu,\"gso_off\":%llu",
 				i ? "," : "", o->name, out_types[o->cfg->type], (unsigned long long)stat_get(&o->st.sent),
 				(unsigned long long)stat_get(&o->st.dropped), (unsigned long long)stat_get(&o->st.errors),
 				(unsigned long long)stat_get(&o->st.clients), (unsigned long long)stat_get(&o->st.accepted),
 				(unsigned long long)stat_get(&o->st.refused), (unsigned long long)stat_get(&o->st.closed),
 				(unsigned long long)stat_get(&o->st.gso_off));
+			if (o->ops->report)
+				o->ops->report(o, out, true);
+			fputc('}', out);
 		}
 		fputs("]}\n", out);
 		return;
@@ -241,6 +247,12 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 			(unsigned long long)stat_get(&o->st.sent), (unsigned long long)stat_get(&o->st.dropped),
 			(unsigned long long)stat_get(&o->st.errors), (unsigned long long)stat_get(&o->st.clients));
 	}
+	for (int i = 0; i < g->n_trackers; i++)
+		if (g->trk[i].drv->report)
+			g->trk[i].drv->report(&g->trk[i], out, false);
+	for (int i = 0; i < g->n_outputs; i++)
+		if (g->out[i].ops->report)
+			g->out[i].ops->report(&g->out[i], out, false);
 }
 
 void ctl_serve(int lfd, const struct ctl_info *info, bool *want_reload)

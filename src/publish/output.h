@@ -16,6 +16,7 @@
 
 #include <stdatomic.h>
 #include <stdint.h>
+#include <stdio.h>
 
 struct out_msg {
 	const uint8_t *data;
@@ -50,6 +51,12 @@ struct output_ops {
 	void (*service)(struct output *o);
 	/* moves what subscribers hold from old to o (a reload keeps them); may be NULL */
 	bool (*adopt)(struct output *o, struct output *old);
+	/*
+	 * The transport's own counters for avatargw-ctl status (control
+	 * thread): JSON members after a comma (",\"x\":1"), or one line of
+	 * text. May be NULL.
+	 */
+	void (*report)(struct output *o, FILE *out, bool json);
 };
 
 struct output {
@@ -72,6 +79,8 @@ static inline void ctr_add_out(_Atomic uint64_t *c, uint64_t n)
 
 extern const struct output_ops udp_output_ops;
 extern const struct output_ops stream_output_ops;
+extern const struct output_ops modbus_output_ops;
+extern const struct output_ops can_output_ops;
 
 /* start-up: opens the transport; wants[] from the config's avatar list (ids by index) */
 /* old: an output of the configuration being replaced, whose subscribers this one may take over */

@@ -16,6 +16,7 @@
 #include "ik/dq.h"
 
 #include <stdatomic.h>
+#include <stdio.h>
 
 struct tracker;
 
@@ -58,6 +59,12 @@ struct tracker_driver {
 	int (*poll)(struct tracker *t, const struct tracker_clock *now);
 	/* a descriptor that becomes readable when samples arrive (event mode), or -1 */
 	int (*fd)(struct tracker *t);
+	/*
+	 * The driver's own counters for avatargw-ctl status (control thread):
+	 * JSON members after a comma (",\"x\":1"), or one line of text. May
+	 * be NULL.
+	 */
+	void (*report)(struct tracker *t, FILE *out, bool json);
 };
 
 struct tracker_stats {
@@ -104,5 +111,7 @@ static inline uint64_t ctr_get(_Atomic uint64_t *c)
 
 extern const struct tracker_driver sim_driver;
 extern const struct tracker_driver replay_driver;
+extern const struct tracker_driver modbus_driver;
+extern const struct tracker_driver can_driver;
 
 #endif /* AGW_TRACKER_H */

@@ -13,6 +13,8 @@
 const struct tracker_driver *const trackers_table[] = {
 	&sim_driver,
 	&replay_driver,
+	&modbus_driver,
+	&can_driver,
 };
 
 const int trackers_count = (int)(sizeof(trackers_table) / sizeof(trackers_table[0]));
