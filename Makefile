@@ -65,6 +65,7 @@ MODBUS_LIBS = $(shell pkg-config --libs libmodbus 2>/dev/null || echo -lmodbus)
 LWS_LIBS = $(shell pkg-config --libs libwebsockets 2>/dev/null || echo -lwebsockets)
 LO_LIBS = $(shell pkg-config --libs liblo 2>/dev/null || echo -llo)
 DEP_LIBS = $(INIH_LIBS)
+DEP_LIBS += $(LO_LIBS)
 LIBS = $(DEP_LIBS) -lpthread -lm
 GW_SRC = $(filter-out src/daemon/main.c,$(wildcard src/wire/*.c src/config/*.c src/trackers/*.c \
 	src/frames/*.c src/publish/*.c src/daemon/*.c))
@@ -141,6 +142,12 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
 	@mkdir -p $(dir $@)
 	$(CXX) $(LDFLAGS) $(TEST_LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) $(LIBS)
 
+# helper programs of the tests (peers built on the same libraries as the daemon)
+TEST_HELPERS = $(BUILD)/tests/osc-recv
+$(BUILD)/tests/osc-recv: tests/helpers/osc_recv.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -D_GNU_SOURCE $(LDFLAGS) -o $@ $< $(LO_LIBS)
+
 # test_alloc counts every allocation made by our code: wrapped at link time
 $(BUILD)/tests/test_alloc: TEST_LDFLAGS = -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free
 
@@ -162,7 +169,7 @@ check-core: $(LIBIK)
 E2E_TESTS = $(wildcard tests/e2e/test_*.py)
 CHECK_SCRIPTS = $(wildcard tests/check-*.sh) tests/service/verify-unit.sh tools/check-man.sh
 
-test: all $(TEST_BIN) check-core
+test: all $(TEST_BIN) $(TEST_HELPERS) check-core
 	@BUILD=$(BUILD) tests/run.sh $(TEST_BIN) $(E2E_TESTS) $(CHECK_SCRIPTS)
 
 bench: $(BUILD)/avatargw-ikbench $(DAEMON) $(BUILD)/avatargw-dump $(BUILD)/avatargw-ctl
