@@ -66,6 +66,7 @@ LWS_LIBS = $(shell pkg-config --libs libwebsockets 2>/dev/null || echo -lwebsock
 LO_LIBS = $(shell pkg-config --libs liblo 2>/dev/null || echo -llo)
 DEP_LIBS = $(INIH_LIBS)
 DEP_LIBS += $(LO_LIBS)
+DEP_LIBS += $(LWS_LIBS)
 LIBS = $(DEP_LIBS) -lpthread -lm
 GW_SRC = $(filter-out src/daemon/main.c,$(wildcard src/wire/*.c src/config/*.c src/trackers/*.c \
 	src/frames/*.c src/publish/*.c src/daemon/*.c))
@@ -150,6 +151,10 @@ $(BUILD)/tests/osc-recv: tests/helpers/osc_recv.c
 
 # test_alloc counts every allocation made by our code: wrapped at link time
 $(BUILD)/tests/test_alloc: TEST_LDFLAGS = -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free
+# ... and on the renderer outputs' side, also the library calls that must stay off the loop thread
+$(BUILD)/tests/test_alloc_renderers: TEST_LDFLAGS = -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free \
+	-Wl,--wrap=lo_message_new,--wrap=lo_send_message,--wrap=lo_send_bundle \
+	-Wl,--wrap=lws_write,--wrap=lws_callback_on_writable_all_protocol
 
 # ---- top-level targets --------------------------------------------------------
 .SECONDARY:
@@ -200,12 +205,14 @@ SYSUSERSDIR ?= $(PREFIX)/lib/sysusers.d
 UDEVRULESDIR ?= $(PREFIX)/lib/udev/rules.d
 INSTALL_CONF = config/avatargw.conf
 INSTALL_CLIPS = $(wildcard config/clips/*)
+INSTALL_WWW = $(wildcard www/*)
 INSTALL_MAN8 = docs/man/avatargw.8
 INSTALL_MAN5 = docs/man/avatargw.conf.5
 
 install: all
 	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(SBINDIR) $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCLUDEDIR)/avatargw/ik
-	install -d $(DESTDIR)$(DATADIR)/avatargw/clips $(DESTDIR)$(MANDIR)/man8 $(DESTDIR)$(MANDIR)/man5
+	install -d $(DESTDIR)$(DATADIR)/avatargw/clips $(DESTDIR)$(DATADIR)/avatargw/www
+	install -d $(DESTDIR)$(MANDIR)/man8 $(DESTDIR)$(MANDIR)/man5
 	install -d $(DESTDIR)$(SYSTEMDUNITDIR) $(DESTDIR)$(SYSUSERSDIR) $(DESTDIR)$(UDEVRULESDIR)
 	install -d -m 0755 $(DESTDIR)$(SYSCONFDIR)/avatargw $(DESTDIR)$(SYSCONFDIR)/avatargw/conf.d
 	install -m 0755 $(DAEMON) $(DESTDIR)$(SBINDIR)/
@@ -214,6 +221,7 @@ install: all
 	install -m 0644 include/ik/*.h $(DESTDIR)$(INCLUDEDIR)/avatargw/ik/
 	install -m 0644 config/limits-human.txt config/demo.conf $(INSTALL_CONF) $(DESTDIR)$(DATADIR)/avatargw/
 	install -m 0644 $(INSTALL_CLIPS) $(DESTDIR)$(DATADIR)/avatargw/clips/
+	install -m 0644 $(INSTALL_WWW) $(DESTDIR)$(DATADIR)/avatargw/www/
 	install -m 0644 $(INSTALL_MAN8) $(DESTDIR)$(MANDIR)/man8/
 	install -m 0644 $(INSTALL_MAN5) $(DESTDIR)$(MANDIR)/man5/
 	sed 's|@sbindir@|$(SBINDIR)|g' systemd/avatargw.service >$(DESTDIR)$(SYSTEMDUNITDIR)/avatargw.service
@@ -238,7 +246,8 @@ uninstall:
 	rmdir $(DESTDIR)$(INCLUDEDIR)/avatargw/ik $(DESTDIR)$(INCLUDEDIR)/avatargw 2>/dev/null || true
 	rm -f $(addprefix $(DESTDIR)$(DATADIR)/avatargw/,limits-human.txt demo.conf $(notdir $(INSTALL_CONF)))
 	rm -f $(addprefix $(DESTDIR)$(DATADIR)/avatargw/clips/,$(notdir $(INSTALL_CLIPS)))
-	rmdir $(DESTDIR)$(DATADIR)/avatargw/clips $(DESTDIR)$(DATADIR)/avatargw 2>/dev/null || true
+	rm -f $(addprefix $(DESTDIR)$(DATADIR)/avatargw/www/,$(notdir $(INSTALL_WWW)))
+	rmdir $(DESTDIR)$(DATADIR)/avatargw/clips $(DESTDIR)$(DATADIR)/avatargw/www $(DESTDIR)$(DATADIR)/avatargw 2>/dev/null || true
 	rm -f $(DESTDIR)$(MANDIR)/man8/$(notdir $(INSTALL_MAN8)) $(DESTDIR)$(MANDIR)/man5/$(notdir $(INSTALL_MAN5))
 	rm -f $(DESTDIR)$(SYSTEMDUNITDIR)/avatargw.service
 	rm -f $(DESTDIR)$(SYSUSERSDIR)/avatargw.conf

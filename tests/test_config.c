@@ -1015,6 +1015,18 @@ static void test_builtin_demo(void **state)
 	assert_int_equal(c->source[clip].driver, trackers_find("replay"));
 	assert_string_equal(c->source[clip].file, "builtin:cmu_141_16.csv"); /* not made relative */
 	assert_true(c->n_avatars >= 1);
+	/* make run shows the browser viewer: the demo has one, on this host only */
+	{
+		int v = -1;
+
+		for (int i = 0; i < c->n_outputs; i++)
+			if (c->output[i].type == CFG_OUT_WEBSOCKET)
+				v = i;
+		assert_true(v >= 0);
+		assert_string_equal(c->output[v].name, "viewer");
+		assert_string_equal(c->output[v].address, "127.0.0.1");
+		assert_int_equal(c->output[v].port, 7780);
+	}
 	config_free(&f->c);
 	assert_int_equal(config_load_ex(&f->c, "builtin:nothing.conf", NULL, 0, f->err, sizeof(f->err)), -1);
 	assert_has(f->err, "builtin:nothing.conf: no such builtin configuration");

@@ -324,15 +324,29 @@ static void send_vmc(struct output *o, struct osc *s, const struct snap_entry *e
 	lo_bundle_free_recursive(bundle);
 }
 
+static void send_vec(struct output *o, struct osc *s, const char *path, struct v3 v)
+{
+	lo_message m = lo_message_new();
+
+	if (!m) {
+		count(o, s, -1);
+		return;
+	}
+	lo_message_add_float(m, (float)v.x);
+	lo_message_add_float(m, (float)v.y);
+	lo_message_add_float(m, (float)v.z);
+	count(o, s, lo_send_message(s->addr, path, m));
+	lo_message_free(m);
+}
+
 static void send_tracker(struct output *o, struct osc *s, const char *id, struct v3 p, struct qd q)
 {
 	char path[64];
-	struct v3 eul = unity_euler(q);
 
 	snprintf(path, sizeof(path), "/tracking/trackers/%s/position", id);
-	count(o, s, lo_send(s->addr, path, "fff", (float)p.x, (float)p.y, (float)p.z));
+	send_vec(o, s, path, p);
 	snprintf(path, sizeof(path), "/tracking/trackers/%s/rotation", id);
-	count(o, s, lo_send(s->addr, path, "fff", (float)eul.x, (float)eul.y, (float)eul.z));
+	send_vec(o, s, path, unity_euler(q));
 }
 
 /* VRChat: trackers 1 chest (the chest segment), 2 left elbow, 3 right elbow (the forearms at the

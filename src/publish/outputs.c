@@ -17,6 +17,7 @@ static const struct output_ops *const outputs_table[] = {
 	[CFG_OUT_VRPN] = &vrpn_output_ops,
 	[CFG_OUT_VMC] = &vmc_output_ops,
 	[CFG_OUT_VRCHAT] = &vrchat_output_ops,
+	[CFG_OUT_WEBSOCKET] = &websocket_output_ops,
 };
 
 int output_open(struct output *o, const struct cfg_output *cfg, const uint16_t *avatar_ids, int n_avatars,

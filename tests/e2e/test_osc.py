@@ -217,6 +217,8 @@ class OscTest(unittest.TestCase):
         msgs = [(p, a) for p, a in self.vrc if p not in ("bundle", "end")]
         self.assertEqual(len(msgs), len(self.vrc), "VRChat gets plain messages, not bundles")
         groups = [msgs[i:i + 8] for i in range(0, len(msgs), 8)]
+        if groups and len(groups[-1]) < 8:
+            groups.pop()  # the receiver stopped in the middle of one
         self.assertGreater(len(groups), 40)
         self.assertLessEqual(len(groups), 85)
         want_paths = ["/tracking/trackers/%s/%s" % (t, k) for t in ("1", "2", "3", "head")

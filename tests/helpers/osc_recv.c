@@ -10,8 +10,10 @@
  */
 #include <lo/lo.h>
 
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 static int on_message(const char *path, const char *types, lo_arg **argv, int argc, lo_message msg, void *user)
@@ -20,15 +22,22 @@ static int on_message(const char *path, const char *types, lo_arg **argv, int ar
 	(void)user;
 	printf("%s %s", path, types);
 	for (int i = 0; i < argc; i++) {
+		/* liblo's arguments are only 4-byte aligned: read them as bytes, not through the union */
+		const void *a = argv[i];
+		float f;
+		int32_t n;
+
 		switch (types[i]) {
 		case 'f':
-			printf(" %.9g", argv[i]->f);
+			memcpy(&f, a, sizeof(f));
+			printf(" %.9g", f);
 			break;
 		case 'i':
-			printf(" %d", argv[i]->i);
+			memcpy(&n, a, sizeof(n));
+			printf(" %d", n);
 			break;
 		case 's':
-			printf(" %s", &argv[i]->s);
+			printf(" %s", (const char *)a);
 			break;
 		default:
 			printf(" ?");
