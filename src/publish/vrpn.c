@@ -865,8 +865,8 @@ static void vrpn_service(struct output *o)
 	struct vmap *m = vrpn_map(o, v);
 	uint64_t now = mono_ns();
 
-	/* clients that connect to us */
-	for (;;) {
+	/* clients that connect to us (a bounded number per cycle: a flood cannot hold the loop) */
+	for (int k = 0; k < 16; k++) {
 		struct sockaddr_storage peer;
 		socklen_t pl = sizeof(peer);
 		int fd = accept4(v->lfd, (struct sockaddr *)&peer, &pl, SOCK_NONBLOCK | SOCK_CLOEXEC), slot = -1;
@@ -888,7 +888,7 @@ static void vrpn_service(struct output *o)
 		vcl_connected(o, v, &v->cl[slot], now);
 	}
 	/* clients that ask us to connect to them */
-	for (;;) {
+	for (int k = 0; k < 16; k++) {
 		char msg[201];
 		struct sockaddr_storage from;
 		socklen_t fl = sizeof(from);

@@ -8,6 +8,7 @@ grey when its trackers go stale.
 
 Run from the repository root: python3 -m unittest tests/e2e/test_viewer.py"""
 import json
+import signal
 import math
 import os
 import socket
@@ -238,3 +239,62 @@ rate = 20
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class ViewerReloadTest(unittest.TestCase):
+    """a reload keeps the port and the browsers, and serves the new configuration"""
+
+    CONF = """
+[daemon]
+rate = 120
+[source sim]
+type = sim
+people = 2
+[avatar a]
+person = sim/p0
+count = 2
+[output viewer]
+type = websocket
+address = 127.0.0.1
+port = {port}
+avatars = {which}
+[output cave]
+type = vrpn
+address = 127.0.0.1
+port = {vport}
+"""
+
+    def test_reload_keeps_browsers(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            port, vport = free_port(socket.SOCK_STREAM), free_port(socket.SOCK_STREAM)
+            d = Daemon(tmp, self.CONF.format(port=port, vport=vport, which="a-0"))
+            ws = None
+            try:
+                ws = WsClient("127.0.0.1", port)
+                ids = set()
+                t0 = time.time()
+                while time.time() - t0 < 0.5:
+                    m = ws.recv_text(1.0)
+                    ids |= {a["id"] for a in json.loads(m)["avatars"]} if m else set()
+                self.assertEqual(ids, {0})
+                with open(d.conf, "w") as f:
+                    f.write(self.CONF.format(port=port, vport=vport, which="a-1"))
+                d.proc.send_signal(signal.SIGHUP)
+                deadline = time.time() + 5
+                while d.status()["reloads"] < 1 and time.time() < deadline:
+                    time.sleep(0.05)
+                self.assertEqual(d.status()["reloads"], 1, d.stderr())
+                # the same connection now carries the other avatar
+                ids = set()
+                t0 = time.time()
+                while time.time() - t0 < 0.7:
+                    m = ws.recv_text(1.0)
+                    if m:
+                        ids = {a["id"] for a in json.loads(m)["avatars"]}
+                self.assertEqual(ids, {1})
+                viewer = [o for o in d.status()["outputs"] if o["name"] == "viewer"][0]
+                self.assertEqual(viewer["clients"], 1)
+            finally:
+                if ws:
+                    ws.close()
+                self.assertEqual(d.stop(), 0)
