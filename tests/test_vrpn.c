@@ -370,6 +370,9 @@ static void test_device_names(void **state)
 		{ "Tracker", "names two avatars" },
 		{ "Avatar%s", "only %d" },
 		{ "%d-%%-%x", "only %d" },
+		/* 95 characters and the id: a description a VRPN client would refuse */
+		{ "AvatarAvatarAvatarAvatarAvatarAvatarAvatarAvatarAvatarAvatarAvatarAvatarAvatarAvatarAvatarAvata%d",
+		  "longer than the 95 characters" },
 	};
 
 	(void)state;

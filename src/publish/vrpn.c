@@ -56,6 +56,7 @@
 #define VRPN_HEADER_LEN 24              /* five be32 (length, sec, usec, sender, type), padded to 8 */
 #define VRPN_ALIGN 8
 #define VRPN_NAME_MAX 100               /* a name with its NUL (VRPN's cName) */
+#define VRPN_DEVICE_MAX 95              /* a peer refuses a description (length + name + NUL) over 100 */
 #define VRPN_ID_MAX 2000                /* VRPN's translation tables */
 #define VRPN_LONGEST 64000              /* no VRPN peer sends a longer message (its TCP buffer) */
 #define VRPN_UDP_MAX 1472               /* one Ethernet frame, as VRPN sends */
@@ -310,7 +311,7 @@ static int device_name(const char *pattern, unsigned id, char *out, size_t len, 
 		}
 		for (; *add; add++) {
 			if (n + 1 >= len) {
-				*why = "a device name is longer than VRPN's 99 characters";
+				*why = "a device name is longer than the 95 characters VRPN takes";
 				return -EINVAL;
 			}
 			out[n++] = *add;
@@ -342,7 +343,7 @@ static int map_build(struct vmap *m, const struct output *o, char *err, size_t e
 	}
 	for (int i = 0; i < m->n; i++) {
 		m->wants[i] = o->wants[i];
-		if (device_name(o->cfg->device, o->ids[i], m->name[i], VRPN_NAME_MAX, &why)) {
+		if (device_name(o->cfg->device, o->ids[i], m->name[i], VRPN_DEVICE_MAX + 1, &why)) {
 			snprintf(err, errlen, "[output %s] device: '%s': %s", o->name, o->cfg->device, why);
 			map_free(m);
 			return -EINVAL;
