@@ -73,7 +73,6 @@ void snap_put_batch(struct snap *s, const bool *wants, const struct out_msg *m, 
 			memset(e->analog, 0, sizeof(e->analog));
 		}
 		e->put_mono_ns = now_mono;
-		e->count = ++sl->count;
 		memcpy(e->name, sl->name, sizeof(e->name));
 		sl->back = atomic_exchange_explicit(&sl->mid, sl->back | SNAP_NEW, memory_order_acq_rel) & 3u;
 	}

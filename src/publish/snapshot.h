@@ -26,7 +26,6 @@ struct snap_entry {
 	uint32_t buttons[FRAME_SENSORS];
 	float analog[FRAME_SENSORS][SENSOR_ANALOG_MAX];
 	uint64_t put_mono_ns;                            /* when the loop handed it over */
-	uint32_t count;                                  /* frames put for this avatar so far */
 	char name[WIRE_NAME_MAX + 1];                    /* from its DESCRIBE; "" until one came */
 };
 
@@ -36,7 +35,6 @@ struct snap_slot {
 	unsigned back;             /* the writer's */
 	unsigned front;            /* the reader's */
 	bool seen;                 /* the reader has taken at least one */
-	uint32_t count;            /* writer: frames put */
 	char name[WIRE_NAME_MAX + 1]; /* writer: the avatar's name */
 };
 
