@@ -349,8 +349,11 @@ static void send_tracker(struct output *o, struct osc *s, const char *id, struct
 	send_vec(o, s, path, unity_euler(q));
 }
 
-/* VRChat: trackers 1 chest (the chest segment), 2 left elbow, 3 right elbow (the forearms at the
- * elbows), and the head for alignment */
+/*
+ * VRChat: trackers 1 chest (the chest segment), 2 left and 3 right elbow, and the head for
+ * alignment. VRChat's elbow trackers belong to the upper arms: each sits at the elbow and turns
+ * with the upper arm, so that bending the elbow does not twist it.
+ */
 static void send_vrchat(struct output *o, struct osc *s, const struct snap_entry *e)
 {
 	struct body b;
@@ -358,8 +361,8 @@ static void send_vrchat(struct output *o, struct osc *s, const struct snap_entry
 	if (!body_of(&e->f, 0.5, &b))
 		return;
 	send_tracker(o, s, "1", b.p[B_NECK], b.q[B_NECK]);
-	send_tracker(o, s, "2", b.p[B_L_LOWER_ARM], b.q[B_L_LOWER_ARM]);
-	send_tracker(o, s, "3", b.p[B_R_LOWER_ARM], b.q[B_R_LOWER_ARM]);
+	send_tracker(o, s, "2", b.p[B_L_LOWER_ARM], b.q[B_L_UPPER_ARM]);
+	send_tracker(o, s, "3", b.p[B_R_LOWER_ARM], b.q[B_R_UPPER_ARM]);
 	if (s->head && pose_ok(&e->f.segment[WIRE_SEG_HEAD]))
 		send_tracker(o, s, "head", b.p[B_HEAD], b.q[B_HEAD]);
 }

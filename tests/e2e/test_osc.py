@@ -240,11 +240,11 @@ class OscTest(unittest.TestCase):
             self.assertLess(qangle(qc, (-x, -z, -y, w)), 1e-5)
             w, x, y, z = f["sensors"][0]["q"]
             self.assertLess(qangle(euler_to_q(*g[7][1]), (-x, -z, -y, w)), 1e-5)
-            # an elbow tracker turns with the forearm: its +x points along the forearm to the wrist
-            for rot, elbow, wrist, sign in ((g[3][1], 7, 8, -1), (g[5][1], 3, 4, 1)):
+            # an elbow tracker turns with the upper arm: its +x (left: -x) runs from the shoulder to the elbow
+            for rot, shoulder, elbow, sign in ((g[3][1], 6, 7, -1), (g[5][1], 2, 3, 1)):
                 axis = qrot(euler_to_q(*rot), (sign, 0, 0))
-                d = normalize([a - b for a, b in zip(unity_pos(f["segments"][wrist]["p"]),
-                                                     unity_pos(f["segments"][elbow]["p"]))])
+                d = normalize([a - b for a, b in zip(unity_pos(f["segments"][elbow]["p"]),
+                                                     unity_pos(f["segments"][shoulder]["p"]))])
                 self.assertGreater(sum(a * b for a, b in zip(axis, d)), 0.99999)
 
     def test_status_counts(self):
