@@ -317,8 +317,16 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
 			break;
 		if (lws_send_pipe_choked(wsi))
 			break; /* still sending an older text: this one is skipped (the tick counts it) */
-		if (lws_write(wsi, (unsigned char *)w->text + LWS_PRE, w->len, LWS_WRITE_TEXT) < (int)w->len)
-			return -1;
+		{
+			int n;
+
+			/* under mu: a reload's adopt() may grow the text buffer */
+			pthread_mutex_lock(&w->mu);
+			n = lws_write(wsi, (unsigned char *)w->text + LWS_PRE, w->len, LWS_WRITE_TEXT);
+			pthread_mutex_unlock(&w->mu);
+			if (n < (int)w->len)
+				return -1;
+		}
 		s->gen = w->gen;
 		ws_count(w, offsetof(struct output_stats, sent), 1);
 		break;
