@@ -66,6 +66,8 @@ LWS_LIBS = $(shell pkg-config --libs libwebsockets 2>/dev/null || echo -lwebsock
 LO_LIBS = $(shell pkg-config --libs liblo 2>/dev/null || echo -llo)
 DEP_LIBS = $(INIH_LIBS)
 DEP_LIBS += $(MODBUS_LIBS)
+DEP_LIBS += $(LO_LIBS)
+DEP_LIBS += $(LWS_LIBS)
 LIBS = $(DEP_LIBS) -lpthread -lm
 GW_SRC = $(filter-out src/daemon/main.c,$(wildcard src/wire/*.c src/config/*.c src/trackers/*.c \
 	src/frames/*.c src/publish/*.c src/daemon/*.c))
@@ -142,9 +144,19 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
 	@mkdir -p $(dir $@)
 	$(CXX) $(LDFLAGS) $(TEST_LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) $(LIBS)
 
+# helper programs of the tests (peers built on the same libraries as the daemon)
+TEST_HELPERS = $(BUILD)/tests/osc-recv
+$(BUILD)/tests/osc-recv: tests/helpers/osc_recv.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -D_GNU_SOURCE $(LDFLAGS) -o $@ $< $(LO_LIBS)
+
 # test_alloc counts every allocation made by our code: wrapped at link time
 $(BUILD)/tests/test_alloc: TEST_LDFLAGS = -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free
 $(BUILD)/tests/test_udp: TEST_LDFLAGS = -Wl,--wrap=sendmmsg
+# ... and on the renderer outputs' side, also the library calls that must stay off the loop thread
+$(BUILD)/tests/test_alloc_renderers: TEST_LDFLAGS = -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free \
+	-Wl,--wrap=lo_message_new,--wrap=lo_send_message,--wrap=lo_send_bundle \
+	-Wl,--wrap=lws_write,--wrap=lws_callback_on_writable_all_protocol
 
 # ---- top-level targets --------------------------------------------------------
 .SECONDARY:
@@ -164,7 +176,7 @@ check-core: $(LIBIK)
 E2E_TESTS = $(wildcard tests/e2e/test_*.py)
 CHECK_SCRIPTS = $(wildcard tests/check-*.sh) tests/service/verify-unit.sh tools/check-man.sh
 
-test: all $(TEST_BIN) check-core
+test: all $(TEST_BIN) $(TEST_HELPERS) check-core
 	@BUILD=$(BUILD) tests/run.sh $(TEST_BIN) $(E2E_TESTS) $(CHECK_SCRIPTS)
 
 bench: $(BUILD)/avatargw-ikbench $(DAEMON) $(BUILD)/avatargw-dump $(BUILD)/avatargw-ctl
@@ -195,12 +207,14 @@ SYSUSERSDIR ?= $(PREFIX)/lib/sysusers.d
 UDEVRULESDIR ?= $(PREFIX)/lib/udev/rules.d
 INSTALL_CONF = config/avatargw.conf
 INSTALL_CLIPS = $(wildcard config/clips/*)
+INSTALL_WWW = $(wildcard www/*)
 INSTALL_MAN8 = docs/man/avatargw.8
 INSTALL_MAN5 = docs/man/avatargw.conf.5
 
 install: all
 	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(SBINDIR) $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCLUDEDIR)/avatargw/ik
-	install -d $(DESTDIR)$(DATADIR)/avatargw/clips $(DESTDIR)$(MANDIR)/man8 $(DESTDIR)$(MANDIR)/man5
+	install -d $(DESTDIR)$(DATADIR)/avatargw/clips $(DESTDIR)$(DATADIR)/avatargw/www
+	install -d $(DESTDIR)$(MANDIR)/man8 $(DESTDIR)$(MANDIR)/man5
 	install -d $(DESTDIR)$(SYSTEMDUNITDIR) $(DESTDIR)$(SYSUSERSDIR) $(DESTDIR)$(UDEVRULESDIR)
 	install -d -m 0755 $(DESTDIR)$(SYSCONFDIR)/avatargw $(DESTDIR)$(SYSCONFDIR)/avatargw/conf.d
 	install -m 0755 $(DAEMON) $(DESTDIR)$(SBINDIR)/
@@ -209,6 +223,7 @@ install: all
 	install -m 0644 include/ik/*.h $(DESTDIR)$(INCLUDEDIR)/avatargw/ik/
 	install -m 0644 config/limits-human.txt config/demo.conf $(INSTALL_CONF) $(DESTDIR)$(DATADIR)/avatargw/
 	install -m 0644 $(INSTALL_CLIPS) $(DESTDIR)$(DATADIR)/avatargw/clips/
+	install -m 0644 $(INSTALL_WWW) $(DESTDIR)$(DATADIR)/avatargw/www/
 	install -m 0644 $(INSTALL_MAN8) $(DESTDIR)$(MANDIR)/man8/
 	install -m 0644 $(INSTALL_MAN5) $(DESTDIR)$(MANDIR)/man5/
 	sed 's|@sbindir@|$(SBINDIR)|g' systemd/avatargw.service >$(DESTDIR)$(SYSTEMDUNITDIR)/avatargw.service
@@ -233,7 +248,8 @@ uninstall:
 	rmdir $(DESTDIR)$(INCLUDEDIR)/avatargw/ik $(DESTDIR)$(INCLUDEDIR)/avatargw 2>/dev/null || true
 	rm -f $(addprefix $(DESTDIR)$(DATADIR)/avatargw/,limits-human.txt demo.conf $(notdir $(INSTALL_CONF)))
 	rm -f $(addprefix $(DESTDIR)$(DATADIR)/avatargw/clips/,$(notdir $(INSTALL_CLIPS)))
-	rmdir $(DESTDIR)$(DATADIR)/avatargw/clips $(DESTDIR)$(DATADIR)/avatargw 2>/dev/null || true
+	rm -f $(addprefix $(DESTDIR)$(DATADIR)/avatargw/www/,$(notdir $(INSTALL_WWW)))
+	rmdir $(DESTDIR)$(DATADIR)/avatargw/clips $(DESTDIR)$(DATADIR)/avatargw/www $(DESTDIR)$(DATADIR)/avatargw 2>/dev/null || true
 	rm -f $(DESTDIR)$(MANDIR)/man8/$(notdir $(INSTALL_MAN8)) $(DESTDIR)$(MANDIR)/man5/$(notdir $(INSTALL_MAN5))
 	rm -f $(DESTDIR)$(SYSTEMDUNITDIR)/avatargw.service
 	rm -f $(DESTDIR)$(SYSUSERSDIR)/avatargw.conf

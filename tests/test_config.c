@@ -1166,6 +1166,18 @@ static void test_builtin_demo(void **state)
 	assert_int_equal(c->source[clip].driver, trackers_find("replay"));
 	assert_string_equal(c->source[clip].file, "builtin:cmu_141_16.csv"); /* not made relative */
 	assert_true(c->n_avatars >= 1);
+	/* make run shows the browser viewer: the demo has one, on this host only */
+	{
+		int v = -1;
+
+		for (int i = 0; i < c->n_outputs; i++)
+			if (c->output[i].type == CFG_OUT_WEBSOCKET)
+				v = i;
+		assert_true(v >= 0);
+		assert_string_equal(c->output[v].name, "viewer");
+		assert_string_equal(c->output[v].address, "127.0.0.1");
+		assert_int_equal(c->output[v].port, 7780);
+	}
 	config_free(&f->c);
 	assert_int_equal(config_load_ex(&f->c, "builtin:nothing.conf", NULL, 0, f->err, sizeof(f->err)), -1);
 	assert_has(f->err, "builtin:nothing.conf: no such builtin configuration");
@@ -1428,6 +1440,100 @@ static void test_first_error_reported(void **state)
 	expect_text_err(*state, "[daemon]\nrate 100\nrate = 1\nrate = 2\n", "e.conf:2: syntax error", NULL);
 }
 
+/* the renderer outputs: their keys, and defaults that differ by type */
+static void test_values_renderer_outputs(void **state)
+{
+	struct fx *f = *state;
+	const struct config *c = load_text_ok(f, "[source s]\ntype = sim\npeople = 2\n"
+						 "[avatar a]\nperson = s/p0\n"
+						 "[avatar b]\nperson = s/p1\n"
+						 "[output v]\ntype = vrpn\n"
+						 "[output v2]\ntype = vrpn\naddress = ::\nport = 3884\ndevice = Body%d\nudp = no\n"
+						 "client_timeout = 0.5\nmax_clients = 2\nclient_buffer = 4096\n"
+						 "[output m]\ntype = vmc\navatars = b\n"
+						 "[output m2]\ntype = vmc\naddress = 10.0.0.2\nport = 39540\nrate = 120\n"
+						 "torso = 0.45\navatars = a\n"
+						 "[output r]\ntype = vrchat\navatars = a\nhead = no\nrate = 240\n"
+						 "[output w]\ntype = websocket\n"
+						 "[output w2]\ntype = websocket\naddress = 0.0.0.0\nport = 8080\nrate = 60\n"
+						 "www = /srv/www\nthree = /opt/three\n");
+	const struct cfg_output *o = c->output;
+
+	assert_int_equal(c->n_outputs, 7);
+	assert_int_equal(o[0].type, CFG_OUT_VRPN);
+	assert_string_equal(o[0].address, "0.0.0.0");
+	assert_int_equal(o[0].port, 3883);
+	assert_string_equal(o[0].device, "Avatar%d");
+	assert_true(o[0].udp);
+	assert_true(o[0].client_timeout == 5);
+	assert_int_equal(o[0].max_clients, 8);
+	assert_int_equal(o[0].client_buffer, 65536);
+	assert_string_equal(o[1].address, "::");
+	assert_int_equal(o[1].port, 3884);
+	assert_string_equal(o[1].device, "Body%d");
+	assert_false(o[1].udp);
+	assert_true(o[1].client_timeout == 0.5);
+	assert_int_equal(o[1].max_clients, 2);
+	assert_int_equal(o[1].client_buffer, 4096);
+
+	assert_int_equal(o[2].type, CFG_OUT_VMC);
+	assert_string_equal(o[2].address, "127.0.0.1");
+	assert_int_equal(o[2].port, 39539);
+	assert_true(o[2].rate == 60);
+	assert_true(o[2].torso == 0.5);
+	assert_int_equal(o[2].n_avatars, 1);
+	assert_int_equal(o[2].avatar_ids[0], 1);
+	assert_string_equal(o[3].address, "10.0.0.2");
+	assert_int_equal(o[3].port, 39540);
+	assert_true(o[3].rate == 120);
+	assert_true(o[3].torso == 0.45);
+
+	assert_int_equal(o[4].type, CFG_OUT_VRCHAT);
+	assert_int_equal(o[4].port, 9000);
+	assert_false(o[4].head);
+	assert_true(o[4].rate == 240);
+
+	assert_int_equal(o[5].type, CFG_OUT_WEBSOCKET);
+	assert_string_equal(o[5].address, "127.0.0.1");
+	assert_int_equal(o[5].port, 7780);
+	assert_true(o[5].rate == 30);
+	assert_string_equal(o[5].www, "auto");
+	assert_string_equal(o[5].three, "/usr/share/javascript/three");
+	assert_string_equal(o[6].address, "0.0.0.0");
+	assert_int_equal(o[6].port, 8080);
+	assert_true(o[6].rate == 60);
+	assert_string_equal(o[6].www, "/srv/www");
+	assert_string_equal(o[6].three, "/opt/three");
+}
+
+static void test_err_renderer_outputs(void **state)
+{
+	/* keys of one renderer are unknown to the others */
+	expect_text_err(*state, "[output o]\ntype = tcp\ndevice = X%d\n", "e.conf:3: [output o] device: unknown key for type tcp",
+			NULL);
+	expect_text_err(*state, "[output o]\ntype = vrpn\nrate = 30\n", "e.conf:3: [output o] rate: unknown key for type vrpn",
+			"(known: type, address, port, max_clients, client_buffer, device, udp, client_timeout, decimate, avatars)",
+			NULL);
+	expect_text_err(*state, "[output o]\ntype = websocket\nclient_buffer = 4096\n",
+			"e.conf:3: [output o] client_buffer: unknown key for type websocket", NULL);
+	/* one key, two ranges: a browser gets at most 60 frames a second, an OSC peer 240 */
+	expect_text_err(*state, "[output o]\ntype = websocket\nrate = 61\n",
+			"e.conf:3: [output o] rate: 61 is out of range [1, 60] Hz", NULL);
+	expect_text_err(*state, "[output o]\ntype = vrchat\nrate = 241\n",
+			"e.conf:3: [output o] rate: 241 is out of range [1, 240] Hz", NULL);
+	expect_text_err(*state, "[output o]\ntype = vrpn\nclient_timeout = 0\n",
+			"e.conf:3: [output o] client_timeout: 0 is out of range", NULL);
+	/* VMC and VRChat carry one avatar */
+	expect_text_err(*state, "[source s]\ntype = sim\npeople = 2\n[avatar a]\nperson = s/p0\ncount = 2\n"
+			"[output o]\ntype = vmc\n",
+			"e.conf:8: [output o] avatars: a vmc output carries one avatar, not 2 (avatars = NAME)", NULL);
+	expect_text_err(*state, "[source s]\ntype = sim\npeople = 2\n[avatar a]\nperson = s/p0\ncount = 2\n"
+			"[output o]\ntype = vrchat\navatars = a\n",
+			"e.conf:9: [output o] avatars: a vrchat output carries one avatar, not 2", NULL);
+	expect_text_err(*state, "[output o]\ntype = osc\n", "e.conf:2: [output o] type: 'osc' is not one of: udp, multicast, tcp, unix, modbus, can, vrpn, vmc, vrchat, websocket",
+			NULL);
+}
+
 int main(void)
 {
 #define T(fn) cmocka_unit_test_setup_teardown(fn, setup, teardown)
@@ -1486,6 +1592,8 @@ int main(void)
 		T(test_print_counted_avatar_origin),
 		T(test_line_of_max_length),
 		T(test_first_error_reported),
+		T(test_values_renderer_outputs),
+		T(test_err_renderer_outputs),
 	};
 #undef T
 

@@ -64,7 +64,7 @@ echo "$lat" | awk '{printf "{\"set\":\"latency\",\"avatars\":1,\"rate_hz\":240,\
 
 # 2. RSS of the demo
 "$BUILD/avatargw" --demo --set "daemon.control_socket=$TMP/demo.ctl" --set "output local.port=$PORT" \
-	--set "output stream.port=$((PORT + 1))" 2>/dev/null &
+	--set "output stream.port=$((PORT + 1))" --set "output viewer.port=$((PORT + 2))" 2>/dev/null &
 d=$!
 sleep 2
 rss=$(awk '/VmRSS/ {print $2}' "/proc/$d/status")

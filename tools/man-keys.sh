@@ -124,7 +124,8 @@ function kind_text(k, w) {
 BEGIN {
 	while ((getline l < table) > 0) {
 		split(l, f, "\t")
-		id = f[1] "." f[2]
+		# a key may have several entries (one per set of types): number them in table order
+		id = f[1] "." f[2]; n_occ[id]++; id = id "#" n_occ[id]
 		kind[id] = f[3]; lo[id] = f[4]; hi[id] = f[5]; words[id] = f[6]
 		order[++n_table] = id
 	}
@@ -136,7 +137,7 @@ BEGIN {
 	next
 }
 {
-	id = S "." $1
+	id = S "." $1; seen_occ[id]++; id = id "#" seen_occ[id]
 	if (!(id in kind)) { printf "man-keys.sh: [%s] %s: not in the keys[] table of config.c (rebuild the daemon)\n", sect, $1 > "/dev/stderr"; bad = 1; next }
 	seen[id] = 1
 	k = kind[id]

@@ -54,7 +54,8 @@ enum kind {
 static const char *const e_mode[] = { "deadline", "events", NULL };
 static const char *const e_log[] = { "err", "warning", "info", "debug", NULL };
 static const char *const e_solver[] = { "dq", "matrix", NULL };
-static const char *const e_out[] = { "udp", "multicast", "tcp", "unix", "modbus", "can", NULL };
+static const char *const e_out[] = { "udp", "multicast", "tcp", "unix", "modbus", "can", "vrpn", "vmc", "vrchat", "websocket",
+					  NULL };
 static const char *const e_word[] = { "abcd", "cdab", "badc", "dcba", NULL };
 static const char *const e_regtype[] = { "holding", "input", NULL };
 static const char *const e_regfmt[] = { "int16", "uint16", "int32", "uint32", "float32", NULL };
@@ -216,14 +217,26 @@ static const struct key_def keys[] = {
 	  "Newton iterations tried from the previous frame before the closed-form search" },
 
 	{ S_OUTPUT, "type", K_ENUM, OUT(type), 0, 0, 0, NULL, NULL, e_out, NULL,
-	  "udp (unicast), multicast, tcp or unix (streams: u32 length + message), modbus (a Modbus TCP server) "
-	  "or can (SocketCAN frames)" },
+	  "udp (unicast), multicast, tcp or unix (streams: u32 length + message), modbus (a Modbus TCP server), "
+	  "can (SocketCAN frames); vrpn (a VRPN server), vmc or vrchat (OSC), websocket (JSON frames and the browser viewer)" },
 	{ S_OUTPUT, "address", K_STR, OUT(address), 0, 0, 0, "127.0.0.1", NULL, NULL, "udp multicast tcp modbus",
 	  "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: listen address" },
 	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "7770", NULL, NULL, "udp multicast tcp modbus",
 	  "UDP destination port or TCP listening port (modbus: required)" },
 	{ S_OUTPUT, "interface", K_STR, OUT(interface), 0, 0, 0, "", NULL, NULL, "multicast can",
 	  "multicast: network interface (empty: the kernel's choice); can: CAN interface or fd:N (required)" },
+	{ S_OUTPUT, "address", K_STR, OUT(address), 0, 0, 0, "0.0.0.0", NULL, NULL, "vrpn",
+	  "listen address for TCP connections and UDP connection requests (0.0.0.0: every IPv4 interface, ::: every interface)" },
+	{ S_OUTPUT, "address", K_STR, OUT(address), 0, 0, 0, "127.0.0.1", NULL, NULL, "vmc vrchat websocket",
+	  "vmc, vrchat: destination host; websocket: listen address (any other address shows the viewer to the network)" },
+	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "3883", NULL, NULL, "vrpn",
+	  "TCP and UDP port of the VRPN server (clients name it as NAME@host:port when it is not 3883)" },
+	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "39539", NULL, NULL, "vmc",
+	  "UDP destination port of the VMC marionette" },
+	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "9000", NULL, NULL, "vrchat",
+	  "UDP port VRChat listens on for OSC" },
+	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "7780", NULL, NULL, "websocket",
+	  "TCP port of the viewer page (HTTP) and its WebSocket" },
 	{ S_OUTPUT, "ttl", K_INT, OUT(ttl), 0, 0, 255, "1", NULL, NULL, "multicast",
 	  "multicast hop limit" },
 	{ S_OUTPUT, "loopback", K_BOOL, OUT(mcast_loop), 0, 0, 0, "yes", NULL, NULL, "multicast",
@@ -232,10 +245,28 @@ static const struct key_def keys[] = {
 	  "send runs of equal-length messages as one buffer the kernel cuts into datagrams (UDP_SEGMENT); off by itself where refused" },
 	{ S_OUTPUT, "path", K_PATH, OUT(path), 0, 0, 0, "/run/avatargw/stream", NULL, NULL, "unix",
 	  "Unix socket path to listen on" },
-	{ S_OUTPUT, "max_clients", K_INT, OUT(max_clients), 0, 1, 256, "8", NULL, NULL, "tcp unix modbus",
-	  "stream subscribers (Modbus clients) at most; more are refused" },
+	{ S_OUTPUT, "max_clients", K_INT, OUT(max_clients), 0, 1, 256, "8", NULL, NULL, "tcp unix modbus vrpn websocket",
+	  "stream subscribers (Modbus, VRPN, WebSocket clients) at most; more are refused" },
 	{ S_OUTPUT, "client_buffer", K_INT, OUT(client_buffer), 0, 4096, 16777216, "65536", "bytes", NULL,
-	  "tcp unix", "per-subscriber buffer; messages that do not fit are dropped and counted" },
+	  "tcp unix vrpn", "per-subscriber buffer; messages that do not fit are dropped and counted" },
+	{ S_OUTPUT, "device", K_STR, OUT(device), 0, 0, 0, "Avatar%d", NULL, NULL, "vrpn",
+	  "VRPN device name of each avatar, %d = its id: clients open Avatar0@host (tracker, analog and button)" },
+	{ S_OUTPUT, "udp", K_BOOL, OUT(udp), 0, 0, 0, "yes", NULL, NULL, "vrpn",
+	  "tracker and analog reports over UDP to clients that offer a UDP port (VRPN's low-latency class); no: all over TCP" },
+	{ S_OUTPUT, "client_timeout", K_DOUBLE, OUT(client_timeout), 0, 0.1, 3600, "5", "s", NULL, "vrpn",
+	  "a client that has not finished its handshake, or whose buffer stays full, this long is dropped" },
+	{ S_OUTPUT, "rate", K_DOUBLE, OUT(rate), 0, 1, 240, "60", "Hz", NULL, "vmc vrchat",
+	  "OSC bundles per second (the newest frame each time)" },
+	{ S_OUTPUT, "rate", K_DOUBLE, OUT(rate), 0, 1, 60, "30", "Hz", NULL, "websocket",
+	  "JSON frames per second to each browser (the newest frame of each avatar each time)" },
+	{ S_OUTPUT, "torso", K_DOUBLE, OUT(torso), 0, 0.1, 1.5, "0.5", "m", NULL, "vmc",
+	  "shoulder line to hips: places the Hips bone below the tracked chest" },
+	{ S_OUTPUT, "head", K_BOOL, OUT(head), 0, 0, 0, "yes", NULL, NULL, "vrchat",
+	  "also send the head pose (/tracking/trackers/head/*), which VRChat uses to align our space with its own" },
+	{ S_OUTPUT, "www", K_PATH, OUT(www), 0, 0, 0, "auto", NULL, NULL, "websocket",
+	  "directory of the viewer page; auto = $AVATARGW_WWW, else ../share/avatargw/www or ../www beside the program" },
+	{ S_OUTPUT, "three", K_PATH, OUT(three), 0, 0, 0, "/usr/share/javascript/three", NULL, NULL, "websocket",
+	  "directory of three.js (Debian's libjs-three), served as /three/" },
 	{ S_OUTPUT, "decimate", K_INT, OUT(decimate), 0, 1, 1000, "1", NULL, NULL, NULL,
 	  "publish every n-th frame" },
 	{ S_OUTPUT, "register_base", K_INT, OUT(reg_base), 0, 0, 65535, "0", NULL, NULL, "modbus",
@@ -582,12 +613,19 @@ static bool word_in(const char *word, const char *list)
 	return false;
 }
 
-static const struct key_def *find_key(int sect, const char *name)
+/* a key may have one entry per set of types (a port with another default...): the one for type */
+static const struct key_def *find_key(int sect, const char *name, const char *type)
 {
-	for (size_t i = 0; i < N_KEYS; i++)
-		if (keys[i].sect == sect && !strcmp(keys[i].name, name))
+	const struct key_def *any = NULL;
+
+	for (size_t i = 0; i < N_KEYS; i++) {
+		if (keys[i].sect != sect || strcmp(keys[i].name, name))
+			continue;
+		if (!keys[i].only || (type && word_in(type, keys[i].only)))
 			return &keys[i];
-	return NULL;
+		any = any ? any : &keys[i];
+	}
+	return any;
 }
 
 static void list_keys(int sect, const char *type, char *buf, size_t len)
@@ -659,7 +697,7 @@ static int set_value(struct section_ctx *s, const struct key_def *k, const char 
 		if (strlen(value) >= cap)
 			return failf(p, w, "[%s] %s: longer than %zu characters", s->full, k->name, cap - 1);
 		if (k->kind == K_PATH && value[0] && value[0] != '/' && strncmp(value, "builtin:", 8) &&
-		    !(s->sect == S_DAEMON && !strcmp(value, "auto")) && w.file >= 0) {
+		    strcmp(value, "auto") && w.file >= 0) {
 			/* relative to the directory of the file that says it */
 			const char *f = p->c->files[w.file];
 			const char *slash = strrchr(f, '/');
@@ -738,7 +776,7 @@ static int apply_section(struct section_ctx *s)
 
 		if (strcmp(e->section, s->full))
 			continue;
-		k = find_key(s->sect, e->key);
+		k = find_key(s->sect, e->key, s->type);
 		if (!k || (k->only && !word_in(s->type, k->only))) {
 			list_keys(s->sect, s->type, known, sizeof(known));
 			return failf(p, e->where, "[%s] %s: unknown key%s%s%s (known: %s)", s->full, e->key,
@@ -987,6 +1025,18 @@ static int check_bus_output(struct parse *p, const char *full, const struct cfg_
 	return 0;
 }
 
+/* VMC and VRChat speak for one body: their output names exactly one avatar */
+static int one_avatar(struct parse *p, const char *full, const struct cfg_output *o, const struct cfg_entry *t)
+{
+	const struct cfg_entry *e = entry_of(p->c, full, "avatars");
+	int n = o->n_avatars ? o->n_avatars : p->c->n_avatars;
+
+	if ((o->type != CFG_OUT_VMC && o->type != CFG_OUT_VRCHAT) || n == 1)
+		return 0;
+	return failf(p, e ? e->where : t->where, "[%s] avatars: a %s output carries one avatar, not %d (avatars = NAME)",
+		     full, e_out[o->type], n);
+}
+
 static int build(struct parse *p)
 {
 	struct config *c = p->c;
@@ -1095,7 +1145,7 @@ static int build(struct parse *p)
 					return failf(p, e->where, "[%s]: more than %d outputs", e->section,
 						     CFG_MAX_OUTPUTS);
 				if (!t)
-					return failf(p, e->where, "[%s] type: missing (udp, multicast, tcp, unix, modbus or can)",
+					return failf(p, e->where, "[%s] type: missing (udp, multicast, tcp, unix, modbus, can, vrpn, vmc, vrchat or websocket)",
 						     e->section);
 				o = &c->output[c->n_outputs];
 				memset(o, 0, sizeof(*o));
@@ -1106,7 +1156,7 @@ static int build(struct parse *p)
 						return failf(p, e->where, "[%s]: output name used twice", e->section);
 				/* the type first: it decides which keys exist */
 				s = (struct section_ctx){ p, S_OUTPUT, name, e->section, o, NULL, e->where };
-				if (set_value(&s, find_key(S_OUTPUT, "type"), t->value, t->where))
+				if (set_value(&s, find_key(S_OUTPUT, "type", NULL), t->value, t->where))
 					return -1;
 				s.type = e_out[o->type];
 				if (o->type == CFG_OUT_MULTICAST) {
@@ -1122,7 +1172,7 @@ static int build(struct parse *p)
 					return failf(p, t->where, "[%s] interface: missing (a CAN interface such as can0)",
 						     e->section);
 				if (apply_section(&s) || resolve_output_avatars(p, e->section, o) ||
-				    check_bus_output(p, e->section, o)) {
+				    check_bus_output(p, e->section, o) || one_avatar(p, e->section, o, t)) {
 					free(o->avatar_ids); /* not counted in n_outputs: config_free would miss it */
 					o->avatar_ids = NULL;
 					return -1;

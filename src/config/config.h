@@ -122,7 +122,18 @@ struct cfg_avatar {
 	int warm_iter;
 };
 
-enum cfg_output_type { CFG_OUT_UDP, CFG_OUT_MULTICAST, CFG_OUT_TCP, CFG_OUT_UNIX, CFG_OUT_MODBUS, CFG_OUT_CAN };
+enum cfg_output_type {
+	CFG_OUT_UDP,
+	CFG_OUT_MULTICAST,
+	CFG_OUT_TCP,
+	CFG_OUT_UNIX,
+	CFG_OUT_MODBUS,    /* Modbus TCP server (docs/MODBUS.md) */
+	CFG_OUT_CAN,       /* joint angles as CAN frames (docs/CAN.md) */
+	CFG_OUT_VRPN,      /* VRPN server (docs/VRPN.md) */
+	CFG_OUT_VMC,       /* OSC, VMC protocol performer (docs/OSC.md) */
+	CFG_OUT_VRCHAT,    /* OSC, VRChat trackers */
+	CFG_OUT_WEBSOCKET, /* JSON frames and the browser viewer (docs/VIEWER.md) */
+};
 
 struct cfg_output {
 	char name[CFG_NAME_MAX];
@@ -149,6 +160,14 @@ struct cfg_output {
 	bool extended_ids;
 	bool safe;                  /* clamp, limit the speed, send nothing stale */
 	double max_speed;           /* rad/s per joint (safe mode) */
+	char device[CFG_PATH_MAX];  /* vrpn: device name pattern, %d = avatar id */
+	bool udp;                   /* vrpn: low-latency reports over UDP when a client offers a port */
+	double client_timeout;      /* vrpn: s a client may stall or take over its handshake */
+	double rate;                /* vmc, vrchat, websocket: messages per second */
+	double torso;               /* vmc: shoulder line to hips, m */
+	bool head;                  /* vrchat: send the head for alignment */
+	char www[CFG_PATH_MAX];     /* websocket: the viewer page's directory, or auto */
+	char three[CFG_PATH_MAX];   /* websocket: libjs-three's directory */
 	/* which avatars: all when n_avatars == 0 */
 	int n_avatars;
 	uint16_t *avatar_ids;       /* resolved ids */

@@ -17,7 +17,7 @@
 
 static const char *const tracker_states[] = { "OK", "STALE", "FAULTY", "ENDED" };
 static const char *const sensor_states[] = { "OK", "STALE", "FAULTY" };
-static const char *const out_types[] = { "udp", "multicast", "tcp", "unix", "modbus", "can" };
+static const char *const out_types[] = { "udp", "multicast", "tcp", "unix", "modbus", "can", "vrpn", "vmc", "vrchat", "websocket" };
 
 void ctl_resolve_path(const char *configured, char *out, size_t len)
 {
@@ -194,12 +194,12 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 			struct output *o = &g->out[i];
 
 			fprintf(out, "%s{\"name\":\"%s\",\"type\":\"%s\",\"sent\":%llu,\"dropped\":%llu,\"errors\":%llu,"
-				"\"clients\":%llu,\"accepted\":%llu,\"refused\":%llu,\"closed\":%llu,\"gso_off\":%llu",
+				"\"clients\":%llu,\"accepted\":%llu,\"refused\":%llu,\"closed\":%llu,\"gso_off\":%llu,\"malformed\":%llu",
 				i ? "," : "", o->name, out_types[o->cfg->type], (unsigned long long)stat_get(&o->st.sent),
 				(unsigned long long)stat_get(&o->st.dropped), (unsigned long long)stat_get(&o->st.errors),
 				(unsigned long long)stat_get(&o->st.clients), (unsigned long long)stat_get(&o->st.accepted),
 				(unsigned long long)stat_get(&o->st.refused), (unsigned long long)stat_get(&o->st.closed),
-				(unsigned long long)stat_get(&o->st.gso_off));
+				(unsigned long long)stat_get(&o->st.gso_off), (unsigned long long)stat_get(&o->st.malformed));
 			if (o->ops->report)
 				o->ops->report(o, out, true);
 			fputc('}', out);

@@ -1,8 +1,9 @@
 /* SPDX-License-Identifier: MIT */
 /*
  * output.h - where messages go: one const struct of operations per
- * transport (udp.c: unicast and multicast; stream.c: TCP and Unix), listed
- * in outputs.c's table by config type.
+ * transport (udp.c: unicast and multicast; stream.c: TCP and Unix; vrpn.c;
+ * osc.c: VMC and VRChat; websocket.c: JSON and the viewer), listed in
+ * outputs.c's table by config type.
  *
  * The loop hands every output the same batch of encoded messages once per
  * cycle. send() never blocks: what the kernel or a subscriber cannot take
@@ -39,6 +40,7 @@ struct output_stats {
 	_Atomic uint64_t refused;   /* over max_clients */
 	_Atomic uint64_t closed;    /* subscribers that went away or were too slow for too long */
 	_Atomic uint64_t gso_off;   /* UDP segmentation offload refused by the kernel: now off */
+	_Atomic uint64_t malformed; /* clients dropped for breaking their protocol (vrpn) */
 	_Atomic int32_t last_errno;
 };
 
@@ -64,6 +66,7 @@ struct output {
 	const struct cfg_output *cfg;
 	char name[CFG_NAME_MAX];
 	bool *wants;        /* per avatar index */
+	uint16_t *ids;      /* per avatar index: its id (vrpn device names) */
 	int n_avatars;
 	uint32_t cycle;     /* for decimation */
 	bool adopted;       /* priv was taken over from the previous configuration */
@@ -81,6 +84,10 @@ extern const struct output_ops udp_output_ops;
 extern const struct output_ops stream_output_ops;
 extern const struct output_ops modbus_output_ops;
 extern const struct output_ops can_output_ops;
+extern const struct output_ops vrpn_output_ops;      /* vrpn.c */
+extern const struct output_ops vmc_output_ops;       /* osc.c */
+extern const struct output_ops vrchat_output_ops;    /* osc.c */
+extern const struct output_ops websocket_output_ops; /* websocket.c */
 
 /* start-up: opens the transport; wants[] from the config's avatar list (ids by index) */
 /* old: an output of the configuration being replaced, whose subscribers this one may take over */

@@ -16,6 +16,10 @@ static const struct output_ops *const outputs_table[] = {
 	[CFG_OUT_UNIX] = &stream_output_ops,
 	[CFG_OUT_MODBUS] = &modbus_output_ops,
 	[CFG_OUT_CAN] = &can_output_ops,
+	[CFG_OUT_VRPN] = &vrpn_output_ops,
+	[CFG_OUT_VMC] = &vmc_output_ops,
+	[CFG_OUT_VRCHAT] = &vrchat_output_ops,
+	[CFG_OUT_WEBSOCKET] = &websocket_output_ops,
 };
 
 int output_open(struct output *o, const struct cfg_output *cfg, const uint16_t *avatar_ids, int n_avatars,
@@ -24,17 +28,29 @@ int output_open(struct output *o, const struct cfg_output *cfg, const uint16_t *
 	int rc;
 
 	memset(o, 0, sizeof(*o));
+	if (cfg->type < 0 || (size_t)cfg->type >= sizeof(outputs_table) / sizeof(outputs_table[0]) ||
+	    !outputs_table[cfg->type]) {
+		snprintf(err, errlen, "[output %s] type: not built into this daemon", cfg->name);
+		return -ENOSYS;
+	}
 	o->ops = outputs_table[cfg->type];
 	o->cfg = cfg;
 	o->n_avatars = n_avatars;
 	snprintf(o->name, sizeof(o->name), "%s", cfg->name);
 	o->wants = calloc((size_t)n_avatars + 1, sizeof(bool));
-	if (!o->wants) {
+	o->ids = calloc((size_t)n_avatars + 1, sizeof(uint16_t));
+	if (!o->wants || !o->ids) {
+		free(o->wants);
+		free(o->ids);
+		o->wants = NULL;
+		o->ids = NULL;
 		snprintf(err, errlen, "[output %s]: out of memory", cfg->name);
 		return -ENOMEM;
 	}
 	for (int i = 0; i < n_avatars; i++) {
 		bool w = cfg->n_avatars == 0;
+
+		o->ids[i] = avatar_ids[i];
 
 		for (int j = 0; j < cfg->n_avatars; j++)
 			w |= cfg->avatar_ids[j] == avatar_ids[i];
@@ -47,7 +63,9 @@ int output_open(struct output *o, const struct cfg_output *cfg, const uint16_t *
 	rc = o->ops->open(o, err, errlen);
 	if (rc) {
 		free(o->wants);
+		free(o->ids);
 		o->wants = NULL;
+		o->ids = NULL;
 	}
 	return rc;
 }
@@ -57,7 +75,9 @@ void output_close(struct output *o)
 	if (o->ops && o->wants)
 		o->ops->close(o);
 	free(o->wants);
+	free(o->ids);
 	o->wants = NULL;
+	o->ids = NULL;
 	o->ops = NULL;
 }
 

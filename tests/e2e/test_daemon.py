@@ -151,7 +151,8 @@ class DemoTest(unittest.TestCase):
         cls.port = free_port()
         cls.tport = free_port(socket.SOCK_STREAM)
         cls.d = Daemon(cls.tmpd.name, demo=True, sets=["output local.port=%d" % cls.port,
-                                                       "output stream.port=%d" % cls.tport])
+                                                       "output stream.port=%d" % cls.tport,
+                                                       "output viewer.port=%d" % free_port(socket.SOCK_STREAM)])
         cls.frames = dump(["--udp", "127.0.0.1:%d" % cls.port, "--describe"], 720)
 
     @classmethod
@@ -413,7 +414,8 @@ class SignalTest(unittest.TestCase):
     def test_sigint(self):
         with tempfile.TemporaryDirectory() as tmp:
             d = Daemon(tmp, demo=True, sets=["output local.port=%d" % free_port(),
-                                             "output stream.port=%d" % free_port(socket.SOCK_STREAM)])
+                                             "output stream.port=%d" % free_port(socket.SOCK_STREAM),
+                                             "output viewer.port=%d" % free_port(socket.SOCK_STREAM)])
             d.proc.send_signal(signal.SIGINT)
             self.assertEqual(d.proc.wait(timeout=2), 0)
             d.stop()

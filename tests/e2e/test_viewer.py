@@ -1,0 +1,300 @@
+# SPDX-License-Identifier: MIT
+"""The websocket output and the browser viewer, on the embedded demo: the
+page and Debian's three.js over HTTP, the JSON frames checked against the
+UDP stream of the same daemon, a stalled browser that loses frames without
+slowing anyone, and the page itself in headless Chromium, which must draw
+the avatar (a screenshot is kept under the build directory) and turn it
+grey when its trackers go stale.
+
+Run from the repository root: python3 -m unittest tests/e2e/test_viewer.py"""
+import json
+import signal
+import math
+import os
+import socket
+import sys
+import tempfile
+import time
+import unittest
+import urllib.error
+import urllib.request
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from headless import Chromium, png_rgb  # noqa: E402
+from test_daemon import BUILD, Daemon, free_port  # noqa: E402
+from wireframe import UdpListener  # noqa: E402
+from wsclient import WsClient  # noqa: E402
+
+AVATAR_RGB = (0x4F, 0xC3, 0xF7)  # the first colour of the page's palette
+
+
+def close_to(a, b):
+    """a (from JSON, %.7g, None for NaN) against b (a float32 of the UDP FRAME)"""
+    if a is None or b is None or not math.isfinite(b):
+        return (a is None) == (b is None or not math.isfinite(b))
+    return abs(a - b) <= 1e-6 * max(1.0, abs(b))
+
+
+def wait_for(browser, cond, timeout):
+    deadline = time.time() + timeout
+    st = None
+    while time.time() < deadline:
+        st = json.loads(browser.evaluate("JSON.stringify(window.avatargwStats || null)") or "null")
+        if st and cond(st):
+            return st
+        time.sleep(0.2)
+    raise AssertionError("the page did not get there in %g s: %s" % (timeout, st))
+
+
+def avatar_pixels(path):
+    _, _, rows = png_rgb(path)
+    return sum(1 for r in rows for p in r if all(abs(c - w) < 40 for c, w in zip(p, AVATAR_RGB)))
+
+
+class ViewerTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmpd = tempfile.TemporaryDirectory()
+        cls.uport, cls.tport, cls.vport = free_port(), free_port(socket.SOCK_STREAM), free_port(socket.SOCK_STREAM)
+        cls.udp = UdpListener(cls.uport)
+        cls.d = Daemon(cls.tmpd.name, demo=True, sets=["output local.port=%d" % cls.uport,
+                                                       "output stream.port=%d" % cls.tport,
+                                                       "output viewer.port=%d" % cls.vport])
+        cls.base = "http://127.0.0.1:%d" % cls.vport
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.udp.close()
+        rc = cls.d.stop()
+        cls.tmpd.cleanup()
+        assert rc == 0, "daemon exit status %s" % rc
+
+    def viewer_status(self):
+        return [o for o in self.d.status()["outputs"] if o["name"] == "viewer"][0]
+
+    def get(self, path):
+        with urllib.request.urlopen(self.base + path, timeout=5) as r:
+            return r.status, r.headers.get("content-type", ""), r.read()
+
+    def test_http(self):
+        st, ct, body = self.get("/")
+        self.assertEqual(st, 200)
+        self.assertIn("text/html", ct)
+        self.assertIn(b"viewer.js", body)
+        st, ct, body = self.get("/viewer.js")
+        self.assertIn("javascript", ct)
+        self.assertIn(b"/three/build/three.module.js", body)
+        # three.js from Debian's libjs-three, and OrbitControls importing it by a relative path
+        st, ct, body = self.get("/three/build/three.module.js")
+        self.assertIn("javascript", ct)
+        with open("/usr/share/javascript/three/build/three.module.js", "rb") as f:
+            self.assertEqual(body, f.read())
+        st, ct, body = self.get("/three/examples/jsm/controls/OrbitControls.js")
+        self.assertIn(b'from "../../../build/three.module.js"', body)
+        with self.assertRaises(urllib.error.HTTPError) as e:
+            self.get("/no-such-file.js")
+        self.assertEqual(e.exception.code, 404)
+        # nothing outside the two directories
+        s = socket.create_connection(("127.0.0.1", self.vport), timeout=5)
+        s.sendall(b"GET /three/../../../../etc/passwd HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n")
+        reply = b""
+        while True:
+            chunk = s.recv(65536)
+            if not chunk:
+                break
+            reply += chunk
+        s.close()
+        self.assertNotIn(b"root:", reply)
+
+    def test_json_frames_match_udp(self):
+        ws = WsClient("127.0.0.1", self.vport)
+        msgs = []
+        t0 = time.time()
+        try:
+            while time.time() - t0 < 1.5:
+                m = ws.recv_text(1.0)
+                if m:
+                    msgs.append(json.loads(m))
+        finally:
+            ws.close()
+        time.sleep(0.05)
+        rate = len(msgs) / 1.5
+        self.assertGreater(rate, 20)  # the demo's viewer runs at the default 30 Hz
+        self.assertLess(rate, 40)
+        frames = {f["seq"]: f for f in self.udp.snapshot() if f["avatar"] == 0}
+        ks = []
+        for m in msgs:
+            self.assertEqual(m["type"], "frames")
+            self.assertEqual(len(m["avatars"]), 1)
+            a = m["avatars"][0]
+            self.assertEqual((a["id"], a["name"]), (0, "demo"))
+            ks.append(a["k"])
+            f = frames.get(a["seq"])
+            self.assertIsNotNone(f, "seq %d is not in the UDP stream" % a["seq"])
+            self.assertEqual(a["flags"], f["flags"])
+            self.assertAlmostEqual(a["t"], f["t_ns"] * 1e-6, delta=1e-3)
+            for s in range(10):
+                for x, y in zip(a["segments"][s], f["segments"][s]["p"] + f["segments"][s]["q"]):
+                    self.assertTrue(close_to(x, y), "segment %d: %s vs %s" % (s, x, y))
+            for s in range(3):
+                self.assertEqual(a["sensors"][s]["state"], f["sensors"][s]["state"])
+                for x, y in zip(a["sensors"][s]["pose"], f["sensors"][s]["p"] + f["sensors"][s]["q"]):
+                    self.assertTrue(close_to(x, y))
+            for x, y in zip(a["joints"], f["joints"]):
+                self.assertTrue(close_to(x, y))
+            # the daemon's own latency, sample to sending: small on one host
+            self.assertGreaterEqual(a["srv_ms"], 0)
+            self.assertLess(a["srv_ms"], 200)
+        # a reader that keeps up misses nothing: one record per text, numbered without gaps
+        self.assertEqual(ks, list(range(ks[0], ks[0] + len(ks))))
+
+    def test_stalled_browser_loses_frames_alone(self):
+        before = self.viewer_status()
+        stalled = WsClient("127.0.0.1", self.vport, rcvbuf=2048)  # upgrades, then never reads
+        good = WsClient("127.0.0.1", self.vport)
+        ks = []
+        t0 = time.time()
+        try:
+            while time.time() - t0 < 3.0:
+                m = good.recv_text(1.0)
+                if m:
+                    ks.append(json.loads(m)["avatars"][0]["k"])
+            st = self.viewer_status()
+        finally:
+            stalled.close()
+            good.close()
+        self.assertGreater(len(ks), 3.0 * 20)
+        self.assertEqual(ks, list(range(ks[0], ks[0] + len(ks))), "the good browser lost frames")
+        self.assertGreater(st["dropped"], before["dropped"], "the stalled browser never fell behind")
+        self.assertEqual(st["clients"], 2)
+        # the loop did not feel it: the UDP stream has no gap
+        seqs = [f["seq"] for f in self.udp.snapshot() if f["avatar"] == 0 and f["rx"] > time.monotonic() - 3.5]
+        self.assertEqual(seqs, list(range(seqs[0], seqs[0] + len(seqs))))
+
+    def test_page_in_chromium(self):
+        with tempfile.TemporaryDirectory() as profile:
+            b = Chromium(profile)
+            try:
+                b.call("Page.navigate", url=self.base + "/")
+                st = wait_for(b, lambda s: s["frames"] >= 15 and s["renders"] >= 10, 10)
+                shot = os.path.join(BUILD, "viewer-demo.png")
+                b.screenshot(shot)
+                table = b.evaluate("document.getElementById('avatars').innerText")
+                dom = b.evaluate("document.getElementById('stats').textContent")
+            finally:
+                b.close()
+        self.assertTrue(st["connected"])
+        self.assertTrue(st["webgl"], "no WebGL in headless Chromium")
+        self.assertEqual(st["avatars"], 1)
+        self.assertEqual(st["bonesDrawn"], 9)   # chest-head, two shoulders, two arms of 3
+        self.assertEqual(st["sensorsDrawn"], 3)
+        self.assertEqual(st["staleAvatars"], 0)
+        self.assertIn("demo", table)
+        self.assertIn('"avatars":1', dom)      # the same numbers in the page, for --dump-dom
+        # the figure is on the picture, in its colour
+        self.assertGreater(avatar_pixels(shot), 100, "the avatar is not on %s" % shot)
+
+
+class ViewerStaleTest(unittest.TestCase):
+    """a replay that ends: its sensors go stale, the page turns the avatar grey"""
+
+    CONF = """
+[daemon]
+rate = 120
+[source clip]
+type = replay
+file = builtin:cmu_141_16.csv
+speed = 100
+loop = no
+[avatar ended]
+person = clip
+[output viewer]
+type = websocket
+address = 127.0.0.1
+port = {port}
+rate = 20
+"""
+
+    def test_stale_avatar_is_grey(self):
+        with tempfile.TemporaryDirectory() as tmp, tempfile.TemporaryDirectory() as profile:
+            port = free_port(socket.SOCK_STREAM)
+            d = Daemon(tmp, self.CONF.format(port=port))
+            try:
+                b = Chromium(profile)
+                try:
+                    b.call("Page.navigate", url="http://127.0.0.1:%d/" % port)
+                    st = wait_for(b, lambda s: s["frames"] >= 5 and s["staleAvatars"] == 1 and s["renders"] >= 5, 10)
+                    shot = os.path.join(BUILD, "viewer-stale.png")
+                    b.screenshot(shot)
+                    table = b.evaluate("document.getElementById('avatars').innerText")
+                finally:
+                    b.close()
+            finally:
+                self.assertEqual(d.stop(), 0)
+        self.assertEqual(st["greySensors"], 3)
+        self.assertEqual(st["bonesDrawn"], 9)
+        self.assertIn("stale", table)
+        self.assertEqual(avatar_pixels(shot), 0, "a stale avatar is drawn in colour")
+
+
+if __name__ == "__main__":
+    unittest.main()
+
+
+class ViewerReloadTest(unittest.TestCase):
+    """a reload keeps the port and the browsers, and serves the new configuration"""
+
+    CONF = """
+[daemon]
+rate = 120
+[source sim]
+type = sim
+people = 2
+[avatar a]
+person = sim/p0
+count = 2
+[output viewer]
+type = websocket
+address = 127.0.0.1
+port = {port}
+avatars = {which}
+[output cave]
+type = vrpn
+address = 127.0.0.1
+port = {vport}
+"""
+
+    def test_reload_keeps_browsers(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            port, vport = free_port(socket.SOCK_STREAM), free_port(socket.SOCK_STREAM)
+            d = Daemon(tmp, self.CONF.format(port=port, vport=vport, which="a-0"))
+            ws = None
+            try:
+                ws = WsClient("127.0.0.1", port)
+                ids = set()
+                t0 = time.time()
+                while time.time() - t0 < 0.5:
+                    m = ws.recv_text(1.0)
+                    ids |= {a["id"] for a in json.loads(m)["avatars"]} if m else set()
+                self.assertEqual(ids, {0})
+                with open(d.conf, "w") as f:
+                    f.write(self.CONF.format(port=port, vport=vport, which="a-1"))
+                d.proc.send_signal(signal.SIGHUP)
+                deadline = time.time() + 5
+                while d.status()["reloads"] < 1 and time.time() < deadline:
+                    time.sleep(0.05)
+                self.assertEqual(d.status()["reloads"], 1, d.stderr())
+                # the same connection now carries the other avatar
+                ids = set()
+                t0 = time.time()
+                while time.time() - t0 < 0.7:
+                    m = ws.recv_text(1.0)
+                    if m:
+                        ids = {a["id"] for a in json.loads(m)["avatars"]}
+                self.assertEqual(ids, {1})
+                viewer = [o for o in d.status()["outputs"] if o["name"] == "viewer"][0]
+                self.assertEqual(viewer["clients"], 1)
+            finally:
+                if ws:
+                    ws.close()
+                self.assertEqual(d.stop(), 0)
