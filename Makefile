@@ -64,10 +64,12 @@ LIBUSB_LIBS = $(shell pkg-config --libs libusb-1.0 2>/dev/null || echo -lusb-1.0
 MODBUS_LIBS = $(shell pkg-config --libs libmodbus 2>/dev/null || echo -lmodbus)
 LWS_LIBS = $(shell pkg-config --libs libwebsockets 2>/dev/null || echo -lwebsockets)
 LO_LIBS = $(shell pkg-config --libs liblo 2>/dev/null || echo -llo)
+ZLIB_LIBS = $(shell pkg-config --libs zlib 2>/dev/null || echo -lz)
 DEP_LIBS = $(INIH_LIBS)
+DEP_LIBS += $(ZLIB_LIBS)
 LIBS = $(DEP_LIBS) -lpthread -lm
 GW_SRC = $(filter-out src/daemon/main.c,$(wildcard src/wire/*.c src/config/*.c src/trackers/*.c \
-	src/frames/*.c src/publish/*.c src/daemon/*.c))
+	src/frames/*.c src/publish/*.c src/record/*.c src/daemon/*.c))
 GW_OBJ = $(patsubst src/%.c,$(BUILD)/obj/%.o,$(GW_SRC)) $(BUILD)/obj/gen/builtin.o
 # files compiled into the daemon: the demo configuration and its clip
 BUILTIN_FILES = config/demo.conf config/clips/cmu_141_16.csv

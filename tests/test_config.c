@@ -645,7 +645,8 @@ static void test_err_unknown_key(void **state)
 {
 	expect_text_err(*state, "[daemon]\nrate = 100\nrat = 100\n", "e.conf:3: [daemon] rat: unknown key",
 			"(known: rate, mode, stale_ms, realtime_priority, cpu, lock_memory, control_socket, "
-			"describe_interval, log_level)",
+			"describe_interval, log_level, record_dir, record_messages, record_flush, record_flush_records, "
+			"record_fsync, record_rotate_size, record_rotate_time, record_buffer, record_keyframe_rate",
 			NULL);
 }
 
@@ -654,7 +655,7 @@ static void test_err_key_of_other_type(void **state)
 {
 	expect_text_err(*state, "[source clip]\ntype = replay\nfile = builtin:cmu_141_16.csv\npeople = 2\n",
 			"e.conf:4: [source clip] people: unknown key for type replay",
-			"(known: type, origin, yaw, file, speed, loop, start)", NULL);
+			"(known: type, origin, yaw, sample_rate, file, speed, loop, start, step, interpolate)", NULL);
 	expect_text_err(*state, "[output o]\ntype = udp\npath = /tmp/x\n",
 			"e.conf:3: [output o] path: unknown key for type udp",
 			"(known: type, address, port, decimate, avatars)", NULL);

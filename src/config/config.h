@@ -45,6 +45,16 @@ struct cfg_daemon {
 	double describe_interval; /* seconds */
 	int log_level;
 	bool ik_stats;
+	/* recording (docs/RECORDING.md) */
+	char record_dir[CFG_PATH_MAX]; /* empty: no recording */
+	bool record_messages;
+	double record_flush;           /* s */
+	int record_flush_records;      /* 0: by time only */
+	bool record_fsync;
+	double record_rotate_size;     /* MiB, 0: never */
+	double record_rotate_time;     /* s, 0: never */
+	int record_buffer;             /* KiB */
+	double record_keyframe_rate;   /* Hz, 0: every sample */
 };
 
 struct cfg_source {
@@ -64,6 +74,8 @@ struct cfg_source {
 	double speed;
 	bool loop;
 	double start;           /* s into the file */
+	bool step;              /* advance on avatargw-ctl step only */
+	int interpolate;        /* 0 none, else 1 + enum kf_interp */
 };
 
 /* a sensor reference: a source and one of its sensors */

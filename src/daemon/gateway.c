@@ -5,6 +5,7 @@
 #include "daemon/gateway.h"
 
 #include "publish/encode.h"
+#include "record/recorder.h"
 
 #include <errno.h>
 #include <math.h>
@@ -274,6 +275,8 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 			a->next_describe_ns = now->mono_ns + g->describe_ns;
 		}
 	}
+	if (g->rec)
+		recorder_messages(g->rec, now->mono_ns, g->msgs, n);
 	for (int o = 0; o < g->n_outputs; o++) {
 		uint64_t acc = stat_get(&g->out[o].st.accepted);
 

@@ -70,6 +70,7 @@ struct gateway {
 	uint64_t stale_ns;
 	uint64_t describe_ns;
 	struct gw_stats st;
+	struct recorder *rec;     /* recording this gateway (record/recorder.h), or NULL */
 };
 
 /*
