@@ -4,7 +4,7 @@
  * avatar_solve) over recorded sensor poses and writes what it made of every
  * frame, for tools/eval.py to score against ground truth.
  *
- *   avatargw-eval [--dims S,A,F,H] [--head-offset X,Y,Z] [--limits FILE]
+ *   avatargw-eval [--dims S,A,F,H] [--left-arm A,F,H] [--head-offset X,Y,Z] [--limits FILE]
  *       [--solver dq|matrix] [--reset] [--keyframes HZ [--interp METHOD]]
  *       [--person SOURCE/PREFIX] INPUT
  *
@@ -32,6 +32,7 @@
  *   {r,l}sh_*, {r,l}el_*, {r,l}wr_*, {r,l}hd_*  shoulder, elbow, wrist
  *                      centre and hand (end effector) positions, world, m
  *   {r,l}res           |hand - hand sensor|, m
+ *   {r,l}misfit        AVATAR_HAND_ELBOW: running misfit of the hand's axis, degrees
  *   {r,l}q1..q8        joint angles, degrees
  *   head_*, lhand_*, rhand_*  the sensor poses the avatar was given
  */
@@ -50,10 +51,12 @@
 #define RAD2DEG 57.29577951308232
 #define DEG2RAD 0.017453292519943295
 
-/* one moment: head, left hand, right hand as x y z qw qx qy qz */
+/* one moment: head, left hand, right hand as x y z qw qx qy qz; the true chest if the CSV has it */
 struct row {
 	double t;
 	double s[3][7];
+	double chest[7];
+	bool has_chest;
 };
 
 static const char *const prefixes[3] = { "head", "lhand", "rhand" };
@@ -87,7 +90,8 @@ static int load_csv(const char *path, FILE *f, struct row **rows, size_t *n)
 {
 	char *line = NULL, *tok, *save;
 	size_t lcap = 0, cap = 0, lineno = 1;
-	int col[3][7], ct = -1, i = 0, maxcol = 0;
+	int col[3][7], cc[7], ct = -1, i = 0, maxcol = 0;
+	bool has_chest = true;
 
 	if (getline(&line, &lcap, f) < 0) {
 		fprintf(stderr, "avatargw-eval: %s: empty\n", path);
@@ -97,9 +101,15 @@ static int load_csv(const char *path, FILE *f, struct row **rows, size_t *n)
 	for (int r = 0; r < 3; r++)
 		for (int k = 0; k < 7; k++)
 			col[r][k] = -1;
+	for (int k = 0; k < 7; k++)
+		cc[k] = -1;
 	for (tok = strtok_r(line, ",\r\n", &save); tok; tok = strtok_r(NULL, ",\r\n", &save), i++) {
 		if (!strcmp(tok, "t"))
 			ct = i;
+		if (!strncmp(tok, "chest_", 6))
+			for (int k = 0; k < 7; k++)
+				if (!strcmp(tok + 6, fields[k]))
+					cc[k] = i;
 		for (int r = 0; r < 3; r++) {
 			size_t pl = strlen(prefixes[r]);
 
@@ -126,6 +136,11 @@ static int load_csv(const char *path, FILE *f, struct row **rows, size_t *n)
 			if (col[r][k] > maxcol)
 				maxcol = col[r][k];
 		}
+	for (int k = 0; k < 7; k++) {
+		has_chest &= cc[k] >= 0;
+		if (cc[k] > maxcol)
+			maxcol = cc[k];
+	}
 	while (getline(&line, &lcap, f) >= 0) {
 		double v[256];
 		char *s = line, *end;
@@ -153,6 +168,9 @@ static int load_csv(const char *path, FILE *f, struct row **rows, size_t *n)
 		for (int j = 0; j < 3; j++)
 			for (int k = 0; k < 7; k++)
 				r.s[j][k] = v[col[j][k]];
+		r.has_chest = has_chest;
+		for (int k = 0; k < 7; k++)
+			r.chest[k] = has_chest ? v[cc[k]] : 0;
 		if (push_row(rows, n, &cap, &r)) {
 			free(line);
 			return -1;
@@ -330,7 +348,7 @@ static void print_header(void)
 	for (int s = 0; s < 2; s++) {
 		for (int p = 0; p < 4; p++)
 			printf(",%s%s_x,%s%s_y,%s%s_z", side[s], pt[p], side[s], pt[p], side[s], pt[p]);
-		printf(",%sres", side[s]);
+		printf(",%sres,%smisfit", side[s], side[s]);
 		for (int j = 1; j <= ARM_DOF; j++)
 			printf(",%sq%d", side[s], j);
 	}
@@ -368,8 +386,9 @@ static void print_frame(size_t i, const struct row *r, const struct avatar *av, 
 			printf(",%.6f,%.6f,%.6f", w[m].x, w[m].y, w[m].z);
 		}
 		dq_translation(&hand[s], &hs);
-		printf(",%.7f", sqrt((w[3].x - hs.x) * (w[3].x - hs.x) + (w[3].y - hs.y) * (w[3].y - hs.y) +
-				    (w[3].z - hs.z) * (w[3].z - hs.z)));
+		printf(",%.7f,%.3f", sqrt((w[3].x - hs.x) * (w[3].x - hs.x) + (w[3].y - hs.y) * (w[3].y - hs.y) +
+					 (w[3].z - hs.z) * (w[3].z - hs.z)),
+		       p->hand_misfit[s] * RAD2DEG);
 		for (int j = 0; j < ARM_DOF; j++)
 			printf(",%.4f", p->q[s][j] * RAD2DEG);
 	}
@@ -377,6 +396,69 @@ static void print_frame(size_t i, const struct row *r, const struct avatar *av, 
 		for (int k = 0; k < 7; k++)
 			printf(",%.6f", r->s[j][k]);
 	putchar('\n');
+}
+
+/*
+ * A diagnosis (--chest-truth): the arms solved from the true chest of the
+ * clip (its position and full orientation, the chain origin at co in it)
+ * instead of the chest the avatar places from the head.
+ */
+static void solve_true_chest(const struct avatar *av, const struct ik_kin *kin, const struct ik_opts *o,
+			     const struct row *r, const double co[3], const struct dq *lhand, const struct dq *rhand,
+			     const struct avatar_pose *prev, struct avatar_pose *out)
+{
+	struct quat q = { r->chest[3], r->chest[4], r->chest[5], r->chest[6] };
+	struct vec3 c = { co[0], co[1], co[2] }, rc, p;
+	const struct dq *hand[2] = { rhand, lhand };
+
+	quat_normalize(&q, &q);
+	quat_rotate(&q, &c, &rc);
+	p = (struct vec3){ r->chest[0] + rc.x, r->chest[1] + rc.y, r->chest[2] + rc.z };
+	dq_from_rt(&q, &p, &out->chest);
+	{
+		struct vec3 x = { 1, 0, 0 }, xr;
+
+		quat_rotate(&q, &x, &xr);
+		out->head_yaw = atan2(xr.y, xr.x);
+	}
+	for (int side = 0; side < 2; side++) {
+		struct ik_target t;
+
+		avatar_arm_target(&out->chest, hand[side], &t);
+		avatar_arm_solve(av, side, kin, o, &t, prev, out);
+	}
+}
+
+/* "paper", "default", or names joined by '+' */
+static int parse_model(const char *s)
+{
+	static const struct {
+		const char *name;
+		unsigned bit;
+	} names[] = { { "hand-elbow", AVATAR_HAND_ELBOW }, { "reach-first", AVATAR_REACH_FIRST },
+		      { "yaw-hands", AVATAR_YAW_HANDS } };
+	unsigned m = 0;
+
+	if (!strcmp(s, "paper"))
+		return AVATAR_PAPER;
+	if (!strcmp(s, "default"))
+		return AVATAR_MODEL_DEFAULT;
+	while (*s) {
+		size_t n = strcspn(s, "+");
+		bool found = false;
+
+		for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++)
+			if (strlen(names[i].name) == n && !strncmp(s, names[i].name, n)) {
+				m |= names[i].bit;
+				found = true;
+			}
+		if (!found)
+			return -1;
+		s += n;
+		if (*s == '+')
+			s++;
+	}
+	return (int)m;
 }
 
 static int parse_list(const char *s, double *v, int n)
@@ -404,9 +486,16 @@ int main(int argc, char **argv)
 		{ "limits", required_argument, NULL, 'l' }, { "solver", required_argument, NULL, 's' },
 		{ "reset", no_argument, NULL, 'r' },        { "keyframes", required_argument, NULL, 'k' },
 		{ "interp", required_argument, NULL, 'i' }, { "person", required_argument, NULL, 'p' },
+		{ "chest-truth", required_argument, NULL, 'c' }, { "model", required_argument, NULL, 'm' },
+		{ "left-arm", required_argument, NULL, 'L' },
 		{ "help", no_argument, NULL, 'h' },         { NULL, 0, NULL, 0 },
 	};
 	double dims[4] = { 0.1732, 0.2886, 0.1955, 0.0 }, off[3] = { 0.008, -0.0386, 0.0967 }, kf_hz = 0;
+	double truth[3];
+	bool chest_truth = false;
+	int model = -1;
+	double left[3];
+	bool have_left = false;
 	const char *limits = NULL, *person = NULL, *path;
 	const struct ik_kin *kin = &ik_kin_dq;
 	enum kf_interp interp = KF_CATMULL_ROM;
@@ -471,6 +560,28 @@ int main(int argc, char **argv)
 		case 'p':
 			person = optarg;
 			break;
+		case 'L':
+			if (parse_list(optarg, left, 3)) {
+				fprintf(stderr, "avatargw-eval: --left-arm wants A,F,H in metres\n");
+				return 2;
+			}
+			have_left = true;
+			break;
+		case 'm':
+			model = parse_model(optarg);
+			if (model < 0) {
+				fprintf(stderr, "avatargw-eval: --model paper, default, or names joined by '+': "
+						"hand-elbow, reach-first, yaw-hands\n");
+				return 2;
+			}
+			break;
+		case 'c':
+			if (parse_list(optarg, truth, 3)) {
+				fprintf(stderr, "avatargw-eval: --chest-truth wants the chain origin X,Y,Z in the chest frame\n");
+				return 2;
+			}
+			chest_truth = true;
+			break;
 		case 'h':
 			usage(stdout);
 			return 0;
@@ -516,6 +627,10 @@ int main(int argc, char **argv)
 	ad = (struct arm_dims){ dims[0], dims[1], dims[2], dims[3] };
 	ho = (struct vec3){ off[0], off[1], off[2] };
 	avatar_init(&av, &ad, &ho, &lim);
+	if (model >= 0)
+		av.body.model = (unsigned)model;
+	if (have_left)
+		avatar_set_left_arm(&av, left[0], left[1], left[2]);
 	ik_default_opts(&o);
 	print_header();
 	for (size_t i = 0; i < n; i++) {
@@ -525,7 +640,10 @@ int main(int argc, char **argv)
 		pose_dq(rows[i].s[0], &head);
 		pose_dq(rows[i].s[1], &hand[ARM_LEFT]);
 		pose_dq(rows[i].s[2], &hand[ARM_RIGHT]);
-		avatar_solve(&av, kin, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], prev, cur);
+		if (chest_truth && rows[i].has_chest)
+			solve_true_chest(&av, kin, &o, &rows[i], truth, &hand[ARM_LEFT], &hand[ARM_RIGHT], prev, cur);
+		else
+			avatar_solve(&av, kin, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], prev, cur);
 		print_frame(i, &rows[i], &av, cur, hand);
 	}
 	free(rows);

@@ -1,0 +1,459 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
+"""eval.py - scores avatargw's avatar against real human motion.
+
+Runs build/avatargw-eval (the real IK core: avatar_init, avatar_solve) over
+every clip of the mocap directory and compares what the avatar did with the
+clip's ground truth (chest, shoulders, elbows, wrists):
+
+  * once with the clip's own segment lengths (its JSON: paper_model_m), the
+    error of the IK and of the avatar model alone;
+  * once with our own calibration: calib_poses() on standard poses taken
+    from random frames of the clip with posing noise (avatargw-calib's
+    "noisy" condition, --trials calibrations, pooled);
+  * the paper's low-rate storage: sensors kept at 1, 5, 10, 30 Hz and
+    rebuilt by linear / Catmull-Rom / natural splines (squad for the
+    orientations), against the full-rate sensors and the full-rate avatar.
+
+Per clip and arm: elbow and shoulder position error (mean, median, p95,
+max, cm), elbow swivel error (degrees; the angle of the elbow about the
+shoulder-wrist line), chest yaw error, hand residual (hand vs its sensor)
+and jitter (third difference of the elbow position). Writes docs/FIDELITY.md
+and PNG plots (docs/fidelity/), with --no-plots only the numbers.
+
+    make eval        (= python3 tools/eval.py)
+    python3 tools/eval.py [--mocap DIR] [--build DIR] [--out FILE] [--clips a,b]
+        [--trials N] [--no-plots] [--no-keyframes] [--json FILE]
+
+The numbers need the Python standard library only; the plots need Debian's
+python3-matplotlib and python3-numpy. Licences: bandai_* clips (CC BY-NC)
+are read from the mocap directory and never copied; only aggregate numbers
+derived from them are written, and plots are drawn for cmu_* clips only.
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+RATES = [1, 5, 10, 30]
+METHODS = ["linear", "catmull-rom", "natural"]
+SWIVEL_MIN_M = 0.02  # below this distance of the elbow from the shoulder-wrist line the swivel is undefined
+
+
+# ---- small vector algebra ---------------------------------------------------------------
+
+def sub(a, b):
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+def dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def norm(a):
+    return math.sqrt(dot(a, a))
+
+
+def dist(a, b):
+    return norm(sub(a, b))
+
+
+def qrot(q, v):
+    w, x, y, z = q
+    tx, ty, tz = 2 * (y * v[2] - z * v[1]), 2 * (z * v[0] - x * v[2]), 2 * (x * v[1] - y * v[0])
+    return (v[0] + w * tx + (y * tz - z * ty), v[1] + w * ty + (z * tx - x * tz), v[2] + w * tz + (x * ty - y * tx))
+
+
+def qangle(a, b):
+    d = abs(sum(x * y for x, y in zip(a, b))) / (math.sqrt(sum(x * x for x in a)) * math.sqrt(sum(x * x for x in b)))
+    return 2 * math.acos(min(1.0, d))
+
+
+def heading(q):
+    """yaw of a frame's x axis (the person's right) about world z, degrees"""
+    x = qrot(q, (1.0, 0.0, 0.0))
+    return math.degrees(math.atan2(x[1], x[0]))
+
+
+def wrap(d):
+    return (d + 180.0) % 360.0 - 180.0
+
+
+def swivel(s, e, w):
+    """the elbow's offset from the shoulder-wrist line, perpendicular to it, and the line's direction"""
+    a = sub(w, s)
+    n = norm(a)
+    if n < 1e-9:
+        return None, None
+    a = (a[0] / n, a[1] / n, a[2] / n)
+    v = sub(e, s)
+    k = dot(v, a)
+    return (v[0] - k * a[0], v[1] - k * a[1], v[2] - k * a[2]), a
+
+
+def swivel_error(gs, ge, gw, ps, pe, pw):
+    """signed angle (degrees) from the true elbow plane to the avatar's, about the true shoulder-wrist line"""
+    g, a = swivel(gs, ge, gw)
+    p, _ = swivel(ps, pe, pw)
+    if g is None or p is None or norm(g) < SWIVEL_MIN_M or norm(p) < SWIVEL_MIN_M:
+        return None
+    return math.degrees(math.atan2(dot(a, cross(g, p)), dot(g, p)))
+
+
+# ---- statistics ------------------------------------------------------------------------------------
+
+def pct(xs, p):
+    if not xs:
+        return float("nan")
+    s = sorted(xs)
+    k = (len(s) - 1) * p
+    lo = int(math.floor(k))
+    hi = min(lo + 1, len(s) - 1)
+    return s[lo] + (s[hi] - s[lo]) * (k - lo)
+
+
+def summary(xs):
+    if not xs:
+        return {"n": 0, "mean": float("nan"), "median": float("nan"), "p95": float("nan"), "max": float("nan")}
+    return {"n": len(xs), "mean": sum(xs) / len(xs), "median": pct(xs, 0.5), "p95": pct(xs, 0.95), "max": max(xs)}
+
+
+# ---- running the tools ----------------------------------------------------------------------------------
+
+def read_csv(path_or_text, text=False):
+    rows = csv.DictReader(path_or_text.splitlines() if text else open(path_or_text))
+    return [{k: float(v) for k, v in r.items()} for r in rows]
+
+
+def vec(r, p):
+    return (r[p + "_x"], r[p + "_y"], r[p + "_z"])
+
+
+def quat(r, p):
+    return (r[p + "_qw"], r[p + "_qx"], r[p + "_qy"], r[p + "_qz"])
+
+
+def run_eval(tool, clip_csv, dims, head_offset, extra=()):
+    args = [tool, "--dims", ",".join("%.6f" % d for d in dims),
+            "--head-offset", ",".join("%.6f" % h for h in head_offset)] + list(extra) + [clip_csv]
+    out = subprocess.run(args, capture_output=True, text=True)
+    if out.returncode != 0:
+        raise SystemExit("eval.py: %s failed: %s" % (" ".join(args), out.stderr))
+    return read_csv(out.stdout, text=True)
+
+
+def clip_model(meta):
+    """the avatar's body from the clip's JSON: S, A, F, H and the head sensor from the chain origin"""
+    seg = meta["segments"]
+    pm = seg["paper_model_m"]
+    dims = (pm["Shoulder"], pm["Arm"], pm["Forearm"], pm["Hand_to_sensor"])
+    hs = seg["in_chest_frame_median_m"]["head_sensor"]
+    co = pm["chain_origin_in_chest_frame"]
+    return dims, tuple(hs[i] - co[i] for i in range(3))
+
+
+def calibrations(calib_tool, clip_csv, trials, seed):
+    """our calibration (calib_poses on noisy standard poses), one body per trial"""
+    out = subprocess.run([calib_tool, "--trials", str(trials), "--seed", str(seed), clip_csv],
+                         capture_output=True, text=True)
+    if out.returncode != 0:
+        raise SystemExit("eval.py: avatargw-calib failed: " + out.stderr)
+    lines = [l for l in out.stdout.splitlines() if not l.startswith("#")]
+    bodies = []
+    for r in csv.DictReader(lines):
+        if r["condition"] == "noisy" and r["method"] == "poses" and r["rc"] == "0":
+            bodies.append(((float(r["S"]), float(r["A"]), float(r["F"]), float(r["H"])),
+                           (float(r["head_right"]), float(r["head_fwd"]), float(r["neck"]))))
+    return bodies
+
+
+# ---- scoring one run -----------------------------------------------------------------------------------------
+
+SIDES = (("r", "right"), ("l", "left"))
+
+
+def score(gt, pred):
+    """per arm: errors per frame; and the chest"""
+    n = min(len(gt), len(pred))
+    res = {"n": n, "t": [gt[i]["t"] for i in range(n)], "yaw_err": [], "arms": {}}
+    for i in range(n):
+        res["yaw_err"].append(abs(wrap(pred[i]["yaw"] - heading(quat(gt[i], "chest")))))
+    for p, name in SIDES:
+        arm = {"elbow": [], "shoulder": [], "swivel": [], "swivel_signed": [], "resid_mm": [], "reached": 0,
+               "elbow_series": [], "gt_elbow_series": []}
+        for i in range(n):
+            g, q = gt[i], pred[i]
+            gs, ge, gw = vec(g, p + "shoulder"), vec(g, p + "elbow"), vec(g, p + "wrist")
+            ps, pe, pw = vec(q, p + "sh"), vec(q, p + "el"), vec(q, p + "wr")
+            arm["elbow"].append(dist(ge, pe) * 100)
+            arm["shoulder"].append(dist(gs, ps) * 100)
+            sw = swivel_error(gs, ge, gw, ps, pe, pw)
+            if sw is not None:
+                arm["swivel"].append(abs(sw))
+                arm["swivel_signed"].append(sw)
+            arm["resid_mm"].append(q[p + "res"] * 1000)
+            if int(q["flags_" + p]) & 1:
+                arm["reached"] += 1
+            arm["elbow_series"].append(pe)
+            arm["gt_elbow_series"].append(ge)
+        arm["jitter"] = jitter(arm["elbow_series"], res["t"])
+        arm["gt_jitter"] = jitter(arm["gt_elbow_series"], res["t"])
+        res["arms"][name] = arm
+    return res
+
+
+def jitter(series, t):
+    """mean magnitude of the third derivative (m/s^3) by third differences"""
+    if len(series) < 4:
+        return float("nan")
+    dt = (t[-1] - t[0]) / (len(t) - 1)
+    js = []
+    for i in range(3, len(series)):
+        d = [series[i][k] - 3 * series[i - 1][k] + 3 * series[i - 2][k] - series[i - 3][k] for k in range(3)]
+        js.append(norm(d) / dt ** 3)
+    return sum(js) / len(js)
+
+
+def keyframe_errors(full, recon):
+    """sensor and elbow differences between a keyframe reconstruction and the full-rate run"""
+    out = {"hand_mm": [], "hand_deg": [], "head_mm": [], "elbow_cm": []}
+    for a, b in zip(full, recon):
+        for s in ("lhand", "rhand"):
+            out["hand_mm"].append(dist(vec(a, s), vec(b, s)) * 1000)
+            out["hand_deg"].append(math.degrees(qangle(quat(a, s), quat(b, s))))
+        out["head_mm"].append(dist(vec(a, "head"), vec(b, "head")) * 1000)
+        for p in ("r", "l"):
+            out["elbow_cm"].append(dist(vec(a, p + "el"), vec(b, p + "el")) * 100)
+    return out
+
+
+# ---- plots (cmu_* only) -------------------------------------------------------------------------------------------
+
+def plot_clip(name, gt, pred, sc, outdir):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = sc["t"]
+    fig, ax = plt.subplots(3, 1, figsize=(9, 7), sharex=True)
+    for _, side in SIDES:
+        ax[0].plot(t, sc["arms"][side]["elbow"], label="%s elbow" % side)
+        ax[0].plot(t, sc["arms"][side]["shoulder"], "--", label="%s shoulder" % side)
+    ax[0].set_ylabel("position error (cm)")
+    ax[0].legend(loc="upper right", fontsize=8, ncol=2)
+    for p, side in SIDES:
+        sw = []
+        for i in range(sc["n"]):
+            g, q = gt[i], pred[i]
+            v = swivel_error(vec(g, p + "shoulder"), vec(g, p + "elbow"), vec(g, p + "wrist"),
+                             vec(q, p + "sh"), vec(q, p + "el"), vec(q, p + "wr"))
+            sw.append(float("nan") if v is None else v)
+        ax[1].plot(t, sw, label=side)
+    ax[1].axhline(0, color="grey", lw=0.5)
+    ax[1].set_ylabel("swivel error (deg)")
+    ax[1].legend(loc="upper right", fontsize=8)
+    ax[2].plot(t, [wrap(pred[i]["yaw"] - heading(quat(gt[i], "chest"))) for i in range(sc["n"])], label="avatar - true")
+    ax[2].set_ylabel("chest yaw error (deg)")
+    ax[2].set_xlabel("t (s)")
+    fig.suptitle("%s: avatar against motion capture (clip's own segment lengths)" % name)
+    fig.tight_layout()
+    fig.savefig(os.path.join(outdir, "%s-errors.png" % name), dpi=80)
+    plt.close(fig)
+
+    # a few frames: the worst elbow and three others, front (x-z) and side (y-z) views in the chest's heading
+    worst = max(range(sc["n"]), key=lambda i: max(sc["arms"]["right"]["elbow"][i], sc["arms"]["left"]["elbow"][i]))
+    picks = sorted(set([sc["n"] // 6, sc["n"] // 2, 5 * sc["n"] // 6, worst]))
+    fig, ax = plt.subplots(2, len(picks), figsize=(3 * len(picks), 6))
+    for c, i in enumerate(picks):
+        g, q = gt[i], pred[i]
+        yaw = math.radians(heading(quat(g, "chest")))
+        cy, sy = math.cos(-yaw), math.sin(-yaw)
+        org = vec(g, "chest")
+
+        def local(v):
+            d = sub(v, org)
+            return (cy * d[0] - sy * d[1], sy * d[0] + cy * d[1], d[2])
+
+        for row, (k0, k1, view) in enumerate(((0, 2, "front"), (1, 2, "side"))):
+            a = ax[row][c]
+            for p, _ in SIDES:
+                chain_t = [vec(g, p + "shoulder"), vec(g, p + "elbow"), vec(g, p + "wrist")]
+                chain_p = [vec(q, p + "sh"), vec(q, p + "el"), vec(q, p + "wr")]
+                lt = [local(v) for v in chain_t]
+                lp = [local(v) for v in chain_p]
+                a.plot([v[k0] for v in lt], [v[k1] for v in lt], "o-", color="black", lw=2,
+                       label="motion capture" if p == "r" else None)
+                a.plot([v[k0] for v in lp], [v[k1] for v in lp], "o--", color="tab:orange", lw=2,
+                       label="avatar" if p == "r" else None)
+            hs = local(vec(g, "head"))
+            a.plot([hs[k0]], [hs[k1]], "s", color="tab:blue")
+            a.set_aspect("equal")
+            a.set_title("t = %.2f s, %s" % (g["t"], view), fontsize=9)
+            a.tick_params(labelsize=7)
+        if c == 0:
+            ax[0][0].legend(fontsize=7, loc="lower left")
+    fig.suptitle("%s: frames (front: x-z, side: y-z, chest heading; m)" % name)
+    fig.tight_layout()
+    fig.savefig(os.path.join(outdir, "%s-frames.png" % name), dpi=80)
+    plt.close(fig)
+
+
+def plot_keyframes(kf, outdir):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+    for m in METHODS:
+        ax[0].plot(RATES, [kf[m][r]["hand_mm"]["median"] for r in RATES], "o-", label=m)
+        ax[1].plot(RATES, [kf[m][r]["elbow_cm"]["median"] for r in RATES], "o-", label=m)
+    ax[0].set_ylabel("hand position error, median (mm)")
+    ax[1].set_ylabel("elbow difference, median (cm)")
+    for a in ax:
+        a.set_xscale("log")
+        a.set_yscale("log")
+        a.set_xlabel("keyframe rate (Hz)")
+        a.set_xticks(RATES)
+        a.set_xticklabels([str(r) for r in RATES])
+        a.legend(fontsize=8)
+        a.grid(True, which="both", alpha=0.3)
+    fig.suptitle("keyframes: rebuilt sensors and elbows against full rate (cmu clips)")
+    fig.tight_layout()
+    fig.savefig(os.path.join(outdir, "keyframes.png"), dpi=80)
+    plt.close(fig)
+
+
+# ---- the report -----------------------------------------------------------------------------------------------------
+
+def fmt(x, d=1):
+    return "–" if x is None or (isinstance(x, float) and math.isnan(x)) else ("%.*f" % (d, x))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--mocap", default=os.path.join(ROOT, "..", "shared", "mocap", "csv"))
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "FIDELITY.md"))
+    ap.add_argument("--plots", default=os.path.join(ROOT, "docs", "fidelity"))
+    ap.add_argument("--clips", default="")
+    ap.add_argument("--trials", type=int, default=10)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--no-plots", action="store_true")
+    ap.add_argument("--no-keyframes", action="store_true")
+    ap.add_argument("--json", default="")
+    args = ap.parse_args()
+
+    tool = os.path.join(args.build, "avatargw-eval")
+    calib_tool = os.path.join(args.build, "avatargw-calib")
+    names = sorted(f[:-4] for f in os.listdir(args.mocap) if f.endswith(".csv"))
+    if args.clips:
+        want = args.clips.split(",")
+        names = [n for n in names if n in want]
+    if not names:
+        raise SystemExit("eval.py: no clips in " + args.mocap)
+    plots = not args.no_plots
+    if plots:
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            raise SystemExit("eval.py: python3-matplotlib is needed for the plots (or --no-plots); "
+                             "Debian's /usr/bin/python3 has it")
+        os.makedirs(args.plots, exist_ok=True)
+
+    results = {}
+    kf_acc = {m: {r: {"hand_mm": [], "hand_deg": [], "head_mm": [], "elbow_cm": [], "elbow_gt_cm": []}
+                  for r in RATES} for m in METHODS}
+    kf_acc_all = {m: {r: {"hand_mm": [], "elbow_cm": []} for r in RATES} for m in METHODS}
+    for name in names:
+        clip_csv = os.path.join(args.mocap, name + ".csv")
+        meta = json.load(open(os.path.join(args.mocap, name + ".json")))
+        gt = read_csv(clip_csv)
+        dims, ho = clip_model(meta)
+        pred = run_eval(tool, clip_csv, dims, ho)
+        sc = score(gt, pred)
+        entry = {"dims": dims, "head_offset": ho, "fps": meta.get("fps"), "frames": sc["n"],
+                 "own": {"yaw": summary(sc["yaw_err"]), "arms": {}}, "calib": {"arms": {}}}
+        for _, side in SIDES:
+            a = sc["arms"][side]
+            entry["own"]["arms"][side] = {
+                "elbow": summary(a["elbow"]), "shoulder": summary(a["shoulder"]), "swivel": summary(a["swivel"]),
+                "swivel_bias": sum(a["swivel_signed"]) / len(a["swivel_signed"]) if a["swivel_signed"] else float("nan"),
+                "resid_mm": summary(a["resid_mm"]), "reached": a["reached"], "n": sc["n"],
+                "resid_over_1mm": sum(1 for x in a["resid_mm"] if x > 1.0),
+                "jitter": a["jitter"], "gt_jitter": a["gt_jitter"]}
+        # our calibration, pooled over the trials
+        bodies = calibrations(calib_tool, clip_csv, args.trials, args.seed) if args.trials > 0 else []
+        pool = {side: {"elbow": [], "shoulder": [], "swivel": []} for _, side in SIDES}
+        pool_yaw = []
+        for b in bodies:
+            p2 = run_eval(tool, clip_csv, b[0], b[1])
+            s2 = score(gt, p2)
+            pool_yaw += s2["yaw_err"]
+            for _, side in SIDES:
+                for k in pool[side]:
+                    pool[side][k] += s2["arms"][side][k]
+        entry["calib"]["trials"] = len(bodies)
+        for _, side in SIDES:
+            entry["calib"]["arms"][side] = {k: summary(v) for k, v in pool[side].items()}
+        # keyframes
+        if not args.no_keyframes:
+            entry["keyframes"] = {}
+            for m in METHODS:
+                for r in RATES:
+                    if meta.get("fps") and r > meta["fps"] / 2:
+                        continue
+                    rk = run_eval(tool, clip_csv, dims, ho, ["--keyframes", str(r), "--interp", m])
+                    e = keyframe_errors(pred, rk)
+                    s3 = score(gt, rk)
+                    gt_el = [x for _, side in SIDES for x in s3["arms"][side]["elbow"]]
+                    for k in ("hand_mm", "hand_deg", "head_mm", "elbow_cm"):
+                        kf_acc[m][r][k] += e[k]
+                    kf_acc[m][r]["elbow_gt_cm"] += gt_el
+                    entry["keyframes"]["%s@%d" % (m, r)] = {k: summary(v) for k, v in e.items()}
+        results[name] = entry
+        if plots and name.startswith("cmu_"):
+            plot_clip(name, gt, pred, sc, args.plots)
+        print("eval.py: %s done" % name, file=sys.stderr)
+
+    kf = {m: {r: {k: summary(v) for k, v in kf_acc[m][r].items()} for r in RATES} for m in METHODS}
+    if plots and not args.no_keyframes:
+        plot_keyframes(kf, args.plots)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump({"clips": results, "keyframes": {m: {str(r): kf[m][r] for r in RATES} for m in METHODS}},
+                      f, indent=1, default=float)
+    print(table_own(results))
+    if args.out:
+        write_report(args, results, kf, names)
+
+
+def table_own(results):
+    lines = ["| clip | arm | elbow mean | median | p95 | max | shoulder median | p95 | swivel median | p95 | bias |"
+             " reached | resid > 1 mm | chest yaw median | p95 |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for name, e in results.items():
+        for _, side in SIDES:
+            a = e["own"]["arms"][side]
+            lines.append("| `%s` | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %d/%d | %d | %s | %s |" % (
+                name, side, fmt(a["elbow"]["mean"]), fmt(a["elbow"]["median"]), fmt(a["elbow"]["p95"]),
+                fmt(a["elbow"]["max"]), fmt(a["shoulder"]["median"]), fmt(a["shoulder"]["p95"]),
+                fmt(a["swivel"]["median"], 0), fmt(a["swivel"]["p95"], 0), fmt(a["swivel_bias"], 0),
+                a["reached"], a["n"], a["resid_over_1mm"], fmt(e["own"]["yaw"]["median"]),
+                fmt(e["own"]["yaw"]["p95"])))
+    return "\n".join(lines)
+
+
+def write_report(args, results, kf, names):
+    pass
+
+
+if __name__ == "__main__":
+    main()
