@@ -595,7 +595,7 @@ int main(int argc, char **argv)
 		return 2;
 	}
 	path = argv[optind];
-	arm_default_limits(&lim);
+	avatar_default_limits(&lim);
 	if (limits && load_limits(limits, &lim))
 		return 1;
 

@@ -160,21 +160,6 @@ def clip_model(meta):
     return dims, tuple(hs[i] - co[i] for i in range(3))
 
 
-def calibrations(calib_tool, clip_csv, trials, seed):
-    """our calibration (calib_poses on noisy standard poses), one body per trial"""
-    out = subprocess.run([calib_tool, "--trials", str(trials), "--seed", str(seed), clip_csv],
-                         capture_output=True, text=True)
-    if out.returncode != 0:
-        raise SystemExit("eval.py: avatargw-calib failed: " + out.stderr)
-    lines = [l for l in out.stdout.splitlines() if not l.startswith("#")]
-    bodies = []
-    for r in csv.DictReader(lines):
-        if r["condition"] == "noisy" and r["method"] == "poses" and r["rc"] == "0":
-            bodies.append(((float(r["S"]), float(r["A"]), float(r["F"]), float(r["H"])),
-                           (float(r["head_right"]), float(r["head_fwd"]), float(r["neck"]))))
-    return bodies
-
-
 # ---- scoring one run -----------------------------------------------------------------------------------------
 
 SIDES = (("r", "right"), ("l", "left"))
@@ -313,8 +298,9 @@ def plot_keyframes(kf, outdir):
 
     fig, ax = plt.subplots(1, 2, figsize=(10, 4))
     for m in METHODS:
-        ax[0].plot(RATES, [kf[m][r]["hand_mm"]["median"] for r in RATES], "o-", label=m)
-        ax[1].plot(RATES, [kf[m][r]["elbow_cm"]["median"] for r in RATES], "o-", label=m)
+        rs = [r for r in RATES if (m, r) in kf]
+        ax[0].plot(rs, [kf[(m, r)]["hand_mm"]["median"] for r in rs], "o-", label=m)
+        ax[1].plot(rs, [kf[(m, r)]["elbow_cm"]["median"] for r in rs], "o-", label=m)
     ax[0].set_ylabel("hand position error, median (mm)")
     ax[1].set_ylabel("elbow difference, median (cm)")
     for a in ax:
@@ -325,7 +311,7 @@ def plot_keyframes(kf, outdir):
         a.set_xticklabels([str(r) for r in RATES])
         a.legend(fontsize=8)
         a.grid(True, which="both", alpha=0.3)
-    fig.suptitle("keyframes: rebuilt sensors and elbows against full rate (cmu clips)")
+    fig.suptitle("keyframes: rebuilt hand sensors and elbows against full rate (all clips)")
     fig.tight_layout()
     fig.savefig(os.path.join(outdir, "keyframes.png"), dpi=80)
     plt.close(fig)
@@ -333,8 +319,101 @@ def plot_keyframes(kf, outdir):
 
 # ---- the report -----------------------------------------------------------------------------------------------------
 
+MODELS = [("paper", "paper"), ("reach-first", "+ reach first"), ("hand-elbow+reach-first", "+ hand elbow"),
+          ("default", "+ chest yaw from hands (default)")]
+GOAL_MEDIAN, GOAL_P95, GOAL_MAX, GOAL_RESID_MM, GOAL_CALIB_MEDIAN = 3.0, 8.0, 15.0, 1.0, 5.0
+
+
 def fmt(x, d=1):
     return "–" if x is None or (isinstance(x, float) and math.isnan(x)) else ("%.*f" % (d, x))
+
+
+def mark(ok):
+    return "yes" if ok else "**no**"
+
+
+def body_args(meta):
+    """the clip's own lengths, per arm (--left-arm), and the head sensor offset"""
+    dims, ho = clip_model(meta)
+    fk = meta["segments"]["measured_fk_m"]
+    right = (dims[0], fk["upper_arm_R"]["median"], fk["forearm_R"]["median"], dims[3])
+    left = (fk["upper_arm_L"]["median"], fk["forearm_L"]["median"], dims[3])
+    return right, ho, ["--left-arm", ",".join("%.6f" % x for x in left)]
+
+
+def pooled(sc):
+    return [x for _, side in SIDES for x in sc["arms"][side]["elbow"]]
+
+
+def run_clip(args, tool, calib_tool, name):
+    clip_csv = os.path.join(args.mocap, name + ".csv")
+    meta = json.load(open(os.path.join(args.mocap, name + ".json")))
+    gt = read_csv(clip_csv)
+    dims, ho, left = body_args(meta)
+    pred = run_eval(tool, clip_csv, dims, ho, left)
+    sc = score(gt, pred)
+    e = {"fps": meta.get("fps"), "frames": sc["n"], "dims": dims, "left": left[1], "head_offset": ho,
+         "yaw": summary(sc["yaw_err"]), "arms": {}, "models": {}, "calib": {}, "keyframes": {}}
+    for _, side in SIDES:
+        a = sc["arms"][side]
+        e["arms"][side] = {
+            "elbow": summary(a["elbow"]), "shoulder": summary(a["shoulder"]), "swivel": summary(a["swivel"]),
+            "swivel_bias": sum(a["swivel_signed"]) / len(a["swivel_signed"]) if a["swivel_signed"] else float("nan"),
+            "resid_mm": summary(a["resid_mm"]), "reached": a["reached"], "n": sc["n"],
+            "resid_over_1mm": sum(1 for x in a["resid_mm"] if x > GOAL_RESID_MM),
+            "jitter": a["jitter"], "gt_jitter": a["gt_jitter"]}
+    # the model's choices, one at a time
+    for m, _ in MODELS:
+        s2 = score(gt, run_eval(tool, clip_csv, dims, ho, left + ["--model", m]))
+        e["models"][m] = {"elbow": summary(pooled(s2)), "yaw": summary(s2["yaw_err"]),
+                          "resid_over_1mm": sum(1 for _, side in SIDES for x in s2["arms"][side]["resid_mm"]
+                                                if x > GOAL_RESID_MM)}
+    # the chest where it truly was: what is left is the arms'
+    co = meta["segments"]["paper_model_m"]["chain_origin_in_chest_frame"]
+    s3 = score(gt, run_eval(tool, clip_csv, dims, ho, left + ["--chest-truth", ",".join("%.6f" % x for x in co)]))
+    e["true_chest"] = {"elbow": summary(pooled(s3)), "shoulder": summary(
+        [x for _, side in SIDES for x in s3["arms"][side]["shoulder"]])}
+    # our calibration and the paper's heuristic, several noisy calibrations pooled
+    if args.trials > 0:
+        for method in ("poses", "paper-wrist"):
+            bodies = calibrations(calib_tool, clip_csv, args.trials, args.seed, method)
+            pool = {side: {"elbow": [], "shoulder": [], "swivel": []} for _, side in SIDES}
+            for b in bodies:
+                s4 = score(gt, run_eval(tool, clip_csv, b[0], b[1]))
+                for _, side in SIDES:
+                    for k in pool[side]:
+                        pool[side][k] += s4["arms"][side][k]
+            e["calib"][method] = {"trials": len(bodies),
+                                  "arms": {side: {k: summary(v) for k, v in pool[side].items()} for _, side in SIDES}}
+    # keyframes
+    kf = {}
+    if not args.no_keyframes:
+        for m in METHODS:
+            for r in RATES:
+                if e["fps"] and r > e["fps"] / 2:
+                    continue
+                rk = run_eval(tool, clip_csv, dims, ho, left + ["--keyframes", str(r), "--interp", m])
+                d = keyframe_errors(pred, rk)
+                d["elbow_gt_cm"] = pooled(score(gt, rk))
+                kf[(m, r)] = d
+                e["keyframes"]["%s@%d" % (m, r)] = {k: summary(v) for k, v in d.items()}
+    e["full_elbow_gt"] = summary(pooled(sc))
+    return e, gt, pred, sc, kf
+
+
+def calibrations(calib_tool, clip_csv, trials, seed, method="poses"):
+    """noisy standard poses (avatargw-calib's "noisy" condition) -> one body per trial"""
+    out = subprocess.run([calib_tool, "--trials", str(trials), "--seed", str(seed), clip_csv],
+                         capture_output=True, text=True)
+    if out.returncode != 0:
+        raise SystemExit("eval.py: avatargw-calib failed: " + out.stderr)
+    lines = [l for l in out.stdout.splitlines() if not l.startswith("#")]
+    bodies = []
+    for r in csv.DictReader(lines):
+        if r["condition"] == "noisy" and r["method"] == method and r["rc"] == "0":
+            bodies.append(((float(r["S"]), float(r["A"]), float(r["F"]), float(r["H"])),
+                           (float(r["head_right"]), float(r["head_fwd"]), float(r["neck"]))))
+    return bodies
 
 
 def main():
@@ -369,89 +448,50 @@ def main():
         os.makedirs(args.plots, exist_ok=True)
 
     results = {}
-    kf_acc = {m: {r: {"hand_mm": [], "hand_deg": [], "head_mm": [], "elbow_cm": [], "elbow_gt_cm": []}
-                  for r in RATES} for m in METHODS}
-    kf_acc_all = {m: {r: {"hand_mm": [], "elbow_cm": []} for r in RATES} for m in METHODS}
+    kf_all = {}
     for name in names:
-        clip_csv = os.path.join(args.mocap, name + ".csv")
-        meta = json.load(open(os.path.join(args.mocap, name + ".json")))
-        gt = read_csv(clip_csv)
-        dims, ho = clip_model(meta)
-        pred = run_eval(tool, clip_csv, dims, ho)
-        sc = score(gt, pred)
-        entry = {"dims": dims, "head_offset": ho, "fps": meta.get("fps"), "frames": sc["n"],
-                 "own": {"yaw": summary(sc["yaw_err"]), "arms": {}}, "calib": {"arms": {}}}
-        for _, side in SIDES:
-            a = sc["arms"][side]
-            entry["own"]["arms"][side] = {
-                "elbow": summary(a["elbow"]), "shoulder": summary(a["shoulder"]), "swivel": summary(a["swivel"]),
-                "swivel_bias": sum(a["swivel_signed"]) / len(a["swivel_signed"]) if a["swivel_signed"] else float("nan"),
-                "resid_mm": summary(a["resid_mm"]), "reached": a["reached"], "n": sc["n"],
-                "resid_over_1mm": sum(1 for x in a["resid_mm"] if x > 1.0),
-                "jitter": a["jitter"], "gt_jitter": a["gt_jitter"]}
-        # our calibration, pooled over the trials
-        bodies = calibrations(calib_tool, clip_csv, args.trials, args.seed) if args.trials > 0 else []
-        pool = {side: {"elbow": [], "shoulder": [], "swivel": []} for _, side in SIDES}
-        pool_yaw = []
-        for b in bodies:
-            p2 = run_eval(tool, clip_csv, b[0], b[1])
-            s2 = score(gt, p2)
-            pool_yaw += s2["yaw_err"]
-            for _, side in SIDES:
-                for k in pool[side]:
-                    pool[side][k] += s2["arms"][side][k]
-        entry["calib"]["trials"] = len(bodies)
-        for _, side in SIDES:
-            entry["calib"]["arms"][side] = {k: summary(v) for k, v in pool[side].items()}
-        # keyframes
-        if not args.no_keyframes:
-            entry["keyframes"] = {}
-            for m in METHODS:
-                for r in RATES:
-                    if meta.get("fps") and r > meta["fps"] / 2:
-                        continue
-                    rk = run_eval(tool, clip_csv, dims, ho, ["--keyframes", str(r), "--interp", m])
-                    e = keyframe_errors(pred, rk)
-                    s3 = score(gt, rk)
-                    gt_el = [x for _, side in SIDES for x in s3["arms"][side]["elbow"]]
-                    for k in ("hand_mm", "hand_deg", "head_mm", "elbow_cm"):
-                        kf_acc[m][r][k] += e[k]
-                    kf_acc[m][r]["elbow_gt_cm"] += gt_el
-                    entry["keyframes"]["%s@%d" % (m, r)] = {k: summary(v) for k, v in e.items()}
-        results[name] = entry
+        e, gt, pred, sc, kf = run_clip(args, tool, calib_tool, name)
+        results[name] = e
+        for key, d in kf.items():
+            acc = kf_all.setdefault(key, {"hand_mm": [], "hand_deg": [], "head_mm": [], "elbow_cm": [],
+                                          "elbow_gt_cm": [], "clips": 0})
+            for k in d:
+                acc[k] += d[k]
+            acc["clips"] += 1
         if plots and name.startswith("cmu_"):
             plot_clip(name, gt, pred, sc, args.plots)
         print("eval.py: %s done" % name, file=sys.stderr)
-
-    kf = {m: {r: {k: summary(v) for k, v in kf_acc[m][r].items()} for r in RATES} for m in METHODS}
-    if plots and not args.no_keyframes:
-        plot_keyframes(kf, args.plots)
+    kf_sum = {key: dict({k: summary(v) for k, v in d.items() if k != "clips"}, clips=d["clips"])
+              for key, d in kf_all.items()}
+    if plots and kf_sum:
+        plot_keyframes(kf_sum, args.plots)
     if args.json:
         with open(args.json, "w") as f:
-            json.dump({"clips": results, "keyframes": {m: {str(r): kf[m][r] for r in RATES} for m in METHODS}},
-                      f, indent=1, default=float)
-    print(table_own(results))
+            json.dump({"clips": results, "keyframes": {"%s@%d" % k: v for k, v in kf_sum.items()}}, f, indent=1)
     if args.out:
-        write_report(args, results, kf, names)
+        write_report(args, results, kf_sum, names, plots)
+        print("eval.py: wrote " + args.out, file=sys.stderr)
+    else:
+        print(table_arms(results))
 
 
-def table_own(results):
+def table_arms(results):
     lines = ["| clip | arm | elbow mean | median | p95 | max | shoulder median | p95 | swivel median | p95 | bias |"
-             " reached | resid > 1 mm | chest yaw median | p95 |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             " hand > 1 mm | hand max (mm) | elbow jitter / true (m/s³) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for name, e in results.items():
         for _, side in SIDES:
-            a = e["own"]["arms"][side]
-            lines.append("| `%s` | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %d/%d | %d | %s | %s |" % (
+            a = e["arms"][side]
+            lines.append("| `%s` | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %d / %d | %s | %s / %s |" % (
                 name, side, fmt(a["elbow"]["mean"]), fmt(a["elbow"]["median"]), fmt(a["elbow"]["p95"]),
                 fmt(a["elbow"]["max"]), fmt(a["shoulder"]["median"]), fmt(a["shoulder"]["p95"]),
                 fmt(a["swivel"]["median"], 0), fmt(a["swivel"]["p95"], 0), fmt(a["swivel_bias"], 0),
-                a["reached"], a["n"], a["resid_over_1mm"], fmt(e["own"]["yaw"]["median"]),
-                fmt(e["own"]["yaw"]["p95"])))
+                a["resid_over_1mm"], a["n"], fmt(a["resid_mm"]["max"], 1), fmt(a["jitter"], 0),
+                fmt(a["gt_jitter"], 0)))
     return "\n".join(lines)
 
 
-def write_report(args, results, kf, names):
+def write_report(args, results, kf, names, plots):
     pass
 
 

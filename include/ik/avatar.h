@@ -69,6 +69,7 @@ struct avatar_pose {
 };
 
 #define avatar_init SCN(avatar_init)
+#define avatar_default_limits SCN(avatar_default_limits)
 #define avatar_set_left_arm SCN(avatar_set_left_arm)
 #define avatar_head_yaw SCN(avatar_head_yaw)
 #define avatar_chest SCN(avatar_chest)
@@ -77,7 +78,15 @@ struct avatar_pose {
 #define avatar_arm_target SCN(avatar_arm_target)
 #define avatar_solve SCN(avatar_solve)
 
-/* lim NULL: the default limits; model = AVATAR_MODEL_DEFAULT (change it after, if wanted) */
+/*
+ * The avatar's default joint limits: the benchmark's (arm_default_limits)
+ * but J2 from -120 degrees, so that an arm raised sideways above the
+ * shoulder (a wave overhead, a thrust up) stays reachable: -90 cut the
+ * motion-capture clips' overhead frames (docs/FIDELITY.md). The daemon's
+ * j1..j8 defaults are these.
+ */
+void avatar_default_limits(struct arm_limits *out);
+/* lim NULL: avatar_default_limits(); model = AVATAR_MODEL_DEFAULT (change it after, if wanted) */
 void avatar_init(struct avatar *av, const struct arm_dims *dims, const struct vec3 *head_offset,
 		 const struct arm_limits *lim);
 /* the left arm's own lengths, when the two arms differ (shoulder is shared: the chain origin is midway) */

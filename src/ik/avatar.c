@@ -6,6 +6,12 @@
  */
 #include "ik/avatar.h"
 
+void avatar_default_limits(struct arm_limits *out)
+{
+	arm_default_limits(out);
+	out->lo[1] = SC_C(-2.0943951023931957); /* -120 degrees */
+}
+
 void avatar_init(struct avatar *av, const struct arm_dims *dims, const struct vec3 *head_offset,
 		 const struct arm_limits *lim)
 {
@@ -15,7 +21,7 @@ void avatar_init(struct avatar *av, const struct arm_dims *dims, const struct ve
 	if (lim)
 		av->body.lim = *lim;
 	else
-		arm_default_limits(&av->body.lim);
+		avatar_default_limits(&av->body.lim);
 	arm_init(&av->arm[ARM_RIGHT], ARM_RIGHT, dims, &av->body.lim);
 	arm_init(&av->arm[ARM_LEFT], ARM_LEFT, dims, &av->body.lim);
 }
