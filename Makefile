@@ -4,6 +4,7 @@
 #   make            build everything into $(BUILD)
 #   make test       build and run every test (add SAN=1 for ASan + UBSan)
 #   make bench      run the IK benchmark on ../shared/bench
+#   make eval       score the avatar against ../shared/mocap (docs/FIDELITY.md)
 #   make install    install under $(DESTDIR)$(PREFIX)
 #   make clean
 
@@ -170,6 +171,13 @@ test: all $(TEST_BIN) check-core
 bench: $(BUILD)/avatargw-ikbench $(DAEMON) $(BUILD)/avatargw-dump $(BUILD)/avatargw-ctl
 	@tools/bench.sh $(BUILD) $(SHARED)
 	@tools/bench-daemon.sh $(BUILD)
+
+# the avatar against the motion capture of $(SHARED)/mocap: writes docs/FIDELITY.md and docs/fidelity/*.png
+# (minutes, not part of make test; Debian's python3 has matplotlib)
+PYTHON ?= $(shell test -x /usr/bin/python3 && echo /usr/bin/python3 || echo python3)
+.PHONY: eval
+eval: $(BUILD)/avatargw-eval $(BUILD)/avatargw-calib
+	$(PYTHON) tools/eval.py --build $(BUILD) --mocap $(SHARED)/mocap/csv
 
 # the embedded demo in the foreground, with a view of the avatar in the terminal
 run: all
