@@ -80,7 +80,11 @@ static int cmd_info(const char *path, bool json)
 		for (size_t i = 0; i < ix.n_damage; i++)
 			printf("%s{\"offset\":%zu,\"length\":%zu,\"truncated\":%s}", i ? "," : "", ix.damage[i].off,
 			       ix.damage[i].len, ix.damage[i].truncated ? "true" : "false");
-		printf("],\"rate_hz\":%.6g,\"source_id\":%u,\"sensors\":[", s->rate, s->source_id);
+		printf("],\"first_arrival_ns\":%llu,\"last_arrival_ns\":%llu,\"rate_hz\":%.6g,\"source_id\":%u,"
+		       "\"sensors\":[",
+		       (unsigned long long)(ix.n_events ? ix.events[0].arrival_ns : 0),
+		       (unsigned long long)(ix.n_events ? ix.events[ix.n_events - 1].arrival_ns : 0), s->rate,
+		       s->source_id);
 		for (uint32_t i = 0; i < ix.n_sensors; i++) {
 			size_t n = 0;
 

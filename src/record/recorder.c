@@ -279,8 +279,10 @@ static bool open_file(struct recorder *r)
 	}
 	gmtime_r(&now, &tm);
 	for (int k = 0; k < 1000; k++) {
-		size_t n = (size_t)snprintf(name, sizeof(name), "%s/avatargw-%04d%02d%02dT%02d%02d%02dZ", r->dir,
-					    tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
+		/* UTC to the millisecond: names sort in time order */
+		size_t n = (size_t)snprintf(name, sizeof(name), "%s/avatargw-%04d%02d%02dT%02d%02d%02d.%03dZ", r->dir,
+					    tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec,
+					    (int)(h.created_ns / 1000000ull % 1000));
 
 		if (k && n < sizeof(name))
 			n += (size_t)snprintf(name + n, sizeof(name) - n, "-%d", k);
@@ -353,7 +355,7 @@ static bool want_rotation(const struct recorder *r, size_t next, uint64_t now)
 		return false; /* never an empty file */
 	if (r->rotate_bytes && r->file_bytes + r->wlen + next > r->rotate_bytes)
 		return true;
-	return r->rotate_ns && now - r->file_opened_ns >= r->rotate_ns;
+	return r->rotate_ns && now > r->file_opened_ns && now - r->file_opened_ns >= r->rotate_ns;
 }
 
 /* marks in the file what the loop could not queue since the last time */
