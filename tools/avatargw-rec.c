@@ -60,6 +60,7 @@ static int cmd_info(const char *path, bool json)
 	struct rec_index ix;
 	char err[512];
 	const struct recfile_session *s;
+	int rc;
 
 	if (rec_index_load(path, &ix, err, sizeof(err))) {
 		fprintf(stderr, "avatargw-rec: %s\n", err);
@@ -128,8 +129,9 @@ static int cmd_info(const char *path, bool json)
 		printf("%s\n", ix.clean_end ? "closed cleanly (END record)"
 					   : "no END record: the recording daemon stopped without closing the file");
 	}
+	rc = ix.n_damage ? 1 : 0;
 	rec_index_free(&ix);
-	return ix.n_damage ? 1 : 0;
+	return rc;
 }
 
 static int cmd_csv(const char *path, const char *person)

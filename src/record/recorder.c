@@ -724,8 +724,8 @@ void recorder_log_replay_damage(struct gateway *g)
 				pr_warning("source %s: more damaged regions not listed", t->name);
 				break;
 			}
-			pr_warning("source %s: %s: %s bytes %zu..%zu (%zu bytes) skipped%s", t->name, t->cfg->file,
-				   d.truncated ? "cut-off record at" : "damaged region", d.off, d.off + d.len, d.len,
+			pr_warning("source %s: %s: %s at bytes %zu..%zu (%zu bytes) skipped%s", t->name, t->cfg->file,
+				   d.truncated ? "cut-off record" : "damaged region", d.off, d.off + d.len, d.len,
 				   d.truncated ? "" : ", replay resumes at the next good record");
 		}
 	}
