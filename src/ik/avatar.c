@@ -486,15 +486,13 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 {
 	const struct arm *a = &av->arm[side];
 	const sc_t *pq = prev ? prev->q[side] : NULL;
-	sc_t pref[ARM_DOF], *q = out->q[side];
+	sc_t pref[ARM_DOF], base[ARM_DOF], *q = out->q[side];
 	struct ik_result *res = &out->res[side];
 	const sc_t *seed = pq;
 	unsigned flags;
 
 	out->hand_misfit[side] = prev ? prev->hand_misfit[side] : SC_C(0);
 	if ((av->body.model & AVATAR_HAND_ELBOW) && t->valid) {
-		sc_t base[ARM_DOF];
-
 		if (!pq) {
 			/* a reset: the solver's own choice is where an untrusted hand leaves the elbow */
 			ik_solve(a, kin, t, NULL, o, base, res);
