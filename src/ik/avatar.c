@@ -196,6 +196,7 @@ struct arm_goal {
 	struct vec3 d0, d1;  /* unit, across ax */
 	sc_t x, r;           /* the circle: centre s + x ax, radius r */
 	sc_t q1, s1, c1;
+	bool in_reach;       /* false: the wrist is beyond A + F, the circle is the straight arm's */
 };
 
 static bool goal_init(const struct arm *a, const struct ik_target *t, sc_t q1, struct arm_goal *g)
@@ -219,8 +220,9 @@ static bool goal_init(const struct arm *a, const struct ik_target *t, sc_t q1, s
 	L = v3_unit(&g->ax);
 	if (!sc_isfinite(L) || !(L > sc_abs(dm->arm - dm->forearm) + SC_C(1e-4)))
 		return false;
-	if (L > dm->arm + dm->forearm)
-		L = dm->arm + dm->forearm; /* out of reach: the arm straight toward the wrist */
+	g->in_reach = L <= dm->arm + dm->forearm;
+	if (!g->in_reach)
+		L = dm->arm + dm->forearm; /* the arm straight toward the wrist */
 	g->x = sc_div(sc_mul(dm->arm, dm->arm) - sc_mul(dm->forearm, dm->forearm) + sc_mul(L, L), 2 * L);
 	r2 = sc_mul(dm->arm, dm->arm) - sc_mul(g->x, g->x);
 	g->r = r2 > 0 ? sc_sqrt(r2) : SC_C(0);
@@ -418,7 +420,7 @@ static bool reach_first(const struct arm *a, const struct ik_target *t, const sc
 		struct arm_goal g;
 		sc_t phi0;
 
-		if (!goal_init(a, t, q1s[i], &g))
+		if (!goal_init(a, t, q1s[i], &g) || !g.in_reach)
 			continue;
 		phi0 = goal_hand_phi(a, &g);
 		for (k = 0; k < 24; k++) {

@@ -497,7 +497,7 @@ int recorder_open(struct recorder **rp, const struct cfg_daemon *d, char *err, s
 		rc = -rc;
 		goto fail;
 	}
-	pthread_setname_np(r->thread, "avatargw-rec");
+	pthread_setname_np(r->thread, "avatargw-record");
 	*rp = r;
 	return 0;
 fail:
