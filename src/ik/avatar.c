@@ -69,11 +69,10 @@ static sc_t hands_yaw(const struct dq *lhand, const struct dq *rhand, sc_t head_
 	if (!(sep > SC_C(0.3)))
 		return 0;
 	*yaw = sc_atan2(dy, dx);
-	d = sc_wrap_pi(*yaw - head_yaw);
-	if (sc_abs(d) > SC_C(1.0471975511965976))
-		return 0;
-	wgt = sc_div(sep - SC_C(0.3), SC_C(0.2));
-	return sc_min(wgt, SC_C(1));
+	d = sc_abs(sc_wrap_pi(*yaw - head_yaw));
+	wgt = sc_min(sc_div(sep - SC_C(0.3), SC_C(0.2)), SC_C(1));
+	/* fading out from 45 to 60 degrees off the head's heading: no jump of the chest when it crosses */
+	return sc_mul(wgt, sc_clamp(sc_div(SC_C(1.0471975511965976) - d, SC_C(0.2617993877991494)), SC_C(0), SC_C(1)));
 }
 
 bool avatar_chest_hands(const struct avatar *av, const struct dq *head, const struct dq *lhand, const struct dq *rhand,
