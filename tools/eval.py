@@ -482,15 +482,16 @@ def main():
 
 
 def table_arms(results):
-    lines = ["| clip | arm | elbow mean | median | p95 | max | shoulder median | p95 | swivel median | p95 | bias |"
-             " hand > 1 mm | hand max (mm) | elbow jitter / true (m/s³) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| clip | arm | elbow mean | median | p95 | max | shoulder mean | median | p95 | max | swivel median (deg) |"
+             " p95 | bias | hand > 1 mm | hand max (mm) | elbow jitter / true (m/s³) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for name, e in results.items():
         for _, side in SIDES:
             a = e["arms"][side]
-            lines.append("| `%s` | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %d / %d | %s | %s / %s |" % (
+            lines.append("| `%s` | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %d / %d | %s | %s / %s |" % (
                 name, side, fmt(a["elbow"]["mean"]), fmt(a["elbow"]["median"]), fmt(a["elbow"]["p95"]),
-                fmt(a["elbow"]["max"]), fmt(a["shoulder"]["median"]), fmt(a["shoulder"]["p95"]),
+                fmt(a["elbow"]["max"]), fmt(a["shoulder"]["mean"]), fmt(a["shoulder"]["median"]),
+                fmt(a["shoulder"]["p95"]), fmt(a["shoulder"]["max"]),
                 fmt(a["swivel"]["median"], 0), fmt(a["swivel"]["p95"], 0), fmt(a["swivel_bias"], 0),
                 a["resid_over_1mm"], a["n"], fmt(a["resid_mm"]["max"], 1), fmt(a["jitter"], 0),
                 fmt(a["gt_jitter"], 0)))
@@ -581,6 +582,8 @@ def write_report(args, results, kf, names, plots):
     w("")
     # ---- full table
     w("## With the clips' own segment lengths")
+    w("")
+    w("Positions in cm.")
     w("")
     w(table_arms(results))
     w("")
