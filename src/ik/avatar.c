@@ -343,16 +343,24 @@ static sc_t goal_hand_misfit(const struct arm *a, const struct arm_goal *g)
 	return sc_abs(ang - gamma);
 }
 
-/* the swivel of the elbow of posture q on the goal's circle */
+/*
+ * The swivel on the goal's circle of the elbow of posture q: the right
+ * arm's elbow is Rz(q1) [(S, 0, 0) + Ry(q2) Rx(q3) (0, 0, -A)] (J4 turns
+ * about the upper arm); the left arm's, mirrored, is the same numbers.
+ */
 static sc_t goal_phi_of(const struct arm *a, const struct arm_goal *g, const sc_t q[ARM_DOF])
 {
-	struct arm_pose ap;
-	struct vec3 v;
+	sc_t s1, c1, s2, c2, s3, c3, A = a->dims.arm;
+	struct vec3 u, e, v;
 
-	arm_fk_pose(a, q, &ap);
-	v = (struct vec3){ ap.elbow.x - g->s.x, ap.elbow.y - g->s.y, ap.elbow.z - g->s.z };
-	if (a->side == ARM_LEFT)
-		v.x = -(ap.elbow.x + g->s.x); /* mirrored: the goal is in the right arm's frame */
+	sc_sincos(q[0], &s1, &c1);
+	sc_sincos(q[1], &s2, &c2);
+	sc_sincos(q[2], &s3, &c3);
+	/* Ry(q2) Rx(q3) (0, 0, -A) */
+	u = (struct vec3){ -sc_mul(A, sc_mul(s2, c3)), sc_mul(A, s3), -sc_mul(A, sc_mul(c2, c3)) };
+	u.x += a->dims.shoulder;
+	e = (struct vec3){ sc_mul(c1, u.x) - sc_mul(s1, u.y), sc_mul(s1, u.x) + sc_mul(c1, u.y), u.z };
+	v = (struct vec3){ e.x - g->s.x, e.y - g->s.y, e.z - g->s.z };
 	return sc_atan2(v3_dot(&v, &g->d1), v3_dot(&v, &g->d0));
 }
 
@@ -387,8 +395,10 @@ static bool hand_elbow_posture(const struct arm *a, const struct ik_target *t, c
 	if (trust <= 0)
 		return false; /* the previous posture as it was */
 	phi = goal_hand_phi(a, &g);
-	base = goal_phi_of(a, &g, prev);
-	phi = base + sc_mul(trust, sc_wrap_pi(phi - base));
+	if (trust < SC_C(1)) {
+		base = goal_phi_of(a, &g, prev);
+		phi = base + sc_mul(trust, sc_wrap_pi(phi - base));
+	}
 	return goal_posture(a, &g, phi, pref, &va, &vw);
 }
 
