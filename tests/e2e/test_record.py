@@ -232,7 +232,7 @@ class KillTest(unittest.TestCase):
             self.assertGreater(info["samples"], 6 * 240)
             lost_s = (killed - info["last_arrival_ns"]) * 1e-9
             # the flush interval, the writer's 10 ms look at the buffer, and scheduling on a busy machine
-            self.assertLess(lost_s, 0.1 + 0.01 + 0.15, "%.3f s lost" % lost_s)
+            self.assertLess(lost_s, 0.1 + 0.01 + 0.25, "%.3f s lost" % lost_s)
 
 
 class StepTest(unittest.TestCase):
