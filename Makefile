@@ -4,6 +4,7 @@
 #   make            build everything into $(BUILD)
 #   make test       build and run every test (add SAN=1 for ASan + UBSan)
 #   make bench      run the IK benchmark on ../shared/bench
+#   make eval       score the avatar against ../shared/mocap (docs/FIDELITY.md)
 #   make install    install under $(DESTDIR)$(PREFIX)
 #   make clean
 
@@ -64,13 +65,15 @@ LIBUSB_LIBS = $(shell pkg-config --libs libusb-1.0 2>/dev/null || echo -lusb-1.0
 MODBUS_LIBS = $(shell pkg-config --libs libmodbus 2>/dev/null || echo -lmodbus)
 LWS_LIBS = $(shell pkg-config --libs libwebsockets 2>/dev/null || echo -lwebsockets)
 LO_LIBS = $(shell pkg-config --libs liblo 2>/dev/null || echo -llo)
+ZLIB_LIBS = $(shell pkg-config --libs zlib 2>/dev/null || echo -lz)
 DEP_LIBS = $(INIH_LIBS)
 DEP_LIBS += $(MODBUS_LIBS)
 DEP_LIBS += $(LO_LIBS)
 DEP_LIBS += $(LWS_LIBS)
+DEP_LIBS += $(ZLIB_LIBS)
 LIBS = $(DEP_LIBS) -lpthread -lm
 GW_SRC = $(filter-out src/daemon/main.c,$(wildcard src/wire/*.c src/config/*.c src/trackers/*.c \
-	src/frames/*.c src/publish/*.c src/daemon/*.c))
+	src/frames/*.c src/publish/*.c src/record/*.c src/daemon/*.c))
 GW_OBJ = $(patsubst src/%.c,$(BUILD)/obj/%.o,$(GW_SRC)) $(BUILD)/obj/gen/builtin.o
 # files compiled into the daemon: the demo configuration and its clip
 BUILTIN_FILES = config/demo.conf config/clips/cmu_141_16.csv
@@ -182,6 +185,13 @@ test: all $(TEST_BIN) $(TEST_HELPERS) check-core
 bench: $(BUILD)/avatargw-ikbench $(DAEMON) $(BUILD)/avatargw-dump $(BUILD)/avatargw-ctl
 	@tools/bench.sh $(BUILD) $(SHARED)
 	@tools/bench-daemon.sh $(BUILD)
+
+# the avatar against the motion capture of $(SHARED)/mocap: writes docs/FIDELITY.md and docs/fidelity/*.png
+# (minutes, not part of make test; Debian's python3 has matplotlib)
+PYTHON ?= $(shell test -x /usr/bin/python3 && echo /usr/bin/python3 || echo python3)
+.PHONY: eval
+eval: $(BUILD)/avatargw-eval $(BUILD)/avatargw-calib
+	$(PYTHON) tools/eval.py --build $(BUILD) --mocap $(SHARED)/mocap/csv
 
 # the embedded demo in the foreground, with a view of the avatar in the terminal
 run: all

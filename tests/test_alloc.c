@@ -7,19 +7,21 @@
  * and the IK core is counted. The gateway is built (allocation allowed),
  * then the real loop thread runs for a while with a TCP and a Unix
  * subscriber connected, a slow subscriber that never reads, several
- * avatars, sim and replay sources, DESCRIBEs, and the counters must not
- * move. mallinfo2() must not move either, which also catches allocations
+ * avatars, sim and replay sources, DESCRIBEs, the recorder (samples and
+ * messages, its writer thread flushing), and the counters must not move. mallinfo2() must not move either, which also catches allocations
  * made inside libc on our behalf.
  */
 #include "config/config.h"
 #include "daemon/gateway.h"
 #include "daemon/loop.h"
+#include "record/recorder.h"
 
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
 #include <cmocka.h>
 
+#include <dirent.h>
 #include <malloc.h>
 #include <netinet/in.h>
 #include <stdatomic.h>
@@ -80,6 +82,9 @@ static const char conf[] =
 	"control_socket =\n"
 	"describe_interval = 0.1\n"
 	"stale_ms = 20\n"
+	"record_dir = /tmp/avatargw-test-alloc-rec\n"
+	"record_messages = yes\n"
+	"record_flush = 0.02\n"
 	"[source sim]\n"
 	"type = sim\n"
 	"people = 3\n"
@@ -121,6 +126,8 @@ static void test_loop_allocates_nothing(void **state)
 	struct config c;
 	char err[512];
 	struct loop *l = NULL;
+	struct recorder *rec = NULL;
+	uint64_t rec_before;
 	struct sockaddr_in sin = { .sin_family = AF_INET, .sin_port = htons(17771),
 				   .sin_addr.s_addr = htonl(INADDR_LOOPBACK) };
 	struct sockaddr_un sun = { .sun_family = AF_UNIX, .sun_path = "/tmp/avatargw-test-alloc.sock" };
@@ -133,6 +140,7 @@ static void test_loop_allocates_nothing(void **state)
 	(void)state;
 	assert_int_equal(config_load_text(&c, "alloc.conf", conf, err, sizeof(err)), 0);
 	assert_int_equal(gw_open(&g, &c, NULL, 42, err, sizeof(err)), 0);
+	assert_int_equal(recorder_apply(&rec, &g, err, sizeof(err)), 0);
 	assert_int_equal(loop_start(&l, &g, err, sizeof(err)), 0);
 	/* subscribers: one that reads, one (TCP) that never reads and falls behind */
 	tcp = socket(AF_INET, SOCK_STREAM, 0);
@@ -141,6 +149,7 @@ static void test_loop_allocates_nothing(void **state)
 	assert_int_equal(connect(ux, (struct sockaddr *)&sun, sizeof(sun)), 0);
 	sleep_ms(300); /* warm: accepted, first DESCRIBEs out, the slow buffer full */
 	before = mallinfo2();
+	rec_before = stat_get(&recorder_stats(rec)->records);
 	atomic_store(&counting, 1);
 	for (int i = 0; i < 20; i++) {
 		sleep_ms(50);
@@ -151,6 +160,26 @@ static void test_loop_allocates_nothing(void **state)
 	after = mallinfo2();
 	n = atomic_load(&allocs);
 	loop_stop(l);
+	/* the recorder wrote all along, and lost nothing */
+	print_message("recorded %llu records while counting\n",
+		      (unsigned long long)(stat_get(&recorder_stats(rec)->records) - rec_before));
+	assert_true(stat_get(&recorder_stats(rec)->records) - rec_before > 1000);
+	assert_int_equal(stat_get(&recorder_stats(rec)->dropped_records), 0);
+	recorder_close(rec);
+	{
+		DIR *d = opendir("/tmp/avatargw-test-alloc-rec");
+		struct dirent *de;
+		char p[512];
+
+		while (d && (de = readdir(d)))
+			if (de->d_name[0] != '.') {
+				snprintf(p, sizeof(p), "/tmp/avatargw-test-alloc-rec/%s", de->d_name);
+				unlink(p);
+			}
+		if (d)
+			closedir(d);
+		rmdir("/tmp/avatargw-test-alloc-rec");
+	}
 	for (int i = 0; i < g.n_avatars; i++)
 		frames += stat_get(&g.av[i].st.frames);
 	print_message("cycles %llu, frames %llu, tcp dropped %llu, allocations while running: %ld\n",

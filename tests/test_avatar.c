@@ -205,12 +205,177 @@ static void test_lost_hand(void **state)
 	assert_true(p1.res[ARM_LEFT].flags & IK_REACHED);
 }
 
+/* a chest at the world origin, unturned: the head straight above it, looking ahead */
+static void origin_head(const struct avatar *av, struct dq *head)
+{
+	struct quat id = { 1, 0, 0, 0 };
+
+	dq_from_rt(&id, &av->body.head_offset, head);
+}
+
+static double rnd01(unsigned *s)
+{
+	*s = *s * 1103515245u + 12345u;
+	return (double)((*s >> 8) & 0xffffff) / 16777216.0;
+}
+
+/*
+ * AVATAR_HAND_ELBOW: with a straight wrist the hand's axis is the forearm's,
+ * so from a reset the avatar finds the elbow that made the hand pose; the
+ * paper's avatar (the rest posture's elbow plane) mostly does not.
+ */
+static void test_hand_elbow(void **state)
+{
+	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.08 };
+	const struct vec3 off = { 0, 0, 0.25 };
+	struct avatar av;
+	struct ik_opts o;
+	unsigned seed = 5;
+	int found[2] = { 0, 0 }, n = 200;
+
+	(void)state;
+	avatar_init(&av, &dims, &off, NULL);
+	ik_default_opts(&o);
+	for (int k = 0; k < n; k++) {
+		sc_t q[ARM_DOF] = { 0 };
+		struct dq head, hand[2], ee;
+		struct arm_pose want;
+		struct avatar_pose p;
+
+		for (int j = 1; j <= 4; j++)
+			q[j] = av.arm[ARM_RIGHT].lim.lo[j] +
+			       (av.arm[ARM_RIGHT].lim.hi[j] - av.arm[ARM_RIGHT].lim.lo[j]) * (0.1 + 0.8 * rnd01(&seed));
+		arm_fk(&av.arm[ARM_RIGHT], q, &ee);
+		arm_fk_pose(&av.arm[ARM_RIGHT], q, &want);
+		hand[ARM_RIGHT] = ee;
+		arm_mirror_dq(&ee, &hand[ARM_LEFT]);
+		origin_head(&av, &head);
+		for (int m = 0; m < 2; m++) {
+			struct arm_pose got;
+			double e;
+
+			av.body.model = m ? AVATAR_MODEL_DEFAULT : AVATAR_PAPER;
+			avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
+			assert_true(p.res[ARM_RIGHT].flags & IK_REACHED);
+			assert_true(arm_in_limits(&av.arm[ARM_RIGHT], p.q[ARM_RIGHT]));
+			arm_fk_pose(&av.arm[ARM_RIGHT], p.q[ARM_RIGHT], &got);
+			e = sqrt((got.elbow.x - want.elbow.x) * (got.elbow.x - want.elbow.x) +
+				 (got.elbow.y - want.elbow.y) * (got.elbow.y - want.elbow.y) +
+				 (got.elbow.z - want.elbow.z) * (got.elbow.z - want.elbow.z));
+			found[m] += e < 1e-3;
+			/* the left arm is the mirror image */
+			for (int j = 0; j < ARM_DOF; j++)
+				assert_true(fabs(p.q[ARM_LEFT][j] - p.q[ARM_RIGHT][j]) < 1e-6);
+		}
+	}
+	print_message("elbow found within 1 mm: paper %d, hand elbow %d of %d\n", found[0], found[1], n);
+	assert_true(found[1] >= n * 97 / 100);
+	assert_true(found[0] < n / 2);
+}
+
+/*
+ * AVATAR_REACH_FIRST: a hand the arm can reach but turned beyond the
+ * wrist's deviation limit. The solver alone trades position for
+ * orientation; the avatar puts the hand on its sensor.
+ */
+static void test_reach_first(void **state)
+{
+	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.0 };
+	const struct vec3 off = { 0, 0, 0.25 };
+	struct avatar av;
+	struct ik_opts o;
+	unsigned seed = 11;
+	int off_paper = 0, unreachable = 0, n = 100;
+
+	(void)state;
+	avatar_init(&av, &dims, &off, NULL);
+	ik_default_opts(&o);
+	for (int k = 0; k < n; k++) {
+		sc_t q[ARM_DOF] = { 0 };
+		struct dq head, ee, lee, fk;
+		struct vec3 want, got;
+		struct avatar_pose p;
+
+		for (int j = 1; j < ARM_DOF; j++)
+			q[j] = av.arm[ARM_RIGHT].lim.lo[j] +
+			       (av.arm[ARM_RIGHT].lim.hi[j] - av.arm[ARM_RIGHT].lim.lo[j]) * (0.15 + 0.7 * rnd01(&seed));
+		q[7] = 1.05 + 0.4 * rnd01(&seed); /* wrist deviation 60 to 83 degrees: its limit is 30 */
+		arm_fk(&av.arm[ARM_RIGHT], q, &ee);
+		arm_mirror_dq(&ee, &lee);
+		dq_translation(&ee, &want);
+		origin_head(&av, &head);
+		for (int m = 1; m >= 0; m--) {
+			av.body.model = m ? AVATAR_MODEL_DEFAULT : AVATAR_PAPER;
+			avatar_solve(&av, &ik_kin_dq, &o, &head, &lee, &ee, NULL, &p);
+			assert_true(arm_in_limits(&av.arm[ARM_RIGHT], p.q[ARM_RIGHT]));
+			arm_fk(&av.arm[ARM_RIGHT], p.q[ARM_RIGHT], &fk);
+			dq_translation(&fk, &got);
+			if (m) {
+				/* another elbow may give the orientation after all; either way the hand is on its sensor */
+				assert_true(fabs(got.x - want.x) < 1e-6 && fabs(got.y - want.y) < 1e-6 &&
+					    fabs(got.z - want.z) < 1e-6);
+				assert_true(p.res[ARM_RIGHT].err.pos < 1e-6);
+				if (!(p.res[ARM_RIGHT].flags & IK_UNREACHABLE))
+					break;
+				unreachable++;
+				/* the wrist turned as far as it goes: some wrist joint at its limit */
+				assert_true(p.res[ARM_RIGHT].flags & IK_LIMITED);
+			} else if (fabs(got.x - want.x) + fabs(got.y - want.y) + fabs(got.z - want.z) > 1e-3) {
+				off_paper++;
+			}
+		}
+	}
+	print_message("orientation out of the wrist's reach in %d of %d; the paper avatar's hand off its sensor in %d\n",
+		      unreachable, n, off_paper);
+	assert_true(unreachable > n / 4);
+	assert_true(off_paper > unreachable / 2);
+}
+
+/* AVATAR_YAW_HANDS: the chest turns toward the hands' line when it agrees with the head */
+static void test_yaw_hands(void **state)
+{
+	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.08 };
+	const struct vec3 off = { 0, 0, 0.25 };
+	struct avatar av;
+	struct dq head, lh, rh, chest;
+	struct quat id = { 1, 0, 0, 0 };
+	sc_t y;
+
+	(void)state;
+	avatar_init(&av, &dims, &off, NULL);
+	dq_from_rt(&id, &(struct vec3){ 0, 0, 1.6 }, &head);
+	/* hands 60 cm apart on a line turned 20 degrees: the chest halfway (equal weights) */
+	dq_from_rt(&id, &(struct vec3){ -0.3 * cos(0.349), -0.3 * sin(0.349), 1.0 }, &lh);
+	dq_from_rt(&id, &(struct vec3){ 0.3 * cos(0.349), 0.3 * sin(0.349), 1.0 }, &rh);
+	assert_true(avatar_chest_hands(&av, &head, &lh, &rh, &chest, &y));
+	assert_true(fabs(y - 0.349 / 2) < 1e-6);
+	/* the paper's: the head's */
+	av.body.model = AVATAR_PAPER;
+	assert_true(avatar_chest_hands(&av, &head, &lh, &rh, &chest, &y));
+	assert_true(fabs(y) < 1e-12);
+	av.body.model = AVATAR_MODEL_DEFAULT;
+	/* hands 20 cm apart, a line 80 degrees off, a lost hand: the head's yaw */
+	dq_from_rt(&id, &(struct vec3){ 0.1, 0, 1.0 }, &rh);
+	dq_from_rt(&id, &(struct vec3){ -0.1, 0, 1.0 }, &lh);
+	assert_true(avatar_chest_hands(&av, &head, &lh, &rh, &chest, &y));
+	assert_true(fabs(y) < 1e-12);
+	dq_from_rt(&id, &(struct vec3){ 0.05, 0.4, 1.0 }, &rh);
+	assert_true(avatar_chest_hands(&av, &head, &lh, &rh, &chest, &y));
+	assert_true(fabs(y) < 1e-12);
+	rh.r.w = NAN;
+	assert_true(avatar_chest_hands(&av, &head, &lh, &rh, &chest, &y));
+	assert_true(fabs(y) < 1e-12);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_chest_from_head),
 		cmocka_unit_test(test_lost_hand),
 		cmocka_unit_test(test_wave_clip),
+		cmocka_unit_test(test_hand_elbow),
+		cmocka_unit_test(test_reach_first),
+		cmocka_unit_test(test_yaw_hands),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

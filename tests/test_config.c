@@ -29,6 +29,7 @@
 #include <unistd.h>
 
 #include "config/config.h"
+#include "record/recfile.h"
 #include "trackers/tracker.h"
 
 #include "testutil.h"
@@ -389,6 +390,144 @@ static void test_values_daemon(void **state)
 	assert_string_equal(c->files[0], "e.conf");
 }
 
+/* the recording keys of [daemon] (docs/RECORDING.md) */
+static void test_values_record(void **state)
+{
+	struct fx *f = *state;
+	const struct config *c = load_text_ok(f, "[daemon]\n"
+						 "record_dir = /var/lib/avatargw/rec\n"
+						 "record_messages = yes\n"
+						 "record_flush = 0.25\n"
+						 "record_flush_records = 500\n"
+						 "record_fsync = yes\n"
+						 "record_rotate_size = 64\n"
+						 "record_rotate_time = 3600\n"
+						 "record_buffer = 4096\n"
+						 "record_keyframe_rate = 10\n"
+						 "[source s]\ntype = sim\n"
+						 "[avatar a]\nperson = s/p0\n");
+
+	assert_string_equal(c->daemon.record_dir, "/var/lib/avatargw/rec");
+	assert_true(c->daemon.record_messages);
+	assert_near(c->daemon.record_flush, 0.25, 0);
+	assert_int_equal(c->daemon.record_flush_records, 500);
+	assert_true(c->daemon.record_fsync);
+	assert_near(c->daemon.record_rotate_size, 64, 0);
+	assert_near(c->daemon.record_rotate_time, 3600, 0);
+	assert_int_equal(c->daemon.record_buffer, 4096);
+	assert_near(c->daemon.record_keyframe_rate, 10, 0);
+	config_free(&f->c);
+	/* the defaults: no recording */
+	c = load_text_ok(f, "[source s]\ntype = sim\n[avatar a]\nperson = s/p0\n");
+	assert_string_equal(c->daemon.record_dir, "");
+	assert_false(c->daemon.record_messages);
+	assert_near(c->daemon.record_flush, 1, 0);
+	assert_int_equal(c->daemon.record_flush_records, 0);
+	assert_false(c->daemon.record_fsync);
+	assert_near(c->daemon.record_rotate_size, 0, 0);
+	assert_near(c->daemon.record_rotate_time, 0, 0);
+	assert_int_equal(c->daemon.record_buffer, 1024);
+	assert_near(c->daemon.record_keyframe_rate, 0, 0);
+	config_free(&f->c);
+	/* a relative record_dir: beside the file that says it */
+	put(f, "etc/main.conf", "[daemon]\nrecord_dir = rec\n[source s]\ntype = sim\n[avatar a]\nperson = s/p0\n");
+	c = load_file_ok(f, "etc/main.conf");
+	{
+		char want[600];
+
+		snprintf(want, sizeof(want), "%s/etc/rec", f->dir);
+		assert_string_equal(c->daemon.record_dir, want);
+	}
+}
+
+static void test_err_record(void **state)
+{
+	expect_text_err(*state, "[daemon]\nrecord_buffer = 32\n",
+			"e.conf:2: [daemon] record_buffer: 32 is out of range [64, 262144] KiB", NULL);
+	expect_text_err(*state, "[daemon]\nrecord_flush = -1\n", "e.conf:2: [daemon] record_flush: -1 is out of range",
+			NULL);
+	expect_text_err(*state, "[daemon]\nrecord_flush_records = 2.5\n",
+			"e.conf:2: [daemon] record_flush_records: '2.5' is not a whole number", NULL);
+	expect_text_err(*state, "[daemon]\nrecord_fsync = always\n", "e.conf:2: [daemon] record_fsync: 'always' is not yes or no",
+			NULL);
+	expect_text_err(*state, "[source c]\ntype = replay\nfile = builtin:cmu_141_16.csv\ninterpolate = cubic\n",
+			"e.conf:4: [source c] interpolate: 'cubic' is not one of: none, linear, catmull-rom, natural", NULL);
+	expect_text_err(*state, "[source s]\ntype = sim\nstep = yes\n",
+			"e.conf:3: [source s] step: unknown key for type sim", NULL);
+}
+
+static void test_values_replay_modes(void **state)
+{
+	struct fx *f = *state;
+	const struct config *c = load_text_ok(f, "[source c]\ntype = replay\nfile = builtin:cmu_141_16.csv\n"
+						 "step = yes\ninterpolate = natural\nsample_rate = 120\n"
+						 "[source d]\ntype = replay\nfile = builtin:cmu_141_16.csv\n");
+
+	assert_true(c->source[0].step);
+	assert_int_equal(c->source[0].interpolate, 3);
+	assert_near(c->source[0].sample_rate, 120, 0);
+	assert_false(c->source[1].step);
+	assert_int_equal(c->source[1].interpolate, 0);
+	assert_near(c->source[1].sample_rate, 240, 0);
+}
+
+/* a recording as the replay file: its sensors are SOURCE.SENSOR; a damaged header is refused */
+static void test_replay_recording(void **state)
+{
+	static const char *const names[3] = { "head", "left_hand", "right_hand" };
+	struct fx *f = *state;
+	uint8_t buf[1024], *r;
+	size_t len = RECFILE_HEADER_LEN;
+	struct recfile_header h = { RECFILE_VERSION, 0, 1, 0 };
+	struct recfile_writer w;
+	const struct config *c;
+	char path[512];
+
+	recfile_header_encode(&h, buf);
+	r = buf + len;
+	w = (struct recfile_writer){ r + RECFILE_REC_HEAD, 512, 0, false };
+	recfile_w_u64(&w, 1);
+	recfile_w_u64(&w, 2);
+	recfile_w_f64(&w, 240);
+	recfile_w_u32(&w, 1);
+	recfile_w_u16(&w, 1);
+	recfile_w_u16(&w, 0);
+	recfile_w_str(&w, "clip");
+	recfile_w_str(&w, "replay");
+	recfile_w_u32(&w, 3);
+	for (int i = 0; i < 3; i++)
+		recfile_w_str(&w, names[i]);
+	for (int i = 0; i < 4; i++)
+		recfile_w_f64(&w, 0);
+	recfile_frame(r, RECFILE_SESSION, (uint32_t)w.len);
+	recfile_seal(r);
+	len += RECFILE_REC_OVERHEAD + w.len;
+	for (int k = 0; k < 6; k++) {
+		struct recfile_sample smp = { 0, (uint16_t)(k % 3), 0, 0, (uint64_t)(k / 3) * 10000000, { 0, 0, 1 },
+					      { 1, 0, 0, 0 }, false, { 0 } };
+
+		r = buf + len;
+		recfile_frame(r, RECFILE_SAMPLE, (uint32_t)recfile_sample_encode(&smp, r + RECFILE_REC_HEAD));
+		recfile_seal(r);
+		len += RECFILE_REC_OVERHEAD + RECFILE_SAMPLE_LEN;
+	}
+	put_bytes(f, "rec/a.agwrec", (const char *)buf, len);
+	put(f, "main.conf", "[source rec]\ntype = replay\nfile = rec/a.agwrec\n[avatar a]\nperson = rec/clip\n");
+	c = load_file_ok(f, "main.conf");
+	for (int i = 0; i < 3; i++)
+		assert_sensor(&c->avatar[0], i, 0, i);
+	config_free(&f->c);
+	put(f, "main.conf", "[source rec]\ntype = replay\nfile = rec/a.agwrec\n[avatar a]\nperson = rec\n");
+	expect_file_err(f, "main.conf", "%s/main.conf:5: [avatar a] person: source 'rec' has no sensor 'head'",
+			"(it has: clip.head, clip.left_hand, clip.right_hand)", NULL);
+	buf[20] ^= 1;
+	put_bytes(f, "rec/a.agwrec", (const char *)buf, len);
+	put(f, "main.conf", "[source rec]\ntype = replay\nfile = rec/a.agwrec\n");
+	at(f, "rec/a.agwrec", path, sizeof(path));
+	expect_file_err(f, "main.conf", "%s/main.conf:3: [source rec] file: ", "a.agwrec: the file header is damaged (CRC)",
+			NULL);
+}
+
 static void test_values_sim_source(void **state)
 {
 	struct fx *f = *state;
@@ -536,7 +675,7 @@ static void test_defaults(void **state)
 						 "[output x]\ntype = unix\n");
 	const struct cfg_source *s = &c->source[0], *r = &c->source[1];
 	const struct cfg_avatar *a = &c->avatar[0];
-	static const double lim[8][2] = { { -30, 30 }, { -90, 30 }, { -60, 120 }, { -90, 90 },
+	static const double lim[8][2] = { { -30, 30 }, { -120, 30 }, { -60, 120 }, { -90, 90 },
 					  { -90, 60 }, { -90, 90 }, { -70, 70 }, { -30, 30 } };
 
 	assert_near(c->daemon.rate, 240, 0);
@@ -645,7 +784,8 @@ static void test_err_unknown_key(void **state)
 {
 	expect_text_err(*state, "[daemon]\nrate = 100\nrat = 100\n", "e.conf:3: [daemon] rat: unknown key",
 			"(known: rate, mode, stale_ms, realtime_priority, cpu, lock_memory, control_socket, "
-			"describe_interval, log_level)",
+			"describe_interval, log_level, record_dir, record_messages, record_flush, record_flush_records, "
+			"record_fsync, record_rotate_size, record_rotate_time, record_buffer, record_keyframe_rate",
 			NULL);
 }
 
@@ -654,7 +794,7 @@ static void test_err_key_of_other_type(void **state)
 {
 	expect_text_err(*state, "[source clip]\ntype = replay\nfile = builtin:cmu_141_16.csv\npeople = 2\n",
 			"e.conf:4: [source clip] people: unknown key for type replay",
-			"(known: type, origin, yaw, file, speed, loop, start)", NULL);
+			"(known: type, origin, yaw, sample_rate, file, speed, loop, start, step, interpolate)", NULL);
 	expect_text_err(*state, "[output o]\ntype = udp\npath = /tmp/x\n",
 			"e.conf:3: [output o] path: unknown key for type udp",
 			"(known: type, address, port, gso, decimate, avatars)", NULL);
@@ -1539,6 +1679,10 @@ int main(void)
 #define T(fn) cmocka_unit_test_setup_teardown(fn, setup, teardown)
 	const struct CMUnitTest tests[] = {
 		T(test_values_daemon),
+		T(test_values_record),
+		T(test_err_record),
+		T(test_values_replay_modes),
+		T(test_replay_recording),
 		T(test_values_sim_source),
 		T(test_values_avatar),
 		T(test_values_outputs),

@@ -4,6 +4,7 @@
  *
  *   avatargw-ctl [-s SOCKET] status [--json]
  *   avatargw-ctl [-s SOCKET] reload
+ *   avatargw-ctl [-s SOCKET] step [N] [SOURCE]
  *
  * Without -s the socket is found as the daemon finds it with
  * control_socket = auto ($RUNTIME_DIRECTORY, then $XDG_RUNTIME_DIR, then
@@ -25,6 +26,7 @@ static void usage(FILE *out)
 {
 	fprintf(out, "usage: avatargw-ctl [-s SOCKET] status [--json]\n"
 		     "       avatargw-ctl [-s SOCKET] reload\n"
+		     "       avatargw-ctl [-s SOCKET] step [N] [SOURCE]   N more instants of stepped replays\n"
 		     "  -s, --socket PATH  the daemon's control socket (daemon.control_socket)\n");
 }
 
@@ -56,7 +58,7 @@ int main(int argc, char **argv)
 		{ "help", no_argument, NULL, 'h' },
 		{ NULL, 0, NULL, 0 },
 	};
-	char path[CFG_PATH_MAX] = "", req[64], buf[4096];
+	char path[CFG_PATH_MAX] = "", req[128], buf[4096];
 	bool json = false;
 	int opt, fd;
 	const char *cmd;
@@ -82,6 +84,19 @@ int main(int argc, char **argv)
 		return 64;
 	}
 	cmd = argv[optind];
+	if (!strcmp(cmd, "step")) {
+		size_t n = (size_t)snprintf(req, sizeof(req), "step");
+
+		for (int i = optind + 1; i < argc && n < sizeof(req); i++)
+			n += (size_t)snprintf(req + n, sizeof(req) - n, " %s", argv[i]);
+		if (n + 2 > sizeof(req) || argc - optind > 3) {
+			usage(stderr);
+			return 64;
+		}
+		req[n] = '\n';
+		req[n + 1] = '\0';
+		goto send;
+	}
 	/* "status --json" with the option after the command */
 	for (int i = optind + 1; i < argc; i++) {
 		if (!strcmp(argv[i], "--json"))
@@ -99,6 +114,7 @@ int main(int argc, char **argv)
 		usage(stderr);
 		return 64;
 	}
+send:
 	if (path[0]) {
 		fd = connect_to(path);
 	} else {

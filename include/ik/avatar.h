@@ -9,6 +9,21 @@
  * line, lies at a fixed offset below the head sensor, expressed in that
  * yawed frame: origin = head - Rz(yaw) head_offset. The paper's offset is
  * (0, 0, Neck). Pitch and roll of the head do not move the chest.
+ *
+ * What avatargw adds to the paper (struct avatar_body.model, each measured
+ * on motion capture in docs/FIDELITY.md):
+ *  - AVATAR_HAND_ELBOW: the arm's redundancy (the elbow's swivel about the
+ *    shoulder-wrist line) is resolved toward the elbow the hand sensor
+ *    points at: a straight wrist puts the forearm along the hand's y axis.
+ *    The IK starts from that posture instead of the previous frame's.
+ *  - AVATAR_REACH_FIRST: when no posture inside the joint limits gives the
+ *    hand both the sensor's position and its orientation, the hand still
+ *    goes to the sensor's position and the wrist turns as far toward the
+ *    orientation as its limits allow (the paper's Newton iteration and our
+ *    solver otherwise trade position for orientation).
+ *  - AVATAR_YAW_HANDS: the chest's yaw is the head's, pulled toward the
+ *    heading of the line from the left to the right hand when the two
+ *    agree (the head turns more often than the chest).
  */
 #ifndef IK_AVATAR_H
 #define IK_AVATAR_H
@@ -19,10 +34,18 @@
 extern "C" {
 #endif
 
+/* struct avatar_body.model */
+#define AVATAR_PAPER 0x0          /* the paper's avatar: chest from the head's yaw, arms tracked from the last frame */
+#define AVATAR_HAND_ELBOW 0x1
+#define AVATAR_REACH_FIRST 0x2
+#define AVATAR_YAW_HANDS 0x4
+#define AVATAR_MODEL_DEFAULT (AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS)
+
 struct avatar_body {
-	struct arm_dims dims;     /* both arms */
+	struct arm_dims dims;     /* the right arm (and the left one unless avatar_set_left_arm() says otherwise) */
 	struct vec3 head_offset;  /* head sensor from the chain origin, chest frame (paper: 0, 0, Neck) */
 	struct arm_limits lim;    /* both arms (the left is mirrored) */
+	unsigned model;           /* AVATAR_* choices, AVATAR_MODEL_DEFAULT after avatar_init() */
 };
 
 struct avatar {
@@ -36,23 +59,57 @@ struct avatar_pose {
 	sc_t head_yaw;               /* radians about world z */
 	sc_t q[2][ARM_DOF];          /* joint angles per arm */
 	struct ik_result res[2];     /* per arm */
+	/*
+	 * AVATAR_HAND_ELBOW, per arm: running mean of how far (radians) the
+	 * hand's y axis is from every direction the forearm could have (a
+	 * bent wrist, or a sensor frame that is not the hand's, makes it
+	 * large); the hand's say on the elbow fades out as it grows.
+	 */
+	sc_t hand_misfit[2];
 };
 
 #define avatar_init SCN(avatar_init)
+#define avatar_default_limits SCN(avatar_default_limits)
+#define avatar_set_left_arm SCN(avatar_set_left_arm)
 #define avatar_head_yaw SCN(avatar_head_yaw)
 #define avatar_chest SCN(avatar_chest)
+#define avatar_chest_hands SCN(avatar_chest_hands)
+#define avatar_arm_solve SCN(avatar_arm_solve)
 #define avatar_arm_target SCN(avatar_arm_target)
 #define avatar_solve SCN(avatar_solve)
 
-/* lim NULL: the default limits */
+/*
+ * The avatar's default joint limits: the benchmark's (arm_default_limits)
+ * but J2 from -120 degrees, so that an arm raised sideways above the
+ * shoulder (a wave overhead, a thrust up) stays reachable: -90 cut the
+ * motion-capture clips' overhead frames (docs/FIDELITY.md). The daemon's
+ * j1..j8 defaults are these.
+ */
+void avatar_default_limits(struct arm_limits *out);
+/* lim NULL: avatar_default_limits(); model = AVATAR_MODEL_DEFAULT (change it after, if wanted) */
 void avatar_init(struct avatar *av, const struct arm_dims *dims, const struct vec3 *head_offset,
 		 const struct arm_limits *lim);
+/* the left arm's own lengths, when the two arms differ (shoulder is shared: the chain origin is midway) */
+void avatar_set_left_arm(struct avatar *av, sc_t arm, sc_t forearm, sc_t hand);
 /* yaw of a rotation about world z (swing-twist); 0 when undefined (upside down) */
 sc_t avatar_head_yaw(const struct quat *head);
-/* the chest frame in the world from the head sensor pose; false if the pose is not finite */
+/*
+ * The chest frame in the world from the head sensor pose (and, with
+ * AVATAR_YAW_HANDS, the hand sensors: NULL or non-finite ones are ignored);
+ * false if the head pose is not finite.
+ */
 bool avatar_chest(const struct avatar *av, const struct dq *head, struct dq *chest, sc_t *yaw);
+bool avatar_chest_hands(const struct avatar *av, const struct dq *head, const struct dq *lhand, const struct dq *rhand,
+			struct dq *chest, sc_t *yaw);
 /* a hand sensor pose (world) as the target of one arm (chest frame) */
 void avatar_arm_target(const struct dq *chest, const struct dq *hand, struct ik_target *t);
+/*
+ * One arm toward its target (chest frame) as avatar_solve does it, with the
+ * body's model choices: writes out->q[side], out->res[side] and
+ * out->hand_misfit[side]. prev: the previous frame or NULL.
+ */
+unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin *kin, const struct ik_opts *o,
+			  const struct ik_target *t, const struct avatar_pose *prev, struct avatar_pose *out);
 /*
  * Places the chest and solves both arms. prev: the previous frame's pose
  * to track from (NULL: reset to the rest posture). Returns the flags of both

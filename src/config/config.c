@@ -61,6 +61,7 @@ static const char *const e_regtype[] = { "holding", "input", NULL };
 static const char *const e_regfmt[] = { "int16", "uint16", "int32", "uint32", "float32", NULL };
 static const char *const e_ori[] = { "rotvec", "quat_wxyz", "quat_xyzw", "rpy", "none", NULL };
 static const char *const e_quat[] = { "wxyz", "xyzw", NULL };
+static const char *const e_interp[] = { "none", "linear", "catmull-rom", "natural", NULL };
 
 struct key_def {
 	int sect;
@@ -99,6 +100,24 @@ static const struct key_def keys[] = {
 	  NULL, "period of the DESCRIBE messages (also sent when an avatar's description changes)" },
 	{ S_DAEMON, "log_level", K_ENUM, D(log_level), 0, 0, 0, "info", NULL, e_log, NULL,
 	  "least important messages logged" },
+	{ S_DAEMON, "record_dir", K_PATH, D(record_dir), 0, 0, 0, "", NULL, NULL, NULL,
+	  "record every sensor sample into files in this directory (created if missing); empty = no recording" },
+	{ S_DAEMON, "record_messages", K_BOOL, D(record_messages), 0, 0, 0, "no", NULL, NULL, NULL,
+	  "also record every published message (FRAME and DESCRIBE)" },
+	{ S_DAEMON, "record_flush", K_DOUBLE, D(record_flush), 0, 0, 3600, "1", "s", NULL, NULL,
+	  "write what was recorded at least this often: a crash or kill -9 loses at most this much" },
+	{ S_DAEMON, "record_flush_records", K_INT, D(record_flush_records), 0, 0, 100000, "0", NULL, NULL, NULL,
+	  "also write after this many records, 0 = by time only" },
+	{ S_DAEMON, "record_fsync", K_BOOL, D(record_fsync), 0, 0, 0, "no", NULL, NULL, NULL,
+	  "fdatasync after every write, so that a power loss loses no more than record_flush either" },
+	{ S_DAEMON, "record_rotate_size", K_DOUBLE, D(record_rotate_size), 0, 0, 100000, "0", "MiB", NULL, NULL,
+	  "start a new file when this one would grow past this size, 0 = never" },
+	{ S_DAEMON, "record_rotate_time", K_DOUBLE, D(record_rotate_time), 0, 0, 604800, "0", "s", NULL, NULL,
+	  "start a new file when this one is this old, 0 = never" },
+	{ S_DAEMON, "record_buffer", K_INT, D(record_buffer), 0, 64, 262144, "1024", "KiB", NULL, NULL,
+	  "buffer between the loop and the writer thread; a record that does not fit is dropped and counted" },
+	{ S_DAEMON, "record_keyframe_rate", K_DOUBLE, D(record_keyframe_rate), 0, 0, 10000, "0", "Hz", NULL, NULL,
+	  "keep at most this many samples per second of each sensor (the paper's low-rate storage), 0 = every sample" },
 
 	{ S_SOURCE, "type", K_STR, 0, 0, 0, 0, NULL, NULL, NULL, NULL,
 	  "the driver: sim, replay, modbus or can" },
@@ -110,13 +129,13 @@ static const struct key_def keys[] = {
 	  "simulated people; their sensors are pN.head, pN.left_hand, pN.right_hand" },
 	{ S_SOURCE, "seed", K_U32, SRC(seed), 0, 0, 4294967295.0, "1", NULL, NULL, "sim",
 	  "seed of the motion (same seed, same motion)" },
-	{ S_SOURCE, "sample_rate", K_DOUBLE, SRC(sample_rate), 0, 1, 4000, "240", "Hz", NULL, "sim",
-	  "sensor samples per second" },
+	{ S_SOURCE, "sample_rate", K_DOUBLE, SRC(sample_rate), 0, 1, 4000, "240", "Hz", NULL, "sim replay",
+	  "sensor samples per second (replay: made between keyframes when interpolate is set)" },
 	{ S_SOURCE, "spacing", K_DOUBLE, SRC(spacing), 0, 0, 100, "1", "m", NULL, "sim",
 	  "distance between simulated people along x" },
 	{ S_SOURCE, "file", K_PATH, SRC(file), 0, 0, 0, NULL, NULL, NULL, "replay",
-	  "sensor CSV (columns t, head_x..head_qz, lhand_*, rhand_*), relative to this file's directory; "
-	  "builtin:NAME for a clip compiled into the daemon" },
+	  "a recording of avatargw (record_dir) or a sensor CSV (columns t, head_x..head_qz, lhand_*, rhand_*), "
+	  "relative to this file's directory; builtin:NAME for a clip compiled into the daemon" },
 	{ S_SOURCE, "speed", K_DOUBLE, SRC(speed), 0, 0.01, 100, "1", NULL, NULL, "replay",
 	  "playback speed, 1 = real time" },
 	{ S_SOURCE, "loop", K_BOOL, SRC(loop), 0, 0, 0, "yes", NULL, NULL, "replay",
@@ -167,6 +186,11 @@ static const struct key_def keys[] = {
 	  "order of the four components in the orientation frame" },
 	{ S_SOURCE, "extended_ids", K_BOOL, SRC(extended_ids), 0, 0, 0, "no", NULL, NULL, "can",
 	  "29-bit CAN identifiers instead of 11-bit" },
+	{ S_SOURCE, "step", K_BOOL, SRC(step), 0, 0, 0, "no", NULL, NULL, "replay",
+	  "stepped: play the first instant, then one more per 'avatargw-ctl step' (speed is ignored)" },
+	{ S_SOURCE, "interpolate", K_ENUM, SRC(interpolate), 0, 0, 0, "none", NULL, e_interp, "replay",
+	  "treat the samples as keyframes and rebuild sample_rate samples per second between them: "
+	  "linear (and slerp), catmull-rom or natural (cubic splines, and squad)" },
 
 	{ S_AVATAR, "id", K_INT, AV(id), 0, 0, 65535, "auto", NULL, NULL, NULL,
 	  "avatar id on the wire (auto: one more than the previous avatar's)" },
@@ -189,7 +213,7 @@ static const struct key_def keys[] = {
 	  "head sensor from the chest centre, in the chest frame (x right, y forward, z up; the paper: 0 0 Neck)" },
 	{ S_AVATAR, "j1", K_RANGE, AV(lo[0]), AV(hi[0]), -180, 180, "-30 30", "deg", NULL, NULL,
 	  "limits of J1, shoulder girdle / chest yaw" },
-	{ S_AVATAR, "j2", K_RANGE, AV(lo[1]), AV(hi[1]), -180, 180, "-90 30", "deg", NULL, NULL,
+	{ S_AVATAR, "j2", K_RANGE, AV(lo[1]), AV(hi[1]), -180, 180, "-120 30", "deg", NULL, NULL,
 	  "limits of J2, shoulder abduction (-) / adduction (+)" },
 	{ S_AVATAR, "j3", K_RANGE, AV(lo[2]), AV(hi[2]), -180, 180, "-60 120", "deg", NULL, NULL,
 	  "limits of J3, shoulder extension (-) / flexion (+)" },

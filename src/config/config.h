@@ -45,6 +45,16 @@ struct cfg_daemon {
 	double describe_interval; /* seconds */
 	int log_level;
 	bool ik_stats;
+	/* recording (docs/RECORDING.md) */
+	char record_dir[CFG_PATH_MAX]; /* empty: no recording */
+	bool record_messages;
+	double record_flush;           /* s */
+	int record_flush_records;      /* 0: by time only */
+	bool record_fsync;
+	double record_rotate_size;     /* MiB, 0: never */
+	double record_rotate_time;     /* s, 0: never */
+	int record_buffer;             /* KiB */
+	double record_keyframe_rate;   /* Hz, 0: every sample */
 };
 
 struct cfg_source {
@@ -88,6 +98,8 @@ struct cfg_source {
 	double quat_scale;      /* the count that stands for 1.0 */
 	int quat_order;         /* enum cfg_quat_order */
 	bool extended_ids;      /* 29-bit identifiers */
+	bool step;              /* advance on avatargw-ctl step only */
+	int interpolate;        /* 0 none, else 1 + enum kf_interp */
 };
 
 /* how 32-bit values lie in two 16-bit registers (A = most significant byte) */

@@ -5,6 +5,9 @@
  */
 #include "daemon/ctl.h"
 
+#include "record/recorder.h"
+#include "trackers/replay.h"
+
 #include <errno.h>
 #include <poll.h>
 #include <stdlib.h>
@@ -204,7 +207,25 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 				o->ops->report(o, out, true);
 			fputc('}', out);
 		}
-		fputs("]}\n", out);
+		fputs("]", out);
+		if (g->rec) {
+			const struct recorder_stats *rs = recorder_stats(g->rec);
+			char file[CFG_PATH_MAX + 64];
+			uint64_t used, cap;
+
+			recorder_current_file(g->rec, file, sizeof(file));
+			recorder_ring_use(g->rec, &used, &cap);
+			fprintf(out, ",\"recorder\":{\"dir\":\"%s\",\"file\":\"%s\",\"files\":%llu,\"records\":%llu,"
+				"\"bytes\":%llu,\"flushes\":%llu,\"dropped\":%llu,\"skipped\":%llu,\"write_errors\":%llu,"
+				"\"buffer_used\":%llu,\"buffer_size\":%llu}",
+				g->cfg.daemon.record_dir, file, (unsigned long long)stat_get(&rs->files),
+				(unsigned long long)stat_get(&rs->records), (unsigned long long)stat_get(&rs->bytes),
+				(unsigned long long)stat_get(&rs->flushes), (unsigned long long)stat_get(&rs->dropped_records),
+				(unsigned long long)stat_get(&rs->skipped_records),
+				(unsigned long long)stat_get(&rs->write_errors), (unsigned long long)used,
+				(unsigned long long)cap);
+		}
+		fputs("}\n", out);
 		return;
 	}
 	fprintf(out, "avatargw: up %.1f s, config %s, %.6g Hz %s, real-time %s, reloads %llu (%llu failed)\n", up,
@@ -253,6 +274,63 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 	for (int i = 0; i < g->n_outputs; i++)
 		if (g->out[i].ops->report)
 			g->out[i].ops->report(&g->out[i], out, false);
+	if (g->rec) {
+		const struct recorder_stats *rs = recorder_stats(g->rec);
+		char file[CFG_PATH_MAX + 64];
+
+		recorder_current_file(g->rec, file, sizeof(file));
+		fprintf(out, "\nrecording: %s\n  %llu files, %llu records, %.1f MiB written, %llu dropped (buffer full), "
+			"%llu not written, %llu write errors\n",
+			file[0] ? file : "(no file open)", (unsigned long long)stat_get(&rs->files),
+			(unsigned long long)stat_get(&rs->records), (double)stat_get(&rs->bytes) / 1048576.0,
+			(unsigned long long)stat_get(&rs->dropped_records), (unsigned long long)stat_get(&rs->skipped_records),
+			(unsigned long long)stat_get(&rs->write_errors));
+	}
+}
+
+/* "step [N] [SOURCE]": N more instants of every stepped replay source, or of SOURCE */
+static void ctl_step(FILE *out, const struct ctl_info *info, const char *args)
+{
+	struct gateway *g = info->g;
+	char name[128] = "";
+	unsigned long n = 1;
+	int done = 0;
+
+	while (*args == ' ')
+		args++;
+	if (*args >= '0' && *args <= '9') {
+		char *end;
+
+		n = strtoul(args, &end, 10);
+		args = end;
+		while (*args == ' ')
+			args++;
+	}
+	if (*args)
+		snprintf(name, sizeof(name), "%s", args);
+	if (n < 1 || n > 1000000) {
+		fputs("error: step N: N from 1 to 1000000\n", out);
+		return;
+	}
+	for (int i = 0; i < g->n_trackers; i++) {
+		struct tracker *t = &g->trk[i];
+
+		if (name[0] && strcmp(name, t->name))
+			continue;
+		if (!replay_is_stepped(t)) {
+			if (name[0]) {
+				fprintf(out, "error: source %s is not a replay with step = yes\n", name);
+				return;
+			}
+			continue;
+		}
+		replay_step(t, (unsigned)n);
+		fprintf(out, "%s: %lu more\n", t->name, n);
+		done++;
+	}
+	if (!done)
+		fprintf(out, "error: %s%s\n", name[0] ? "no source named " : "no replay source has step = yes",
+			name[0] ? name : "");
 }
 
 void ctl_serve(int lfd, const struct ctl_info *info, bool *want_reload)
@@ -299,8 +377,10 @@ void ctl_serve(int lfd, const struct ctl_info *info, bool *want_reload)
 	else if (!strcmp(req, "reload")) {
 		*want_reload = true;
 		fputs("reloading\n", out);
-	} else
-		fprintf(out, "error: unknown request '%s' (status, status json, reload)\n", req);
+	} else if (!strcmp(req, "step") || !strncmp(req, "step ", 5))
+		ctl_step(out, info, req + 4);
+	else
+		fprintf(out, "error: unknown request '%s' (status, status json, reload, step [N] [SOURCE])\n", req);
 	fclose(out);
 	for (size_t off = 0; off < len;) {
 		ssize_t n = send(fd, text + off, len - off, MSG_NOSIGNAL);

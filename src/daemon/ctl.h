@@ -2,7 +2,7 @@
 /*
  * ctl.h - the control socket (avatargw-ctl): a Unix stream socket served by
  * the control thread. A client sends one line ("status", "status json",
- * "reload") and reads the answer until EOF.
+ * "reload", "step [N] [SOURCE]") and reads the answer until EOF.
  */
 #ifndef AGW_CTL_H
 #define AGW_CTL_H

@@ -5,6 +5,7 @@
 #include "daemon/gateway.h"
 
 #include "publish/encode.h"
+#include "record/recorder.h"
 
 #include <errno.h>
 #include <math.h>
@@ -266,6 +267,7 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		struct wire_frame wf;
 		struct encode_in in = { a->av, pf, NULL, false };
 		const struct dq *s[FRAME_SENSORS];
+		uint8_t missing = 0;
 
 		frame_gather(&a->fs, now->mono_ns, g->stale_ns, pf);
 		{
@@ -277,9 +279,21 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		}
 		for (int r = 0; r < FRAME_SENSORS; r++)
 			s[r] = pf->state[r] == WIRE_SENSOR_MISSING ? &nan_dq : &pf->sensor[r];
-		if (pf->state[0] != WIRE_SENSOR_MISSING) {
+		for (int r = 0; r < FRAME_SENSORS; r++)
+			missing |= (uint8_t)((pf->state[r] == WIRE_SENSOR_MISSING) << r);
+		if (pf->state[0] != WIRE_SENSOR_MISSING && !pf->new_sample && a->have_pose && missing == a->solved_missing) {
+			/*
+			 * The very samples of the last solve: its posture is the answer.
+			 * Solving again would only move the redundancy a little further
+			 * toward mid-range, so the same input would not always give the
+			 * same frame; and a 60 Hz tracker in a 240 Hz loop would cost
+			 * four solves per sample.
+			 */
+			in.pose = &a->pose;
+		} else if (pf->state[0] != WIRE_SENSOR_MISSING) {
 			struct avatar_pose next;
 
+			a->solved_missing = missing;
 			avatar_solve(a->av, a->kin, &a->opts, s[0], s[1], s[2], a->have_pose ? &a->pose : NULL, &next);
 			a->pose = next;
 			a->have_pose = true;
@@ -343,6 +357,8 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 			}
 		}
 	}
+	if (g->rec)
+		recorder_messages(g->rec, now->mono_ns, g->msgs, n);
 	for (int o = 0; o < g->n_outputs; o++) {
 		uint64_t acc = stat_get(&g->out[o].st.accepted);
 

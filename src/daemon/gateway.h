@@ -44,6 +44,7 @@ struct gw_avatar {
 	struct frame_source fs;
 	struct avatar_pose pose;
 	bool have_pose;
+	uint8_t solved_missing;     /* sensors MISSING at the last solve (bit per sensor) */
 	uint32_t seq, dseq;
 	uint32_t describe_rev;
 	uint64_t next_describe_ns;
@@ -81,6 +82,7 @@ struct gateway {
 	uint64_t stale_ns;
 	uint64_t describe_ns;
 	struct gw_stats st;
+	struct recorder *rec;     /* recording this gateway (record/recorder.h), or NULL */
 };
 
 /*

@@ -16,6 +16,7 @@
 #include "daemon/log.h"
 #include "daemon/loop.h"
 #include "daemon/notify.h"
+#include "record/recorder.h"
 #include "trackers/tracker.h"
 
 #include <errno.h>
@@ -208,6 +209,7 @@ int main(int argc, char **argv)
 	char err[1024], ctl_path[CFG_PATH_MAX];
 	struct config cfg;
 	struct loop *loop = NULL;
+	struct recorder *rec = NULL;
 	struct ctl_rates rates = { 0 };
 	struct ctl_info info = { 0 };
 	struct seen seen = { 0 };
@@ -288,6 +290,9 @@ int main(int argc, char **argv)
 		/* the configuration was valid: what failed is the system (a port in use...), worth a retry */
 		return 1;
 	}
+	recorder_log_replay_damage(&gws[cur]);
+	if (recorder_apply(&rec, &gws[cur], err, sizeof(err)))
+		pr_err("%s: the daemon runs without recording", err);
 	if (gws[cur].cfg.daemon.lock_memory && lock_memory())
 		pr_warning("mlockall: %s: memory may be paged out (raise LimitMEMLOCK)", strerror(errno));
 	if (loop_start(&loop, &gws[cur], err, sizeof(err))) {
@@ -355,6 +360,9 @@ int main(int argc, char **argv)
 					pr_err("reload failed, the running configuration stays: %s", err);
 					info.reload_failures++;
 				} else {
+					recorder_log_replay_damage(&gws[nxt]);
+					if (recorder_apply(&rec, &gws[nxt], err, sizeof(err)))
+						pr_err("%s: the daemon runs without recording", err);
 					loop_resume(loop, &gws[nxt]);
 					gw_close(&gws[cur]);
 					cur = nxt;
@@ -382,6 +390,7 @@ int main(int argc, char **argv)
 		if (now >= next_tick) {
 			ctl_rates_update(&rates, &gws[cur]);
 			report(&seen, &gws[cur]);
+			recorder_log(rec);
 			status_line(&gws[cur]);
 			next_tick = now + 1.0;
 		}
@@ -391,6 +400,7 @@ int main(int argc, char **argv)
 	pr_info("stopping");
 	ctl_close(lfd, ctl_path);
 	loop_stop(loop);
+	recorder_close(rec);
 	gw_close(&gws[cur]);
 	ctl_rates_free(&rates);
 	seen_reset(&seen, &gws[cur]);

@@ -1,21 +1,36 @@
 // SPDX-License-Identifier: MIT
 /*
  * avatar.c - the chest from the head, both arms toward the hands.
- * See ik/avatar.h.
+ * See ik/avatar.h; what each model choice buys is measured in
+ * docs/FIDELITY.md.
  */
 #include "ik/avatar.h"
+
+void avatar_default_limits(struct arm_limits *out)
+{
+	arm_default_limits(out);
+	out->lo[1] = SC_C(-2.0943951023931957); /* -120 degrees */
+}
 
 void avatar_init(struct avatar *av, const struct arm_dims *dims, const struct vec3 *head_offset,
 		 const struct arm_limits *lim)
 {
 	av->body.dims = *dims;
 	av->body.head_offset = *head_offset;
+	av->body.model = AVATAR_MODEL_DEFAULT;
 	if (lim)
 		av->body.lim = *lim;
 	else
-		arm_default_limits(&av->body.lim);
+		avatar_default_limits(&av->body.lim);
 	arm_init(&av->arm[ARM_RIGHT], ARM_RIGHT, dims, &av->body.lim);
 	arm_init(&av->arm[ARM_LEFT], ARM_LEFT, dims, &av->body.lim);
+}
+
+void avatar_set_left_arm(struct avatar *av, sc_t arm, sc_t forearm, sc_t hand)
+{
+	struct arm_dims d = { av->body.dims.shoulder, arm, forearm, hand };
+
+	arm_init(&av->arm[ARM_LEFT], ARM_LEFT, &d, &av->body.lim);
 }
 
 sc_t avatar_head_yaw(const struct quat *head)
@@ -32,11 +47,40 @@ sc_t avatar_head_yaw(const struct quat *head)
 	return 2 * sc_atan2(z, w);
 }
 
-bool avatar_chest(const struct avatar *av, const struct dq *head, struct dq *chest, sc_t *yaw)
+/*
+ * The heading of the line from the left to the right hand, and how far to
+ * trust it as the chest's: hands at least 30 cm apart sideways count fully
+ * from 50 cm on, and a line more than 60 degrees off the head's heading is
+ * not the chest's (one arm reaching out, the hands crossed). Returns the
+ * weight in [0, 1].
+ */
+static sc_t hands_yaw(const struct dq *lhand, const struct dq *rhand, sc_t head_yaw, sc_t *yaw)
+{
+	struct vec3 l, r;
+	sc_t dx, dy, sep, d, wgt;
+
+	if (!lhand || !rhand || !dq_is_finite(lhand) || !dq_is_finite(rhand))
+		return 0;
+	dq_translation(lhand, &l);
+	dq_translation(rhand, &r);
+	dx = r.x - l.x;
+	dy = r.y - l.y;
+	sep = sc_sqrt(sc_mul(dx, dx) + sc_mul(dy, dy));
+	if (!(sep > SC_C(0.3)))
+		return 0;
+	*yaw = sc_atan2(dy, dx);
+	d = sc_abs(sc_wrap_pi(*yaw - head_yaw));
+	wgt = sc_min(sc_div(sep - SC_C(0.3), SC_C(0.2)), SC_C(1));
+	/* fading out from 45 to 60 degrees off the head's heading: no jump of the chest when it crosses */
+	return sc_mul(wgt, sc_clamp(sc_div(SC_C(1.0471975511965976) - d, SC_C(0.2617993877991494)), SC_C(0), SC_C(1)));
+}
+
+bool avatar_chest_hands(const struct avatar *av, const struct dq *head, const struct dq *lhand, const struct dq *rhand,
+			struct dq *chest, sc_t *yaw)
 {
 	struct quat r;
 	struct vec3 hp, off, o;
-	sc_t s, c;
+	sc_t s, c, hy, w;
 
 	if (!dq_is_finite(head) || !quat_normalize(&head->r, &r)) {
 		dq_identity(chest);
@@ -44,6 +88,14 @@ bool avatar_chest(const struct avatar *av, const struct dq *head, struct dq *che
 		return false;
 	}
 	*yaw = avatar_head_yaw(&r);
+	if ((av->body.model & AVATAR_YAW_HANDS) && (w = hands_yaw(lhand, rhand, *yaw, &hy)) > 0) {
+		/* the weighted circular mean of the two headings */
+		sc_t sh, ch, sy, cy;
+
+		sc_sincos(*yaw, &sy, &cy);
+		sc_sincos(hy, &sh, &ch);
+		*yaw = sc_atan2(sy + sc_mul(w, sh), cy + sc_mul(w, ch));
+	}
 	sc_sincos(sc_mul(*yaw, SC_C(0.5)), &s, &c);
 	r = (struct quat){ c, 0, 0, s };
 	dq_translation(head, &hp);
@@ -51,6 +103,11 @@ bool avatar_chest(const struct avatar *av, const struct dq *head, struct dq *che
 	o = (struct vec3){ hp.x - off.x, hp.y - off.y, hp.z - off.z };
 	dq_from_rt(&r, &o, chest);
 	return true;
+}
+
+bool avatar_chest(const struct avatar *av, const struct dq *head, struct dq *chest, sc_t *yaw)
+{
+	return avatar_chest_hands(av, head, NULL, NULL, chest, yaw);
 }
 
 void avatar_arm_target(const struct dq *chest, const struct dq *hand, struct ik_target *t)
@@ -71,6 +128,420 @@ void avatar_arm_target(const struct dq *chest, const struct dq *hand, struct ik_
 	ik_target_set(t, &p, &local.r);
 }
 
+/* ---- the elbow the hand points at ------------------------------------------------------ */
+
+static void v3_axpy(sc_t k, const struct vec3 *x, struct vec3 *y)
+{
+	y->x += sc_mul(k, x->x);
+	y->y += sc_mul(k, x->y);
+	y->z += sc_mul(k, x->z);
+}
+
+static sc_t v3_unit(struct vec3 *v)
+{
+	sc_t n = v3_norm(v);
+
+	if (n > SC_EPS) {
+		sc_t k = sc_div(SC_C(1), n);
+
+		v->x = sc_mul(v->x, k);
+		v->y = sc_mul(v->y, k);
+		v->z = sc_mul(v->z, k);
+	}
+	return n;
+}
+
+static sc_t over(sc_t v, sc_t lo, sc_t hi)
+{
+	return v < lo ? lo - v : (v > hi ? v - hi : SC_C(0));
+}
+
+/*
+ * m = Ry(a) Rx(b) Rz(c): of the two angle triples the one inside the
+ * limits of joints i0..i0+2, else the one outside them least.
+ */
+static void yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, sc_t out[3])
+{
+	const sc_t *lo = &lim->lo[i0], *hi = &lim->hi[i0];
+	sc_t b = sc_asin(-m[1][2]), a = sc_atan2(m[0][2], m[2][2]), c = sc_atan2(m[1][0], m[1][1]);
+	sc_t a1 = sc_wrap_pi(a + SC_PI), b1 = sc_wrap_pi(SC_PI - b), c1 = sc_wrap_pi(c + SC_PI);
+	sc_t v0 = over(a, lo[0], hi[0]) + over(b, lo[1], hi[1]) + over(c, lo[2], hi[2]);
+	sc_t v1 = over(a1, lo[0], hi[0]) + over(b1, lo[1], hi[1]) + over(c1, lo[2], hi[2]);
+
+	if (v1 < v0) {
+		out[0] = a1, out[1] = b1, out[2] = c1;
+	} else {
+		out[0] = a, out[1] = b, out[2] = c;
+	}
+}
+
+/* (a^T b)[i][j] */
+static sc_t tdot(const sc_t a[3][3], const sc_t b[3][3], int i, int j)
+{
+	return sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), a[0][i], b[0][j]), a[1][i], b[1][j]), a[2][i], b[2][j]));
+}
+
+/*
+ * One target of one arm, seen from one J1, in the right arm's frame (a left
+ * arm's target mirrored: the angles are the same): the wrist centre, the
+ * shoulder, and the circle the elbow can lie on about the shoulder-wrist
+ * line. The elbow's place on it is an angle phi from d0 (the way down, or
+ * back when the line is vertical) toward d1 = ax x d0.
+ */
+struct arm_goal {
+	sc_t R[3][3];        /* target orientation */
+	struct vec3 w, s;    /* wrist centre, shoulder */
+	struct vec3 ax;      /* unit, shoulder -> wrist */
+	struct vec3 d0, d1;  /* unit, across ax */
+	sc_t x, r;           /* the circle: centre s + x ax, radius r */
+	sc_t q1, s1, c1;
+	bool in_reach;       /* false: the wrist is beyond A + F, the circle is the straight arm's */
+};
+
+static bool goal_init(const struct arm *a, const struct ik_target *t, sc_t q1, struct arm_goal *g)
+{
+	const struct arm_dims *dm = &a->dims;
+	struct dq d = t->d;
+	struct vec3 p, hy;
+	sc_t L, r2, k;
+
+	if (a->side == ARM_LEFT)
+		arm_mirror_dq(&t->d, &d);
+	dq_translation(&d, &p);
+	quat_to_mat3(&d.r, g->R);
+	hy = (struct vec3){ g->R[0][1], g->R[1][1], g->R[2][1] };
+	g->w = p;
+	v3_axpy(-dm->hand, &hy, &g->w);
+	g->q1 = sc_clamp(q1, a->lim.lo[0], a->lim.hi[0]);
+	sc_sincos(g->q1, &g->s1, &g->c1);
+	g->s = (struct vec3){ sc_mul(dm->shoulder, g->c1), sc_mul(dm->shoulder, g->s1), 0 };
+	g->ax = (struct vec3){ g->w.x - g->s.x, g->w.y - g->s.y, g->w.z - g->s.z };
+	L = v3_unit(&g->ax);
+	if (!sc_isfinite(L) || !(L > sc_abs(dm->arm - dm->forearm) + SC_C(1e-4)))
+		return false;
+	g->in_reach = L <= dm->arm + dm->forearm;
+	if (!g->in_reach)
+		L = dm->arm + dm->forearm; /* the arm straight toward the wrist */
+	g->x = sc_div(sc_mul(dm->arm, dm->arm) - sc_mul(dm->forearm, dm->forearm) + sc_mul(L, L), 2 * L);
+	r2 = sc_mul(dm->arm, dm->arm) - sc_mul(g->x, g->x);
+	g->r = r2 > 0 ? sc_sqrt(r2) : SC_C(0);
+	g->d0 = (struct vec3){ 0, 0, SC_C(-1) };
+	k = v3_dot(&g->d0, &g->ax);
+	v3_axpy(-k, &g->ax, &g->d0);
+	if (v3_unit(&g->d0) < SC_C(0.1)) {
+		g->d0 = (struct vec3){ 0, SC_C(-1), 0 };
+		k = v3_dot(&g->d0, &g->ax);
+		v3_axpy(-k, &g->ax, &g->d0);
+		v3_unit(&g->d0);
+	}
+	v3_cross(&g->ax, &g->d0, &g->d1);
+	return true;
+}
+
+/* the swivel at which the point F behind the wrist along the hand's y axis lies */
+static sc_t goal_hand_phi(const struct arm *a, const struct arm_goal *g)
+{
+	struct vec3 v = { g->w.x - g->s.x, g->w.y - g->s.y, g->w.z - g->s.z };
+	struct vec3 hy = { g->R[0][1], g->R[1][1], g->R[2][1] };
+
+	v3_axpy(-a->dims.forearm, &hy, &v);
+	return sc_atan2(v3_dot(&v, &g->d1), v3_dot(&v, &g->d0));
+}
+
+/*
+ * The posture with the elbow at swivel phi: J2..J5 from the elbow, J6..J8
+ * what the target's orientation then asks of the wrist (of the two angle
+ * triples the one inside the limits; nothing clamped). Reaches the wrist
+ * centre exactly (when in reach) and the orientation exactly. Writes the
+ * limit violations of J2..J5 (arm) and J6..J8 (wrist), radians; false if
+ * something is not finite.
+ */
+static bool goal_posture(const struct arm *a, const struct arm_goal *g, sc_t phi, sc_t q[ARM_DOF], sc_t *v_arm,
+			 sc_t *v_wrist)
+{
+	const struct arm_limits *lim = &a->lim;
+	struct vec3 e, u, f, zu, yu, xu, v;
+	sc_t Ru[3][3], M[3][3], Rf[3][3], N[3][3], sp, cp, k, s5, c5;
+	int i, j;
+
+	sc_sincos(phi, &sp, &cp);
+	v = (struct vec3){ sc_mul(cp, g->d0.x) + sc_mul(sp, g->d1.x), sc_mul(cp, g->d0.y) + sc_mul(sp, g->d1.y),
+			   sc_mul(cp, g->d0.z) + sc_mul(sp, g->d1.z) };
+	e = g->s;
+	v3_axpy(g->x, &g->ax, &e);
+	v3_axpy(g->r, &v, &e);
+	u = (struct vec3){ e.x - g->s.x, e.y - g->s.y, e.z - g->s.z };
+	f = (struct vec3){ g->w.x - e.x, g->w.y - e.y, g->w.z - e.z };
+	v3_unit(&u);
+	v3_unit(&f);
+	zu = (struct vec3){ -u.x, -u.y, -u.z };
+	/* the bend plane: the forearm's part across the upper arm; a straight arm bends away from the elbow's side */
+	yu = f;
+	k = v3_dot(&yu, &zu);
+	v3_axpy(-k, &zu, &yu);
+	if (v3_unit(&yu) < SC_C(1e-4)) {
+		yu = (struct vec3){ -v.x, -v.y, -v.z };
+		k = v3_dot(&yu, &zu);
+		v3_axpy(-k, &zu, &yu);
+		if (v3_unit(&yu) < SC_C(1e-6))
+			return false;
+	}
+	v3_cross(&yu, &zu, &xu);
+	q[0] = g->q1;
+	q[4] = sc_atan2(v3_dot(&f, &zu), v3_dot(&f, &yu));
+	for (i = 0; i < 3; i++) {
+		Ru[i][0] = i == 0 ? xu.x : i == 1 ? xu.y : xu.z;
+		Ru[i][1] = i == 0 ? yu.x : i == 1 ? yu.y : yu.z;
+		Ru[i][2] = i == 0 ? zu.x : i == 1 ? zu.y : zu.z;
+	}
+	/* Rz(-q1) Ru = Ry(q2) Rx(q3) Rz(q4) */
+	for (i = 0; i < 3; i++) {
+		M[0][i] = sc_mul(g->c1, Ru[0][i]) + sc_mul(g->s1, Ru[1][i]);
+		M[1][i] = sc_mul(g->c1, Ru[1][i]) - sc_mul(g->s1, Ru[0][i]);
+		M[2][i] = Ru[2][i];
+	}
+	yxz((const sc_t(*)[3])M, lim, 1, &q[1]);
+	/* the forearm frame Ru Rx(q5), then Rf^T R = Ry(q6) Rx(q7) Rz(q8) */
+	sc_sincos(q[4], &s5, &c5);
+	for (i = 0; i < 3; i++) {
+		Rf[i][0] = Ru[i][0];
+		Rf[i][1] = sc_mul(c5, Ru[i][1]) + sc_mul(s5, Ru[i][2]);
+		Rf[i][2] = sc_mul(c5, Ru[i][2]) - sc_mul(s5, Ru[i][1]);
+	}
+	for (i = 0; i < 3; i++)
+		for (j = 0; j < 3; j++)
+			N[i][j] = tdot((const sc_t(*)[3])Rf, (const sc_t(*)[3])g->R, i, j);
+	yxz((const sc_t(*)[3])N, lim, 5, &q[5]);
+	*v_arm = 0;
+	*v_wrist = 0;
+	for (i = 0; i < ARM_DOF; i++) {
+		if (!sc_isfinite(q[i]))
+			return false;
+		if (i >= 1 && i <= 4)
+			*v_arm += over(q[i], lim->lo[i], lim->hi[i]);
+		else if (i >= 5)
+			*v_wrist += over(q[i], lim->lo[i], lim->hi[i]);
+	}
+	return true;
+}
+
+/*
+ * How far the hand's y axis is from the cone of directions the forearm can
+ * have: a forearm from any elbow of the circle to the wrist makes the angle
+ * gamma with the shoulder-wrist line. Radians.
+ */
+static sc_t goal_hand_misfit(const struct arm *a, const struct arm_goal *g)
+{
+	struct vec3 hy = { g->R[0][1], g->R[1][1], g->R[2][1] };
+	sc_t along, gamma, ang;
+
+	/* the forearm's part along the axis: (L - x) / F, L - x = sqrt(F^2 - r^2) */
+	along = sc_div(sc_sqrt(sc_max(sc_mul(a->dims.forearm, a->dims.forearm) - sc_mul(g->r, g->r), SC_C(0))),
+		       a->dims.forearm);
+	gamma = sc_acos(along);
+	ang = sc_acos(v3_dot(&hy, &g->ax));
+	return sc_abs(ang - gamma);
+}
+
+/*
+ * The swivel on the goal's circle of the elbow of posture q: the right
+ * arm's elbow is Rz(q1) [(S, 0, 0) + Ry(q2) Rx(q3) (0, 0, -A)] (J4 turns
+ * about the upper arm); the left arm's, mirrored, is the same numbers.
+ */
+static sc_t goal_phi_of(const struct arm *a, const struct arm_goal *g, const sc_t q[ARM_DOF])
+{
+	sc_t s1, c1, s2, c2, s3, c3, A = a->dims.arm;
+	struct vec3 u, e, v;
+
+	sc_sincos(q[0], &s1, &c1);
+	sc_sincos(q[1], &s2, &c2);
+	sc_sincos(q[2], &s3, &c3);
+	/* Ry(q2) Rx(q3) (0, 0, -A) */
+	u = (struct vec3){ -sc_mul(A, sc_mul(s2, c3)), sc_mul(A, s3), -sc_mul(A, sc_mul(c2, c3)) };
+	u.x += a->dims.shoulder;
+	e = (struct vec3){ sc_mul(c1, u.x) - sc_mul(s1, u.y), sc_mul(s1, u.x) + sc_mul(c1, u.y), u.z };
+	v = (struct vec3){ e.x - g->s.x, e.y - g->s.y, e.z - g->s.z };
+	return sc_atan2(v3_dot(&v, &g->d1), v3_dot(&v, &g->d0));
+}
+
+/* misfit below this: the hand leads the elbow fully; above MISFIT_NONE: not at all */
+#define MISFIT_FULL SC_C(0.14)  /* 8 degrees */
+#define MISFIT_NONE SC_C(0.44)  /* 25 degrees */
+#define MISFIT_RATE SC_C(0.02)  /* of the running mean per frame */
+
+/*
+ * The posture to start the IK from: the elbow where the hand's y axis says
+ * (the forearm along the hand, a straight wrist) as far as the hand is
+ * trusted, else where the previous frame had it (base: the previous
+ * posture, or at a reset the solver's own choice), J1 at 0; J6..J8 what
+ * the orientation then asks. Updates the running misfit. false when
+ * the wrist centre is too close to the shoulder (the solver then starts
+ * from base).
+ */
+static bool hand_elbow_posture(const struct arm *a, const struct ik_target *t, const sc_t *prev, bool first,
+			       sc_t prev_misfit, sc_t *misfit, sc_t pref[ARM_DOF])
+{
+	struct arm_goal g;
+	sc_t va, vw, m, trust, phi, base;
+
+	/* J1 at mid-range: what the shoulders do beyond the chest's yaw is the solver's to find */
+	if (!goal_init(a, t, SC_C(0), &g))
+		return false;
+	m = goal_hand_misfit(a, &g);
+	if (!first && sc_isfinite(prev_misfit))
+		m = prev_misfit + sc_mul(MISFIT_RATE, m - prev_misfit);
+	*misfit = m;
+	trust = sc_clamp(sc_div(MISFIT_NONE - m, MISFIT_NONE - MISFIT_FULL), SC_C(0), SC_C(1));
+	if (trust <= 0)
+		return false; /* the previous posture as it was */
+	phi = goal_hand_phi(a, &g);
+	if (trust < SC_C(1)) {
+		base = goal_phi_of(a, &g, prev);
+		phi = base + sc_mul(trust, sc_wrap_pi(phi - base));
+	}
+	return goal_posture(a, &g, phi, pref, &va, &vw);
+}
+
+/* ---- the hand to its sensor first ---------------------------------------------------------- */
+
+#define STEP15 SC_C(0.2617993877991494)
+
+static void q_set(sc_t dst[ARM_DOF], const sc_t src[ARM_DOF])
+{
+	for (int j = 0; j < ARM_DOF; j++)
+		dst[j] = src[j];
+}
+
+/*
+ * A posture that puts the hand on its target's position with J1..J5 inside
+ * their limits and the wrist as near the target's orientation as its limits
+ * allow. Tries J1 at q1s[], the swivel in 15 degree steps from the hand's,
+ * then narrows the best step down. Returns false if no J1 and swivel keep
+ * J2..J5 inside their limits.
+ */
+static bool reach_first(const struct arm *a, const struct ik_target *t, const sc_t *q1s, int n1, sc_t q[ARM_DOF])
+{
+	sc_t best_vw = SC_C(1e9), best_phi = 0, best_q1 = 0, cand[ARM_DOF], va, vw;
+	bool found = false;
+	int i, k;
+
+	for (i = 0; i < n1 && !(found && best_vw == 0); i++) {
+		struct arm_goal g;
+		sc_t phi0;
+
+		if (!goal_init(a, t, q1s[i], &g) || !g.in_reach)
+			continue;
+		phi0 = goal_hand_phi(a, &g);
+		for (k = 0; k < 24; k++) {
+			/* 0, +1, -1, +2, ... steps from the hand's swivel */
+			sc_t phi = phi0 + sc_mul(SC_C((k + 1) / 2 * (k & 1 ? 1 : -1)), STEP15);
+
+			if (!goal_posture(a, &g, phi, cand, &va, &vw) || va > 0 || !(vw < best_vw))
+				continue;
+			best_vw = vw;
+			best_phi = phi;
+			best_q1 = g.q1;
+			found = true;
+			q_set(q, cand);
+		}
+	}
+	if (!found)
+		return false;
+	if (best_vw > 0) {
+		/* narrow down around the best step, where the violation is smooth in phi */
+		struct arm_goal g;
+		sc_t lo = best_phi - STEP15, hi = best_phi + STEP15;
+
+		goal_init(a, t, best_q1, &g);
+		for (k = 0; k < 24; k++) {
+			sc_t m1 = lo + sc_div(hi - lo, SC_C(3)), m2 = hi - sc_div(hi - lo, SC_C(3));
+			sc_t va1, vw1, va2, vw2, c2[ARM_DOF];
+			bool ok1 = goal_posture(a, &g, m1, cand, &va1, &vw1) && va1 == 0;
+			bool ok2 = goal_posture(a, &g, m2, c2, &va2, &vw2) && va2 == 0;
+
+			if (ok1 && vw1 < best_vw) {
+				best_vw = vw1;
+				q_set(q, cand);
+			}
+			if (ok2 && vw2 < best_vw) {
+				best_vw = vw2;
+				q_set(q, c2);
+			}
+			if (!ok1 && !ok2)
+				break;
+			if (!ok2 || (ok1 && vw1 < vw2))
+				hi = m2;
+			else
+				lo = m1;
+		}
+	}
+	arm_clamp(a, q);
+	return true;
+}
+
+/* |hand - target| and the angle between their orientations, for a posture */
+static void posture_err(const struct arm *a, const struct ik_target *t, const sc_t q[ARM_DOF], struct ik_err *err)
+{
+	struct dq ee;
+	struct vec3 p;
+
+	arm_fk(a, q, &ee);
+	dq_translation(&ee, &p);
+	p = (struct vec3){ p.x - t->p.x, p.y - t->p.y, p.z - t->p.z };
+	err->pos = v3_norm(&p);
+	err->rot = quat_angle_between(&ee.r, &t->r);
+}
+
+unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin *kin, const struct ik_opts *o,
+			  const struct ik_target *t, const struct avatar_pose *prev, struct avatar_pose *out)
+{
+	const struct arm *a = &av->arm[side];
+	const sc_t *pq = prev ? prev->q[side] : NULL;
+	sc_t pref[ARM_DOF], base[ARM_DOF], *q = out->q[side];
+	struct ik_result *res = &out->res[side];
+	const sc_t *seed = pq;
+	unsigned flags;
+
+	out->hand_misfit[side] = prev ? prev->hand_misfit[side] : SC_C(0);
+	if ((av->body.model & AVATAR_HAND_ELBOW) && t->valid) {
+		if (!pq) {
+			/* a reset: the solver's own choice is where an untrusted hand leaves the elbow */
+			ik_solve(a, kin, t, NULL, o, base, res);
+			pq = base;
+		}
+		if (hand_elbow_posture(a, t, pq, !prev, prev ? prev->hand_misfit[side] : SC_C(0),
+				       &out->hand_misfit[side], pref))
+			seed = pref;
+		else
+			seed = pq;
+	}
+	flags = ik_solve(a, kin, t, seed, o, q, res);
+	if ((av->body.model & AVATAR_REACH_FIRST) && t->valid && (flags & IK_UNREACHABLE) &&
+	    res->err.pos > o->tol_pos) {
+		/*
+		 * No posture inside the limits has both the position and the
+		 * orientation, and the solver's compromise moved the hand off
+		 * its sensor: the position first, if J1..J5 can give it.
+		 */
+		sc_t q2[ARM_DOF], q1s[4] = { q[0], pq ? pq[0] : SC_C(0), SC_C(0), sc_mul(q[0], SC_C(0.5)) };
+		struct ik_err e2;
+
+		if (reach_first(a, t, q1s, 4, q2)) {
+			posture_err(a, t, q2, &e2);
+			if (e2.pos < res->err.pos) {
+				q_set(q, q2);
+				res->err = e2;
+				res->flags &= ~(unsigned)IK_LIMITED;
+				for (int i = 0; i < ARM_DOF; i++)
+					if (q[i] <= a->lim.lo[i] || q[i] >= a->lim.hi[i])
+						res->flags |= IK_LIMITED;
+				flags = res->flags;
+			}
+		}
+	}
+	return flags;
+}
+
 unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const struct ik_opts *o,
 		      const struct dq *head, const struct dq *lhand, const struct dq *rhand,
 		      const struct avatar_pose *prev, struct avatar_pose *out)
@@ -79,7 +550,7 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 	unsigned flags = 0;
 	int side;
 
-	if (!avatar_chest(av, head, &out->chest, &out->head_yaw)) {
+	if (!avatar_chest_hands(av, head, lhand, rhand, &out->chest, &out->head_yaw)) {
 		/* no head: keep the previous frame, flagged */
 		for (side = 0; side < 2; side++) {
 			int i;
@@ -89,6 +560,7 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 			if (!prev)
 				ik_rest_posture(&av->arm[side], out->q[side]);
 			out->res[side] = (struct ik_result){ IK_BAD_TARGET, 0, 0, { 0, 0 } };
+			out->hand_misfit[side] = prev ? prev->hand_misfit[side] : SC_C(0);
 		}
 		if (prev)
 			out->chest = prev->chest;
@@ -98,8 +570,7 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 		struct ik_target t;
 
 		avatar_arm_target(&out->chest, hand[side], &t);
-		flags |= ik_solve(&av->arm[side], kin, &t, prev ? prev->q[side] : NULL, o, out->q[side],
-				  &out->res[side]);
+		flags |= avatar_arm_solve(av, side, kin, o, &t, prev, out);
 	}
 	return flags;
 }

@@ -19,6 +19,7 @@
 #include <stdio.h>
 
 struct tracker;
+struct recorder;
 
 enum tracker_state {
 	TRACKER_OK = 0,
@@ -84,6 +85,8 @@ struct tracker {
 	bool world_identity;      /* the tracker's frame is the world's: no product per sample */
 	struct tracker_stats st;
 	void *priv;               /* the driver's state */
+	struct recorder *rec;     /* records every sample when not NULL (record/recorder.h) */
+	uint16_t rec_source;      /* this tracker's index in the recording */
 };
 
 /* the table: index = cfg_source.driver */
@@ -94,7 +97,11 @@ int trackers_find(const char *name);
 /* start-up: allocates the slots and calls the driver's open() */
 int tracker_open(struct tracker *t, const struct cfg_source *cfg, char *err, size_t errlen);
 void tracker_close(struct tracker *t);
-/* a sample in the tracker's frame, stored in world coordinates */
+/*
+ * a sample in the tracker's frame, stored in world coordinates (and
+ * recorded, with the slot's buttons and analog values: a driver sets those
+ * before it puts the sample)
+ */
 void tracker_put(struct tracker *t, int sensor, const struct dq *local, uint64_t t_ns, uint64_t arrival_ns);
 int tracker_sensor_lookup(const struct cfg_source *cfg, const char *name);
 

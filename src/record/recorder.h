@@ -1,0 +1,87 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * recorder.h - the daemon records its sessions (docs/RECORDING.md).
+ *
+ * The loop never touches a file: every sample a tracker takes in
+ * (tracker_put) and, if asked, every published message is encoded into a
+ * preallocated lock-free single-producer single-consumer ring; a writer
+ * thread takes the records out, seals them with their CRC and appends them
+ * to the current file under the flush policy, and rotates files by size or
+ * age. A full ring drops the record and counts it (the writer then marks the
+ * gap in the file); the loop never waits.
+ *
+ * Threads: recorder_open/attach/close and the stats readers run in the
+ * control thread; recorder_sample/recorder_messages in the loop (the one
+ * producer; attach pushes only while the loop is paused or not yet
+ * started); the writer thread is the consumer.
+ */
+#ifndef AGW_RECORDER_H
+#define AGW_RECORDER_H
+
+#include "config/config.h"
+
+#include <stdatomic.h>
+#include <stdint.h>
+
+struct gateway;
+struct sensor_slot;
+struct out_msg;
+struct recorder;
+
+struct recorder_stats {
+	_Atomic uint64_t records;         /* written to files */
+	_Atomic uint64_t bytes;           /* written to files, headers included */
+	_Atomic uint64_t dropped_records; /* lost to a full ring (loop side) */
+	_Atomic uint64_t dropped_bytes;
+	_Atomic uint64_t skipped_records; /* not written: no file could be opened, or a write failed */
+	_Atomic uint64_t write_errors;    /* failed open/write/fsync calls */
+	_Atomic uint64_t files;           /* files opened */
+	_Atomic uint64_t flushes;         /* write() batches */
+	_Atomic int last_errno;
+};
+
+/*
+ * Start-up (control thread): the ring of d->record_buffer KiB, the writer
+ * thread, the first file in d->record_dir (created if missing). A file that
+ * cannot be opened is not fatal: the writer retries every second and counts.
+ * Returns 0 or a negative errno with err set (no memory, no thread).
+ */
+int recorder_open(struct recorder **rp, const struct cfg_daemon *d, char *err, size_t errlen);
+/* Stops the writer after it has written everything queued, an END record last. NULL is fine. */
+void recorder_close(struct recorder *r);
+/* true if the record_* keys of a and b differ (a reload must reopen the recorder) */
+bool recorder_config_changed(const struct cfg_daemon *a, const struct cfg_daemon *b);
+
+/*
+ * Control thread, with the loop paused or not started: g's trackers and
+ * outputs feed r from now on, and a SESSION record describing g (sources,
+ * sensors, avatars) is queued. r NULL detaches g. Returns 0 or -ENOSPC if
+ * the SESSION record does not fit the ring (raise record_buffer).
+ */
+int recorder_attach(struct recorder *r, struct gateway *g, char *err, size_t errlen);
+
+/* loop: one sample of sensor `sensor` of the tracker attached as `source` (its slot after the update) */
+void recorder_sample(struct recorder *r, uint16_t source, uint16_t sensor, const struct sensor_slot *s);
+/* loop: the messages of one cycle (only if record_messages) */
+void recorder_messages(struct recorder *r, uint64_t mono_ns, const struct out_msg *msgs, int n);
+
+/* control thread */
+const struct recorder_stats *recorder_stats(const struct recorder *r);
+/* the file being written ("" if none) */
+void recorder_current_file(struct recorder *r, char *buf, size_t len);
+/* ring fill, bytes used and capacity */
+void recorder_ring_use(const struct recorder *r, uint64_t *used, uint64_t *cap);
+
+/*
+ * Control thread: opens, reopens (record_* keys changed) or closes *rp as
+ * g's [daemon] record_* keys say, and attaches g. With the loop paused or
+ * not started. 0 or a negative errno with err.
+ */
+int recorder_apply(struct recorder **rp, struct gateway *g, char *err, size_t errlen);
+/* control thread, once a second: logs what changed (new file, drops, errors) */
+void recorder_log(struct recorder *r);
+
+/* logs (control thread) what the replay sources of g found damaged in their recordings */
+void recorder_log_replay_damage(struct gateway *g);
+
+#endif /* AGW_RECORDER_H */
