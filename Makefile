@@ -35,12 +35,15 @@ CMOCKA_LIBS = $(shell pkg-config --libs cmocka 2>/dev/null || echo -lcmocka)
 
 # ---- the IK core, once per scalar type ------------------------------------
 CORE_SRC = $(wildcard src/ik/*.c)
-CORE_TYPES = d f
-CORE_OBJ = $(foreach t,$(CORE_TYPES),$(patsubst src/%.c,$(BUILD)/obj/%.$(t).o,$(CORE_SRC)))
+CORE_TYPES = d f q
+# the fixed-point build (q, int32 Q5.26) is the solver: body calibration is host-side setup work
+CORE_SRC_q = $(filter-out src/ik/calib.c,$(CORE_SRC))
+CORE_OBJ = $(foreach t,$(CORE_TYPES),$(patsubst src/%.c,$(BUILD)/obj/%.$(t).o,$(or $(CORE_SRC_$(t)),$(CORE_SRC))))
 LIBIK = $(BUILD)/libavatargw-ik.a
 
 SC_d = -DSC_TYPE=SC_DOUBLE
 SC_f = -DSC_TYPE=SC_FLOAT
+SC_q = -DSC_TYPE=SC_FIXQ
 
 $(BUILD)/obj/ik/%.d.o: src/ik/%.c
 	@mkdir -p $(dir $@)
@@ -48,6 +51,9 @@ $(BUILD)/obj/ik/%.d.o: src/ik/%.c
 $(BUILD)/obj/ik/%.f.o: src/ik/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) $(CORE_CFLAGS) $(SC_f) -c $< -o $@
+$(BUILD)/obj/ik/%.q.o: src/ik/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(CORE_CFLAGS) $(SC_q) -c $< -o $@
 
 $(LIBIK): $(CORE_OBJ)
 	@rm -f $@
@@ -122,8 +128,7 @@ TEST_CXX = $(wildcard tests/test_*.cpp)
 TEST_BIN = $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_C)) $(patsubst tests/%.cpp,$(BUILD)/tests/%,$(TEST_CXX))
 # helpers linked into every test binary (built once per type where named *.tmpl.c)
 TEST_LIB_SRC = $(wildcard tests/lib/*.c)
-TEST_LIB_OBJ = $(patsubst tests/lib/%.c,$(BUILD)/obj/tests/lib/%.d.o,$(TEST_LIB_SRC)) \
-	$(patsubst tests/lib/%.c,$(BUILD)/obj/tests/lib/%.f.o,$(TEST_LIB_SRC))
+TEST_LIB_OBJ = $(foreach t,$(CORE_TYPES),$(patsubst tests/lib/%.c,$(BUILD)/obj/tests/lib/%.$(t).o,$(TEST_LIB_SRC)))
 
 $(BUILD)/obj/tests/lib/%.d.o: tests/lib/%.c
 	@mkdir -p $(dir $@)
@@ -131,6 +136,9 @@ $(BUILD)/obj/tests/lib/%.d.o: tests/lib/%.c
 $(BUILD)/obj/tests/lib/%.f.o: tests/lib/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) $(SC_f) -Itests -c $< -o $@
+$(BUILD)/obj/tests/lib/%.q.o: tests/lib/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(SC_q) -Itests -c $< -o $@
 $(BUILD)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -D_GNU_SOURCE -Isrc -Itests -DSHARED_DIR='"$(SHARED)"' -c $< -o $@

@@ -113,7 +113,7 @@ static inline void v3_cross(const struct vec3 *a, const struct vec3 *b, struct v
 
 static inline sc_t v3_norm(const struct vec3 *a)
 {
-	return sc_sqrt(v3_dot(a, a));
+	return sc_acc_sqrt(sc_mac(sc_mac(sc_mac(sc_acc0(), a->x, a->x), a->y, a->y), a->z, a->z));
 }
 
 /* out = a b (Hamilton) */
@@ -155,7 +155,7 @@ static inline sc_t quat_norm(const struct quat *a)
 
 	s = sc_mac(s, a->x, a->x);
 	s = sc_mac(s, a->y, a->y);
-	return sc_sqrt(sc_acc_get(sc_mac(s, a->z, a->z)));
+	return sc_acc_sqrt(sc_mac(s, a->z, a->z));
 }
 
 /* Returns false (and writes the identity) if |a| is zero or not finite. */
