@@ -114,6 +114,23 @@ $(BUILD)/obj/tools/%.o: tools/%.c
 $(BUILD)/avatargw-%: $(BUILD)/obj/tools/avatargw-%.o $(LIBGW) $(LIBIK)
 	$(CC) $(LDFLAGS) -o $@ $^ $(LIBS)
 
+# tools/lib/ikx.c: the core of one scalar type behind a double interface, once per type
+IKX_OBJ = $(foreach t,$(CORE_TYPES),$(BUILD)/obj/tools/lib/ikx.$(t).o)
+
+$(BUILD)/obj/tools/lib/%.d.o: tools/lib/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(SC_d) -Itools -c $< -o $@
+$(BUILD)/obj/tools/lib/%.f.o: tools/lib/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(SC_f) -Itools -c $< -o $@
+$(BUILD)/obj/tools/lib/%.q.o: tools/lib/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(SC_q) -Itools -c $< -o $@
+
+$(BUILD)/obj/tools/avatargw-ikcompare.o: ALL_CFLAGS += -Itools
+$(BUILD)/avatargw-ikcompare: $(BUILD)/obj/tools/avatargw-ikcompare.o $(IKX_OBJ) $(LIBGW) $(LIBIK)
+	$(CC) $(LDFLAGS) -o $@ $^ $(LIBS)
+
 $(BUILD)/obj/examples/%.o: tools/examples/%.cpp
 	@mkdir -p $(dir $@)
 	$(CXX) $(ALL_CXXFLAGS) -c $< -o $@
@@ -141,7 +158,7 @@ $(BUILD)/obj/tests/lib/%.q.o: tests/lib/%.c
 	$(CC) $(ALL_CFLAGS) $(SC_q) -Itests -c $< -o $@
 $(BUILD)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -D_GNU_SOURCE -Isrc -Itests -DSHARED_DIR='"$(SHARED)"' -c $< -o $@
+	$(CC) $(ALL_CFLAGS) $(TEST_CFLAGS) -D_GNU_SOURCE -Isrc -Itests -DSHARED_DIR='"$(SHARED)"' -c $< -o $@
 $(BUILD)/obj/tests/%.o: tests/%.cpp
 	@mkdir -p $(dir $@)
 	$(CXX) $(ALL_CXXFLAGS) -Itests -DSHARED_DIR='"$(SHARED)"' -c $< -o $@
@@ -151,6 +168,23 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
 
 # test_alloc counts every allocation made by our code: wrapped at link time
 $(BUILD)/tests/test_alloc: TEST_LDFLAGS = -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free
+
+# test_fixq is the fixed-point build's own test (sc_t = Q5.26). It holds the core's
+# Q5.26 build against the double one through tools/lib/ikx.c, and links a counting
+# build of the fixed core (suffix _qs, SC_FIXQ_STATS: how many results saturated).
+SC_qs = -DSC_TYPE=SC_FIXQ -DSC_FIXQ_STATS -DSC_SUFFIX=_qs
+QS_OBJ = $(patsubst src/%.c,$(BUILD)/obj/%.qs.o,$(CORE_SRC_q)) $(BUILD)/obj/tools/lib/ikx.qs.o
+
+$(BUILD)/obj/ik/%.qs.o: src/ik/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(CORE_CFLAGS) $(SC_qs) -c $< -o $@
+$(BUILD)/obj/tools/lib/%.qs.o: tools/lib/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(SC_qs) -Itools -c $< -o $@
+$(BUILD)/obj/tests/test_fixq.o: TEST_CFLAGS = $(SC_q) -Itools
+$(BUILD)/tests/test_fixq: $(BUILD)/obj/tests/test_fixq.o $(QS_OBJ) $(IKX_OBJ) $(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
+	@mkdir -p $(dir $@)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) $(LIBS)
 
 # ---- top-level targets --------------------------------------------------------
 .SECONDARY:

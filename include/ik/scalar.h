@@ -7,8 +7,8 @@
  * point: value = raw / 2^26, range [-32, 32), resolution 1.5e-8; see
  * docs/EMBEDDED.md). Generic code never touches the representation:
  *   - constants go through SC_C(1.5) (compile-time constants only: in fixed
- *     point it is folded by the compiler) and run-time integers through
- *     sc_from_int();
+ *     point it is folded by the compiler); run-time integers through
+ *     sc_from_int(), sc_mul_int() and sc_div_int();
  *   - products, quotients, roots and trig go through sc_mul(), sc_div(),
  *     sc_sqrt(), sc_sincos(), sc_atan2();
  *   - dot products go through an accumulator (sc_acc0/sc_mac/sc_acc_get) so
@@ -294,6 +294,17 @@ static inline sc_t sc_from_int(int n)
 	return (sc_t)n;
 }
 
+/* a n and a / n for an integer n (n != 0) */
+static inline sc_t sc_mul_int(sc_t a, int n)
+{
+	return a * (sc_t)n;
+}
+
+static inline sc_t sc_div_int(sc_t a, int n)
+{
+	return a / (sc_t)n;
+}
+
 /* the square root of a sum of products: the norm of a vector */
 static inline sc_t sc_acc_sqrt(sc_acc_t s)
 {
@@ -359,12 +370,15 @@ static inline sc_t sc_wrap_pi(sc_t a)
 /*
  * Bounded steps and targets: q + x must stay representable, and the sum of
  * four squares must fit the accumulator (2^11), so input with a component
- * beyond 16 is scaled down before its norm is taken. A target farther than
- * 8 m from the chest is out of any arm's reach; only its direction matters,
- * so it is pulled in to 8 m along that direction.
+ * beyond 16 is scaled down before its norm is taken. The solver squares
+ * distances (the law of cosines at the elbow), which must stay below 32 m^2,
+ * and its error twist holds w x (w x t) with |w| <= pi: a target farther
+ * than 2 m from the chest, out of any human arm's reach (the segments of a
+ * fixed-point arm must add up to less than that), is pulled in to 2 m
+ * along its direction, which is all that matters about it.
  */
 #define SC_STEP_CAP SC_C(8)
-#define SC_REACH_MAX SC_C(8)
+#define SC_REACH_MAX SC_C(2)
 #define SC_SQ_SAFE SC_C(16)
 
 #ifdef SC_FIXQ_STATS
@@ -462,10 +476,26 @@ static inline sc_acc_t sc_acc_add(sc_acc_t a, sc_acc_t b)
 	return a + b;
 }
 
-/* |n| < 32 */
+/* saturates beyond [-32, 31] */
 static inline sc_t sc_from_int(int n)
 {
-	return (sc_t)n * ((sc_t)1 << SC_FRAC);
+	return sc_sat((int64_t)n * ((int64_t)1 << SC_FRAC));
+}
+
+/* a n, saturating */
+static inline sc_t sc_mul_int(sc_t a, int n)
+{
+	return sc_sat((int64_t)a * n);
+}
+
+/* a / n rounded to nearest (half away from zero); n != 0 */
+static inline sc_t sc_div_int(sc_t a, int n)
+{
+	int64_t q = (int64_t)a / n, r = (int64_t)a % n;
+
+	if (2 * (r < 0 ? -r : r) >= (n < 0 ? -(int64_t)n : (int64_t)n))
+		q += (a < 0) == (n < 0) ? 1 : -1;
+	return sc_sat(q);
 }
 
 #ifndef SC_NO_DOUBLE

@@ -365,7 +365,7 @@ static bool ctx_refine(struct search *s, const struct swivel_ctx *x, sc_t lo, sc
 static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, bool refine, sc_t q[ARM_DOF])
 {
 	int samples = s->o->swivel_samples > 2 ? s->o->swivel_samples : 2;
-	sc_t step = sc_div(2 * SC_PI, sc_from_int(samples)), t[ARM_DOF], v, bv, bphi;
+	sc_t step = sc_div_int(2 * SC_PI, samples), t[ARM_DOF], v, bv, bphi;
 	sc_t c0, s0, cs, ss, cf, sf, cb, sb;
 	int k, side, it;
 
@@ -387,7 +387,7 @@ static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, 
 		sb = sc_mul(sb, cs) - sc_mul(cb, ss);
 		cb = nc;
 		for (side = -1; side <= 1; side += 2) {
-			sc_t lo, hi = phi0 + sc_mul(sc_from_int(side * k), step);
+			sc_t lo, hi = phi0 + sc_mul_int(step, side * k);
 
 			v = side < 0 ? search_eval_cs(s, x, hi, cb, sb, t, false) : search_eval_cs(s, x, hi, cf, sf, t, false);
 			if (v > 0) {
@@ -397,7 +397,7 @@ static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, 
 			}
 			q_copy(q, t);
 			/* feasible at hi, not at lo: move hi toward lo */
-			lo = hi - sc_mul(sc_from_int(side), step);
+			lo = hi - sc_mul_int(step, side);
 			for (it = 0; it < 8; it++) {
 				sc_t mid = sc_mul(lo + hi, SC_C(0.5));
 
@@ -444,23 +444,23 @@ static bool rescue(struct search *s, const struct swivel_target *st, sc_t q[ARM_
 		if (!ctx_init(&x, a, &st->w, (const sc_t(*)[3])st->rt, q1s[i]))
 			continue;
 		for (j = 0; j < n2; j++)
-			search_eval(s, &x, sc_mul(sc_div(2 * SC_PI, sc_from_int(n2)), sc_from_int(j)), t, true);
+			search_eval(s, &x, sc_mul_int(sc_div_int(2 * SC_PI, n2), j), t, true);
 	}
 	if (s->best_v >= SC_BIG)
 		return false;
 	q1 = s->best_q1;
 	phi = s->best_phi;
 	v = s->best_v;
-	dq1 = sc_div(a->lim.hi[0] - a->lim.lo[0], sc_from_int(2 * (n1 - 1)));
-	dphi = sc_div(SC_PI, sc_from_int(n2));
+	dq1 = sc_div_int(a->lim.hi[0] - a->lim.lo[0], 2 * (n1 - 1));
+	dphi = sc_div_int(SC_PI, n2);
 	for (round = 0; round < 100 && v > 0 && dphi > SC_C(1e-5) && s->evals < s->o->max_evals; round++) {
 		static const signed char dir[4][2] = { { 1, 0 }, { -1, 0 }, { 0, 1 }, { 0, -1 } };
 		bool moved = false;
 		int d;
 
 		for (d = 0; d < 4 && !moved; d++) {
-			sc_t nq1 = sc_clamp(q1 + sc_mul(sc_from_int(dir[d][0]), dq1), a->lim.lo[0], a->lim.hi[0]);
-			sc_t nphi = phi + sc_mul(sc_from_int(dir[d][1]), dphi), nv;
+			sc_t nq1 = sc_clamp(q1 + sc_mul_int(dq1, dir[d][0]), a->lim.lo[0], a->lim.hi[0]);
+			sc_t nphi = phi + sc_mul_int(dphi, dir[d][1]), nv;
 
 			if (!ctx_init(&x, a, &st->w, (const sc_t(*)[3])st->rt, nq1))
 				continue;
@@ -589,7 +589,7 @@ static int yaw_candidates(const struct swivel_target *st, sc_t q1p, int samples,
 		sc_t a0 = lo[i] + mg, a1 = hi[i] - mg;
 
 		for (j = 0; j < samples && m < max; j++) {
-			out[m++] = samples > 1 ? a0 + sc_div(sc_mul(a1 - a0, sc_from_int(j)), sc_from_int(samples - 1))
+			out[m++] = samples > 1 ? a0 + sc_div_int(sc_mul_int(a1 - a0, j), samples - 1)
 					       : sc_mul(a0 + a1, SC_C(0.5));
 		}
 	}
@@ -659,7 +659,7 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 	}
 	if (!found && nc > 1 && ctx_init(&x, a, &st.w, (const sc_t(*)[3])st.rt, s.best_q1) && x.viol15 == 0) {
 		/* around the least violating sample of the coarse scans */
-		sc_t step = sc_div(2 * SC_PI, sc_from_int(o->swivel_samples > 2 ? o->swivel_samples : 2));
+		sc_t step = sc_div_int(2 * SC_PI, o->swivel_samples > 2 ? o->swivel_samples : 2);
 
 		found = ctx_refine(&s, &x, s.best_phi - step, s.best_phi + step, q);
 	}
