@@ -4,6 +4,7 @@
 #   make            build everything into $(BUILD)
 #   make test       build and run every test (add SAN=1 for ASan + UBSan)
 #   make bench      run the IK benchmark on ../shared/bench
+#   make embedded   cross-build the IK core's self-test (Cortex-M, aarch64); embedded-report: docs/EMBEDDED.md's numbers
 #   make install    install under $(DESTDIR)$(PREFIX)
 #   make clean
 
@@ -200,11 +201,14 @@ check-core: $(LIBIK)
 	if [ -n "$$bad" ]; then echo "check-core: the IK core references: $$bad"; exit 1; fi; \
 	echo "check-core: the IK core references nothing outside itself but: $$(nm -u $(LIBIK) | awk '/ U /{print $$2}' | sort -u | comm -23 - $(BUILD)/core-defined.txt | grep -v -E '^__(asan|ubsan)' | tr '\n' ' ')"
 
+# the core cross-built for microcontrollers and aarch64, and its self-test (docs/EMBEDDED.md)
+include tools/embedded.mk
+
 # end-to-end tests (the real daemon on loopback) and checks of docs against the code
 E2E_TESTS = $(wildcard tests/e2e/test_*.py)
 CHECK_SCRIPTS = $(wildcard tests/check-*.sh) tests/service/verify-unit.sh tools/check-man.sh
 
-test: all $(TEST_BIN) check-core
+test: all $(TEST_BIN) check-core $(EMB_IMAGES)
 	@BUILD=$(BUILD) tests/run.sh $(TEST_BIN) $(E2E_TESTS) $(CHECK_SCRIPTS)
 
 bench: $(BUILD)/avatargw-ikbench $(DAEMON) $(BUILD)/avatargw-dump $(BUILD)/avatargw-ctl
