@@ -9,7 +9,8 @@
 #   ikt-a64{q,d,f} aarch64 Linux, Q5.26 / double / float (qemu-aarch64)
 #   ikt-host{q,d,f} this machine, the reference for the hashes
 #   min-<cfg>-{none,newton,solve}.elf   the smallest firmware without a solver,
-#                  with the paper's Newton, with avatargw's solver (code size)
+#                  with the paper's Newton, with avatargw's solver (code size);
+#                  <cfg>l: the same with link-time optimisation
 #
 # tests/check-embedded.sh runs them as part of `make test`. A family whose
 # tools are missing is not built here; the check then says so and is skipped,
@@ -42,17 +43,22 @@ EMB_CORE_FLAGS = -std=c11 $(WARN) -g -fno-math-errno -ffp-contract=off
 
 # Cortex-M: size-optimised, freestanding, unused functions dropped at link time
 CM_FLAGS = $(EMB_CORE_FLAGS) -Os -ffreestanding -ffunction-sections -fdata-sections \
-	-fno-tree-loop-distribute-patterns -fstack-usage
+	-fno-tree-loop-distribute-patterns
+# each object's frame sizes and calls (.su, .ci): tools/stack-depth.py bounds the stack
+CM_STACK = -fstack-usage -fcallgraph-info=su
 CM_LD = -nostdlib -Ltests/embedded -Wl,--gc-sections
-EMB_FLAGS_m0q = -mcpu=cortex-m0 -mthumb $(CM_FLAGS) -DSC_TYPE=SC_FIXQ -DSC_NO_DOUBLE
-EMB_FLAGS_m3q = -mcpu=cortex-m3 -mthumb $(CM_FLAGS) -DSC_TYPE=SC_FIXQ -DSC_NO_DOUBLE
-EMB_FLAGS_m4q = -mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard $(CM_FLAGS) -DSC_TYPE=SC_FIXQ -DSC_NO_DOUBLE
-EMB_FLAGS_m4ff = -mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard $(CM_FLAGS) -DSC_TYPE=SC_FLOAT
+EMB_FLAGS_m0q = -mcpu=cortex-m0 -mthumb $(CM_FLAGS) $(CM_STACK) -DSC_TYPE=SC_FIXQ -DSC_NO_DOUBLE
+EMB_FLAGS_m3q = -mcpu=cortex-m3 -mthumb $(CM_FLAGS) $(CM_STACK) -DSC_TYPE=SC_FIXQ -DSC_NO_DOUBLE
+EMB_FLAGS_m4q = -mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard $(CM_FLAGS) $(CM_STACK) -DSC_TYPE=SC_FIXQ -DSC_NO_DOUBLE
+EMB_FLAGS_m4ff = -mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard $(CM_FLAGS) $(CM_STACK) -DSC_TYPE=SC_FLOAT
 EMB_LD_m0q = $(CM_LD) -T tests/embedded/microbit.ld -lgcc
 EMB_LD_m3q = $(CM_LD) -T tests/embedded/mps2.ld -lgcc
 EMB_LD_m4q = $(CM_LD) -T tests/embedded/mps2.ld -lgcc
 # float: libm's sinf/cosf/atan2f back the core's polynomials beyond |a| = 8
 EMB_LD_m4ff = $(CM_LD) -T tests/embedded/mps2.ld -lm -lc -lgcc
+# the same with link-time optimisation, for the code size of the smallest firmware
+$(foreach c,m0q m3q m4q m4ff,$(eval EMB_FLAGS_$(c)l = $$(filter-out $$(CM_STACK),$$(EMB_FLAGS_$(c))) -flto)$(eval EMB_LD_$(c)l = $$(EMB_LD_$(c)))\
+	$(eval EMB_CC_$(c)l = $$(EMB_CC_$(c)))$(eval EMB_NAME_$(c)l = $$(EMB_NAME_$(c))))
 EMB_NAME_m0q = cortex-m0 (qemu microbit)
 EMB_NAME_m3q = cortex-m3 (qemu mps2-an385)
 EMB_NAME_m4q = cortex-m4f (qemu mps2-an386)
@@ -89,6 +95,7 @@ EMB_LD_hostd = $(LDFLAGS) -lm
 EMB_LD_hostf = $(LDFLAGS) -lm
 
 EMB_CM = m0q m3q m4q m4ff
+EMB_CM_LTO = $(addsuffix l,$(EMB_CM))
 EMB_LINUX = a64q a64d a64f
 EMB_HOST = hostq hostd hostf
 
@@ -100,17 +107,17 @@ $(EMB_VEC): tools/embedded-vectors.sh $(SHARED)/bench/targets.csv $(SHARED)/benc
 
 # objects of one configuration: the core, the self-test and its platform
 define emb_config
-$(EMB)/$(1)/%.o: src/ik/%.c
+$(EMB)/$(1)/%.o: src/ik/%.c tools/embedded.mk
 	@mkdir -p $$(dir $$@)
 	$$(EMB_CC_$(1)) $$(EMB_FLAGS_$(1)) $$(EMB_INC) -MMD -MP -c $$< -o $$@
-$(EMB)/$(1)/%.o: tests/embedded/%.c $(EMB_VEC)
+$(EMB)/$(1)/%.o: tests/embedded/%.c $(EMB_VEC) tools/embedded.mk
 	@mkdir -p $$(dir $$@)
 	$$(EMB_CC_$(1)) $$(EMB_FLAGS_$(1)) $$(EMB_INC) -DIKT_PLATFORM='"$$(EMB_NAME_$(1))"' -MMD -MP -c $$< -o $$@
-$(EMB)/$(1)/min-%.o: tests/embedded/min.c
+$(EMB)/$(1)/min-%.o: tests/embedded/min.c tools/embedded.mk
 	@mkdir -p $$(dir $$@)
 	$$(EMB_CC_$(1)) $$(EMB_FLAGS_$(1)) $$(EMB_INC) -DIKT_MIN_$$(shell echo $$* | tr a-z A-Z) -MMD -MP -c $$< -o $$@
 endef
-$(foreach c,$(EMB_CM) $(EMB_LINUX) $(EMB_HOST),$(eval $(call emb_config,$(c))))
+$(foreach c,$(EMB_CM) $(EMB_CM_LTO) $(EMB_LINUX) $(EMB_HOST),$(eval $(call emb_config,$(c))))
 
 $(EMB)/ikt-%.elf: $(EMB)/%/ikt.o $(EMB)/%/ikt_mcu.o $(addprefix $(EMB)/%/,$(addsuffix .o,$(EMB_CORE)))
 	$(EMB_CC_$*) $(EMB_FLAGS_$*) $^ $(EMB_LD_$*) -Wl,-Map=$(@:.elf=.map) -o $@
@@ -126,7 +133,7 @@ $(EMB)/ikt-%: $(EMB)/%/ikt.o $(EMB)/%/ikt_host.o $(addprefix $(EMB)/%/,$(addsuff
 EMB_IMAGES = $(addprefix $(EMB)/ikt-,$(EMB_HOST)) \
 	$(if $(EMB_ARM),$(foreach c,$(EMB_CM),$(EMB)/ikt-$(c).elf)) \
 	$(if $(EMB_A64),$(addprefix $(EMB)/ikt-,$(EMB_LINUX)))
-EMB_MIN = $(foreach c,$(EMB_CM),$(foreach v,none newton solve,$(EMB)/min-$(c)-$(v).elf))
+EMB_MIN = $(foreach c,$(EMB_CM) $(EMB_CM_LTO),$(foreach v,none newton solve,$(EMB)/min-$(c)-$(v).elf))
 
 .PHONY: embedded embedded-report
 # every image of the self-test this machine can build

@@ -435,15 +435,66 @@ static inline sc_t sc_sat(int64_t v)
 }
 
 /* Q(2F) -> Q(F), rounding half up (GCC's >> on a negative int64 is arithmetic) */
-static inline sc_t sc_acc_get(sc_acc_t s)
+static inline sc_t sc_acc_get_inline(sc_acc_t s)
 {
 	return sc_sat((s + ((sc_acc_t)1 << (SC_FRAC - 1))) >> SC_FRAC);
 }
 
+static inline sc_t sc_mul_inline(sc_t a, sc_t b)
+{
+	return sc_acc_get_inline((sc_acc_t)a * b);
+}
+
+static inline sc_acc_t sc_mac_inline(sc_acc_t s, sc_t a, sc_t b)
+{
+	return s + (sc_acc_t)a * b;
+}
+
+/*
+ * A core without a 32 x 32 -> 64 multiply (ARMv6-M: Cortex-M0/M0+) calls a
+ * helper for every product; there products, accumulation and rounding are
+ * functions of their own (src/ik/fixq.c), so that each use is a call
+ * instead of some 40 bytes of inline code. The results are the same bits.
+ * SC_FIXQ_OUTLINE=0 or 1 overrides the choice.
+ */
+#ifndef SC_FIXQ_OUTLINE
+#if defined(__ARM_ARCH_6M__)
+#define SC_FIXQ_OUTLINE 1
+#else
+#define SC_FIXQ_OUTLINE 0
+#endif
+#endif
+
+#if SC_FIXQ_OUTLINE
+#define sc_acc_get SCN(sc_acc_get)
+#define sc_mul SCN(sc_mul)
+#define sc_mac SCN(sc_mac)
+#define sc_msb SCN(sc_msb)
+sc_t sc_acc_get(sc_acc_t s);
+sc_t sc_mul(sc_t a, sc_t b);
+sc_acc_t sc_mac(sc_acc_t s, sc_t a, sc_t b);
+sc_acc_t sc_msb(sc_acc_t s, sc_t a, sc_t b);
+#else
+static inline sc_t sc_acc_get(sc_acc_t s)
+{
+	return sc_acc_get_inline(s);
+}
+
 static inline sc_t sc_mul(sc_t a, sc_t b)
 {
-	return sc_acc_get((sc_acc_t)a * b);
+	return sc_mul_inline(a, b);
 }
+
+static inline sc_acc_t sc_mac(sc_acc_t s, sc_t a, sc_t b)
+{
+	return sc_mac_inline(s, a, b);
+}
+
+static inline sc_acc_t sc_msb(sc_acc_t s, sc_t a, sc_t b)
+{
+	return s - (sc_acc_t)a * b;
+}
+#endif
 
 static inline sc_t sc_abs(sc_t a)
 {
@@ -459,16 +510,6 @@ static inline bool sc_isfinite(sc_t a)
 static inline sc_acc_t sc_acc0(void)
 {
 	return 0;
-}
-
-static inline sc_acc_t sc_mac(sc_acc_t s, sc_t a, sc_t b)
-{
-	return s + (sc_acc_t)a * b;
-}
-
-static inline sc_acc_t sc_msb(sc_acc_t s, sc_t a, sc_t b)
-{
-	return s - (sc_acc_t)a * b;
 }
 
 static inline sc_acc_t sc_acc_add(sc_acc_t a, sc_acc_t b)
@@ -488,15 +529,9 @@ static inline sc_t sc_mul_int(sc_t a, int n)
 	return sc_sat((int64_t)a * n);
 }
 
+#define sc_div_int SCN(sc_div_int)
 /* a / n rounded to nearest (half away from zero); n != 0 */
-static inline sc_t sc_div_int(sc_t a, int n)
-{
-	int64_t q = (int64_t)a / n, r = (int64_t)a % n;
-
-	if (2 * (r < 0 ? -r : r) >= (n < 0 ? -(int64_t)n : (int64_t)n))
-		q += (a < 0) == (n < 0) ? 1 : -1;
-	return sc_sat(q);
-}
+sc_t sc_div_int(sc_t a, int n);
 
 #ifndef SC_NO_DOUBLE
 /* host-side conversions (tests, tools): saturating, NaN gives 0; never in the core */

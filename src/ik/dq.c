@@ -3,6 +3,8 @@
  * dq.c - quaternion and dual-quaternion algebra. See ik/dq.h for contracts.
  * Compiled once per scalar type.
  */
+/* with SC_FIXQ_OUTLINE this file holds the one copy of the largest small algebra (dq.h) */
+#define DQ_DEFINE_OUTLINE
 #include "ik/dq.h"
 #include "ik_private.h"
 

@@ -21,6 +21,28 @@ unsigned long sc_saturations;
 
 #define Q31_ONE ((int64_t)1 << 31)
 
+#if SC_FIXQ_OUTLINE
+sc_t sc_acc_get(sc_acc_t s)
+{
+	return sc_acc_get_inline(s);
+}
+
+sc_t sc_mul(sc_t a, sc_t b)
+{
+	return sc_mul_inline(a, b);
+}
+
+sc_acc_t sc_mac(sc_acc_t s, sc_t a, sc_t b)
+{
+	return sc_mac_inline(s, a, b);
+}
+
+sc_acc_t sc_msb(sc_acc_t s, sc_t a, sc_t b)
+{
+	return s - (sc_acc_t)a * b;
+}
+#endif
+
 /* a b in Q1.31, rounded half up */
 static inline int64_t mul31(int64_t a, int64_t b)
 {
@@ -33,25 +55,79 @@ static inline sc_t q31_to_q26(int64_t v)
 	return (sc_t)((v + 16) >> 5);
 }
 
+/*
+ * n / d for a quotient that fits 32 bits ((n >> 32) < d), and the
+ * remainder; every division of the back end is one of these. A Cortex-M0
+ * has no divider, and libgcc's general 64-bit division would add about
+ * 900 bytes to its image: there it is a restoring division, one quotient
+ * bit per turn. Elsewhere the compiler's (hardware-assisted) division. The
+ * quotient is exact either way.
+ */
+static uint32_t udiv64_32(uint64_t n, uint32_t d, uint32_t *rem)
+{
+#if defined(__ARM_ARCH_6M__)
+	uint32_t r = (uint32_t)(n >> 32), q = (uint32_t)n;
+	int i;
+
+	for (i = 0; i < 32; i++) {
+		uint32_t carry = r >> 31;
+
+		r = r << 1 | q >> 31;
+		q <<= 1;
+		if (carry || r >= d) {
+			r -= d;
+			q |= 1;
+		}
+	}
+	*rem = r;
+	return q;
+#else
+	uint64_t q = n / d;
+
+	*rem = (uint32_t)(n - q * d);
+	return (uint32_t)q;
+#endif
+}
+
+static uint32_t mag(sc_t a)
+{
+	return a < 0 ? (uint32_t)0 - (uint32_t)a : (uint32_t)a;
+}
+
+/* |n| / d rounded half away from zero, signed by neg, saturating */
+static sc_t div_round(uint64_t n, uint32_t d, bool neg)
+{
+	uint32_t q, r;
+
+	if ((n >> 32) >= d) {
+		SC_FIXQ_SATURATED();
+		return neg ? INT32_MIN : INT32_MAX;
+	}
+	q = udiv64_32(n, d, &r);
+	if (r >= d - r) {
+		if (q == UINT32_MAX) {
+			SC_FIXQ_SATURATED();
+			return neg ? INT32_MIN : INT32_MAX;
+		}
+		q++;
+	}
+	return sc_sat(neg ? -(int64_t)q : (int64_t)q);
+}
+
 sc_t sc_div(sc_t a, sc_t b)
 {
-	int64_t n, q, r;
-
 	if (b == 0) {
 		if (a == 0)
 			return 0;
 		SC_FIXQ_SATURATED();
 		return a > 0 ? INT32_MAX : INT32_MIN;
 	}
-	n = (int64_t)a * ((int64_t)1 << SC_FRAC);
-	q = n / b;
-	r = n % b;
-	/* half away from zero: |r| >= |b| / 2 */
-	if (r < 0)
-		r = -r;
-	if (2 * r >= (b < 0 ? -(int64_t)b : (int64_t)b))
-		q += (n < 0) == (b < 0) ? 1 : -1;
-	return sc_sat(q);
+	return div_round((uint64_t)mag(a) << SC_FRAC, mag(b), (a < 0) != (b < 0));
+}
+
+sc_t sc_div_int(sc_t a, int n)
+{
+	return div_round(mag(a), n < 0 ? (uint32_t)0 - (uint32_t)n : (uint32_t)n, (a < 0) != (n < 0));
 }
 
 /* floor(sqrt(v)) and the remainder v - root^2, bit by bit (no multiplier needed) */
@@ -102,13 +178,13 @@ sc_t sc_sqrt(sc_t a)
 sc_recip_t sc_recip(sc_t n)
 {
 	sc_recip_t r = { 0, 1, n < 0 };
-	uint32_t u = n < 0 ? (uint32_t)0 - (uint32_t)n : (uint32_t)n;
+	uint32_t u = mag(n), rem;
 	int b;
 
 	if (!u)
 		return r;
 	b = 31 - __builtin_clz(u);
-	r.m = (uint32_t)(((uint64_t)INT64_MAX) / ((uint64_t)u << (31 - b)));
+	r.m = udiv64_32((uint64_t)INT64_MAX, u << (31 - b), &rem);
 	r.shift = (uint8_t)(6 + b);
 	return r;
 }
@@ -176,10 +252,11 @@ static int64_t atan_unit31(int64_t t)
 	int i;
 
 	if (t > tan_pi12) {
-		/* atan t = pi/6 + atan((sqrt3 t - 1) / (sqrt3 + t)) */
+		/* atan t = pi/6 + atan((sqrt3 t - 1) / (sqrt3 + t)); den / 2 fits 32 bits, |num| < den */
 		int64_t num = mul31(sqrt3, t) - Q31_ONE, den = sqrt3 + t;
+		uint32_t rem, q = udiv64_32((uint64_t)(num < 0 ? -num : num) << 30, (uint32_t)(den >> 1), &rem);
 
-		t = num * Q31_ONE / den;
+		t = num < 0 ? -(int64_t)q : (int64_t)q;
 		off = pi6;
 	}
 	z = mul31(t, t);
@@ -192,8 +269,7 @@ static int64_t atan_unit31(int64_t t)
 sc_t sc_atan2(sc_t y, sc_t x)
 {
 	const int64_t pi = INT64_C(6746518852), half_pi = INT64_C(3373259426); /* Q1.31 */
-	uint64_t ax = x < 0 ? (uint64_t)0 - (uint64_t)(int64_t)x : (uint64_t)x;
-	uint64_t ay = y < 0 ? (uint64_t)0 - (uint64_t)(int64_t)y : (uint64_t)y;
+	uint32_t ax = mag(x), ay = mag(y), rem;
 	int64_t a;
 	sc_t v;
 
@@ -201,9 +277,9 @@ sc_t sc_atan2(sc_t y, sc_t x)
 		return 0;
 	/* the ratio of the smaller to the larger, in Q1.31, rounded to nearest */
 	if (ay <= ax)
-		a = atan_unit31((int64_t)(((ay << 31) + ax / 2) / ax));
+		a = atan_unit31(udiv64_32(((uint64_t)ay << 31) + ax / 2, ax, &rem));
 	else
-		a = half_pi - atan_unit31((int64_t)(((ax << 31) + ay / 2) / ay));
+		a = half_pi - atan_unit31(udiv64_32(((uint64_t)ax << 31) + ay / 2, ay, &rem));
 	if (x < 0)
 		a = pi - a;
 	v = q31_to_q26(a);

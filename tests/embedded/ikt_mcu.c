@@ -181,8 +181,8 @@ void ikt_reset(void)
 	}
 }
 
-/* GCC emits calls to these for structure copies even in freestanding code */
-void *memcpy(void *d, const void *s, size_t n)
+/* GCC emits calls to these for structure copies even in freestanding code (used: kept through -flto) */
+__attribute__((used)) void *memcpy(void *d, const void *s, size_t n)
 {
 	unsigned char *dp = d;
 	const unsigned char *sp = s;
@@ -192,7 +192,7 @@ void *memcpy(void *d, const void *s, size_t n)
 	return d;
 }
 
-void *memset(void *d, int c, size_t n)
+__attribute__((used)) void *memset(void *d, int c, size_t n)
 {
 	unsigned char *dp = d;
 
