@@ -44,7 +44,12 @@ sc_acc_t sc_msb(sc_acc_t s, sc_t a, sc_t b)
 #endif
 
 /* a b in Q1.31, rounded half up */
+/* one copy on a core that calls a helper for the product anyway (smaller) */
+#if defined(__ARM_ARCH_6M__)
+__attribute__((noinline)) static int64_t mul31(int64_t a, int64_t b)
+#else
 static inline int64_t mul31(int64_t a, int64_t b)
+#endif
 {
 	return (a * b + ((int64_t)1 << 30)) >> 31;
 }
