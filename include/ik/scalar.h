@@ -87,9 +87,9 @@ typedef int64_t sc_acc_t; /* Q11.52: a sum of products, rounded once by sc_acc_g
 /* one unit in the last place */
 #define SC_EPS ((sc_t)1)
 /*
- * The tolerances sit above the floor that rounding leaves after the last
- * Newton step (forward kinematics through 8 joints: about 0.1 um and
- * 0.2 urad, measured) so that Newton stops there instead of running to its
+ * The tolerances sit above the floor that rounding leaves in the
+ * kinematics (forward kinematics through 8 joints: up to 0.18 um and
+ * 0.19 urad, measured) so that Newton stops there instead of running to its
  * cap, and far enough below the goals (1 um and 0.001 deg = 17 urad of the
  * double solution) that a solve within them meets them. docs/EMBEDDED.md.
  */
