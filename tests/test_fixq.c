@@ -129,7 +129,7 @@ static void test_mul_div_sqrt(void **state)
 	assert_int_equal(SC_PI, 210828714);
 	/* products: exact, rounded once (half up), saturating */
 	assert_int_equal(sc_mul(SC_C(1.5), SC_C(-2)), SC_C(-3));
-	assert_int_equal(sc_mul(3, 1 << 25), 2);  /* 1.5 ulp -> 2 */
+	assert_int_equal(sc_mul(3, 1 << 25), 2);   /* 1.5 ulp -> 2 */
 	assert_int_equal(sc_mul(-3, 1 << 25), -1); /* -1.5 ulp -> -1 (half up) */
 	assert_int_equal(sc_mul(SC_C(8), SC_C(8)), INT32_MAX);
 	assert_int_equal(sc_mul(SC_C(-8), SC_C(8)), INT32_MIN);
@@ -521,14 +521,10 @@ static void test_hopeless_input(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_mul_div_sqrt),
-		cmocka_unit_test(test_trig),
-		cmocka_unit_test(test_fk_jacobian),
-		cmocka_unit_test(test_lsq),
-		cmocka_unit_test(test_random_reset),
-		cmocka_unit_test(test_trajectory_warm),
-		cmocka_unit_test(test_matrix_and_left),
-		cmocka_unit_test(test_paper_newton),
+		cmocka_unit_test(test_mul_div_sqrt),	cmocka_unit_test(test_trig),
+		cmocka_unit_test(test_fk_jacobian),	cmocka_unit_test(test_lsq),
+		cmocka_unit_test(test_random_reset),	cmocka_unit_test(test_trajectory_warm),
+		cmocka_unit_test(test_matrix_and_left), cmocka_unit_test(test_paper_newton),
 		cmocka_unit_test(test_hopeless_input),
 	};
 

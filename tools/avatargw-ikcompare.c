@@ -141,8 +141,8 @@ static double dist3(const double a[3], const double b[3])
 
 struct judged {
 	double q[IKX_DOF]; /* returned angles */
-	double fk[7];      /* double FK of them */
-	double ep, er;     /* against the target: metres, radians */
+	double fk[7];	   /* double FK of them */
+	double ep, er;	   /* against the target: metres, radians */
 	bool strict, in_limits;
 	unsigned flags;
 	int iters;
@@ -200,9 +200,12 @@ static double joint_diff(const double a[IKX_DOF], const double b[IKX_DOF])
 int main(int argc, char **argv)
 {
 	static const struct option longopts[] = {
-		{ "targets", required_argument, NULL, 't' }, { "mode", required_argument, NULL, 'm' },
-		{ "solver", required_argument, NULL, 's' },  { "rows", required_argument, NULL, 'n' },
-		{ "quiet", no_argument, NULL, 'q' },         { "help", no_argument, NULL, 'h' },
+		{ "targets", required_argument, NULL, 't' },
+		{ "mode", required_argument, NULL, 'm' },
+		{ "solver", required_argument, NULL, 's' },
+		{ "rows", required_argument, NULL, 'n' },
+		{ "quiet", no_argument, NULL, 'q' },
+		{ "help", no_argument, NULL, 'h' },
 		{ NULL, 0, NULL, 0 },
 	};
 	const char *targets = NULL, *mode = "reset", *solver = "dq";
@@ -239,7 +242,8 @@ int main(int argc, char **argv)
 		}
 	}
 	if (!targets || optind != argc || (strcmp(mode, "reset") && strcmp(mode, "warm"))) {
-		fprintf(stderr, "usage: avatargw-ikcompare --targets FILE [--mode reset|warm] [--solver ...] [--rows N]\n");
+		fprintf(stderr,
+			"usage: avatargw-ikcompare --targets FILE [--mode reset|warm] [--solver ...] [--rows N]\n");
 		return 2;
 	}
 	warm = !strcmp(mode, "warm");
@@ -303,8 +307,8 @@ int main(int argc, char **argv)
 		qsort(us, n, sizeof(*us), cmp_double);
 		if (!quiet)
 			printf("| %s | %.2f | %.2f | %.2f | %zu | %.2f | %.3g | %.3g | %.3g | %.3g | %.2f | %.2f |\n",
-			       backends[b].name, 100.0 * strict / n, 100.0 * loose / n, 100.0 * inlim / n, jumps, iters / n,
-			       max_ep * 1e6, max_er * RAD2DEG, max_dp * 1e6, max_dr * RAD2DEG,
+			       backends[b].name, 100.0 * strict / n, 100.0 * loose / n, 100.0 * inlim / n, jumps,
+			       iters / n, max_ep * 1e6, max_er * RAD2DEG, max_dp * 1e6, max_dr * RAD2DEG,
 			       both ? 100.0 * same / both : 0.0, us[n / 2]);
 		printf("{\"scalar\":\"%s\",\"mode\":\"%s\",\"solver\":\"%s\",\"n\":%zu,\"strict\":%.6f,"
 		       "\"loose\":%.6f,\"in_limits\":%.6f,\"reached\":%.6f,\"jumps\":%zu,\"iters_mean\":%.4f,"
@@ -316,7 +320,8 @@ int main(int argc, char **argv)
 		       max_dr * RAD2DEG, both ? (double)same / both : 0.0, us[n / 2]);
 		free(us);
 		if (getenv("IKCOMPARE_FAR"))
-			fprintf(stderr, "%s: %zu rows with a joint more than 1 deg from the double solution\n", backends[b].name, far);
+			fprintf(stderr, "%s: %zu rows with a joint more than 1 deg from the double solution\n",
+				backends[b].name, far);
 	}
 	for (b = 0; b < NB; b++)
 		free(res[b]);

@@ -75,8 +75,9 @@ typedef float sc_acc_t;
 #define sc_builtin_atan2 __builtin_atan2f
 #define sc_builtin_fabs __builtin_fabsf
 #elif SC_TYPE == SC_FIXQ
-typedef int32_t sc_t;     /* Q5.26 */
-typedef int64_t sc_acc_t; /* Q11.52: a sum of products, rounded once by sc_acc_get */
+/* Q5.26; a sum of products is Q11.52, rounded once by sc_acc_get */
+typedef int32_t sc_t;
+typedef int64_t sc_acc_t;
 #ifndef SC_SUFFIX
 #define SC_SUFFIX _q
 #endif
@@ -243,7 +244,6 @@ static inline sc_t sc_atan2(sc_t y, sc_t x)
 	return y < 0 ? -a : a;
 }
 
-
 /* false for NaN and +-inf (a fixed back end is always finite) */
 static inline bool sc_isfinite(sc_t a)
 {
@@ -287,7 +287,6 @@ static inline double sc_to_double(sc_t a)
 {
 	return (double)a;
 }
-
 
 static inline sc_t sc_from_int(int n)
 {
@@ -349,7 +348,6 @@ static inline sc_t sc_wrap_pi(sc_t a)
 		a += 2 * SC_PI;
 	return a;
 }
-
 
 #else /* SC_FIXQ */
 

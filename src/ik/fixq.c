@@ -219,7 +219,7 @@ sc_t sc_mul_recip(sc_t a, sc_recip_t r)
 
 void sc_sincos(sc_t a, sc_t *s, sc_t *c)
 {
-	static const int32_t sin_k[5] = { -357913941, 17895697, -426088, 5918, -54 };       /* -1/3!, 1/5!, ... */
+	static const int32_t sin_k[5] = { -357913941, 17895697, -426088, 5918, -54 };	     /* -1/3!, 1/5!, ... */
 	static const int32_t cos_k[6] = { -1073741824, 89478485, -2982616, 53261, -592, 4 }; /* -1/2!, 1/4!, ... */
 	int64_t n = ((int64_t)a * TWO_OVER_PI_Q32 + ((int64_t)1 << 57)) >> 58;
 	int64_t r56 = (int64_t)a * ((int64_t)1 << 30) - n * PIO2_Q56;
@@ -250,8 +250,9 @@ void sc_sincos(sc_t a, sc_t *s, sc_t *c)
  */
 static int64_t atan_unit31(int64_t t)
 {
-	static const int32_t k[7] = { -715827883, 429496730, -306783378, 238609294,
-				      -195225786, 165191050, -143165577 }; /* -1/3, 1/5, ... -1/15 */
+	static const int32_t k[7] = {
+		-715827883, 429496730, -306783378, 238609294, -195225786, 165191050, -143165577
+	}; /* -1/3, 1/5, ... -1/15 */
 	const int64_t sqrt3 = INT64_C(3719550787), tan_pi12 = INT64_C(575416509), pi6 = INT64_C(1124419809);
 	int64_t off = 0, z, p;
 	int i;

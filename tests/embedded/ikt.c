@@ -31,8 +31,8 @@ struct ikt_row {
 	sc_t r[4];
 };
 
-#define IKT_ROW(a, b, c, d, e, f, g, h, px, py, pz, qw, qx, qy, qz)                                                   \
-	{ { SC_C(a), SC_C(b), SC_C(c), SC_C(d), SC_C(e), SC_C(f), SC_C(g), SC_C(h) },                                \
+#define IKT_ROW(a, b, c, d, e, f, g, h, px, py, pz, qw, qx, qy, qz)                                                    \
+	{ { SC_C(a), SC_C(b), SC_C(c), SC_C(d), SC_C(e), SC_C(f), SC_C(g), SC_C(h) },                                  \
 	  { SC_C(px), SC_C(py), SC_C(pz) },                                                                            \
 	  { SC_C(qw), SC_C(qx), SC_C(qy), SC_C(qz) } },
 
@@ -76,7 +76,7 @@ static const struct ikt_row traj_rows[] = {
 #endif
 #define STRICT_POS SC_C(1e-4)
 #define STRICT_ROT SC_C(1.7453292519943295e-4) /* 0.01 deg */
-#define JUMP SC_C(0.17453292519943295)        /* 10 deg */
+#define JUMP SC_C(0.17453292519943295)	       /* 10 deg */
 
 static const struct arm_dims bench_dims = { SC_C(0.18), SC_C(0.30), SC_C(0.26), SC_C(0.08) };
 

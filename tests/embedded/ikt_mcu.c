@@ -56,7 +56,8 @@ static int semihost(int op, const void *arg)
 
 static void __attribute__((noreturn)) ikt_exit(int status)
 {
-	semihost(SYS_EXIT, (const void *)(uintptr_t)(status ? ADP_STOPPED_RUN_TIME_ERROR : ADP_STOPPED_APPLICATION_EXIT));
+	semihost(SYS_EXIT,
+		 (const void *)(uintptr_t)(status ? ADP_STOPPED_RUN_TIME_ERROR : ADP_STOPPED_APPLICATION_EXIT));
 	for (;;) {
 	}
 }
@@ -73,12 +74,24 @@ static void fault(void)
 	ikt_exit(1);
 }
 
-/* initial stack pointer, reset, NMI, HardFault, then what a v7-M core may raise */
+/* the Cortex-M vector table: every exception but reset is a failure of the test */
 __attribute__((section(".vectors"), used)) static const uintptr_t vectors[16] = {
-	(uintptr_t)__stack_top, (uintptr_t)ikt_reset, (uintptr_t)fault, (uintptr_t)fault,
-	(uintptr_t)fault,       (uintptr_t)fault,     (uintptr_t)fault, 0,
-	0,                      0,                    0,                (uintptr_t)fault,
-	(uintptr_t)fault,       0,                    (uintptr_t)fault, (uintptr_t)fault,
+	(uintptr_t)__stack_top, /* initial stack pointer */
+	(uintptr_t)ikt_reset,	/* reset */
+	(uintptr_t)fault,	/* NMI */
+	(uintptr_t)fault,	/* HardFault */
+	(uintptr_t)fault,	/* MemManage (v7-M) */
+	(uintptr_t)fault,	/* BusFault (v7-M) */
+	(uintptr_t)fault,	/* UsageFault (v7-M) */
+	0,			/* reserved */
+	0,			/* reserved */
+	0,			/* reserved */
+	0,			/* reserved */
+	(uintptr_t)fault,	/* SVCall */
+	(uintptr_t)fault,	/* DebugMonitor (v7-M) */
+	0,			/* reserved */
+	(uintptr_t)fault,	/* PendSV */
+	(uintptr_t)fault,	/* SysTick (counting only, its interrupt is off) */
 };
 
 static inline uintptr_t sp_now(void)

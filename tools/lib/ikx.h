@@ -15,10 +15,10 @@
 
 struct ikx_setup {
 	double dims[4]; /* S, A, F, H, metres */
-	int left;       /* 0: right arm */
-	int matrix;     /* 0: dual-quaternion kinematics, 1: 4x4 matrices */
-	int newton;     /* 0: avatargw's solver, 1: the paper's Newton (no limits, plain step, 100 iterations) */
-	bool limits;    /* false: the default limits; true: lo, hi below (radians) */
+	int left;	/* 0: right arm */
+	int matrix;	/* 0: dual-quaternion kinematics, 1: 4x4 matrices */
+	int newton;	/* 0: avatargw's solver, 1: the paper's Newton (no limits, plain step, 100 iterations) */
+	bool limits;	/* false: the default limits; true: lo, hi below (radians) */
 	double lo[IKX_DOF], hi[IKX_DOF];
 };
 
@@ -28,13 +28,13 @@ struct ikx_result {
 	double err_pos, err_rot; /* the solver's own final errors */
 };
 
-#define IKX_DECLARE(s)                                                                                              \
-	void ikx_fk##s(const struct ikx_setup *o, const double q[IKX_DOF], double out[7]);                           \
-	void ikx_jacobian##s(const struct ikx_setup *o, const double q[IKX_DOF], double J[6][IKX_DOF]);              \
-	int ikx_lsq##s(const double J[6][IKX_DOF], const double V[6], const bool *free, double x[IKX_DOF]);          \
-	unsigned ikx_solve##s(const struct ikx_setup *o, const double p[3], const double r[4], const double *seed,  \
-			      double q[IKX_DOF], struct ikx_result *res);                                            \
-	const char *ikx_name##s(void);                                                                              \
+#define IKX_DECLARE(s)                                                                                                 \
+	void ikx_fk##s(const struct ikx_setup *o, const double q[IKX_DOF], double out[7]);                             \
+	void ikx_jacobian##s(const struct ikx_setup *o, const double q[IKX_DOF], double J[6][IKX_DOF]);                \
+	int ikx_lsq##s(const double J[6][IKX_DOF], const double V[6], const bool *free, double x[IKX_DOF]);            \
+	unsigned ikx_solve##s(const struct ikx_setup *o, const double p[3], const double r[4], const double *seed,     \
+			      double q[IKX_DOF], struct ikx_result *res);                                              \
+	const char *ikx_name##s(void);                                                                                 \
 	void ikx_limits##s(const struct ikx_setup *o, double lo[IKX_DOF], double hi[IKX_DOF]);
 
 /* out = px, py, pz, qw, qx, qy, qz of the end effector */
