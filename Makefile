@@ -5,6 +5,7 @@
 #   make test       build and run every test (add SAN=1 for ASan + UBSan)
 #   make bench      run the IK benchmark on ../shared/bench
 #   make eval       score the avatar against ../shared/mocap (docs/FIDELITY.md)
+#   make embedded   cross-build the IK core's self-test (Cortex-M, aarch64); embedded-report: docs/EMBEDDED.md's numbers
 #   make install    install under $(DESTDIR)$(PREFIX)
 #   make clean
 
@@ -36,12 +37,15 @@ CMOCKA_LIBS = $(shell pkg-config --libs cmocka 2>/dev/null || echo -lcmocka)
 
 # ---- the IK core, once per scalar type ------------------------------------
 CORE_SRC = $(wildcard src/ik/*.c)
-CORE_TYPES = d f
-CORE_OBJ = $(foreach t,$(CORE_TYPES),$(patsubst src/%.c,$(BUILD)/obj/%.$(t).o,$(CORE_SRC)))
+CORE_TYPES = d f q
+# the fixed-point build (q, int32 Q5.26) is the solver: body calibration is host-side setup work
+CORE_SRC_q = $(filter-out src/ik/calib.c,$(CORE_SRC))
+CORE_OBJ = $(foreach t,$(CORE_TYPES),$(patsubst src/%.c,$(BUILD)/obj/%.$(t).o,$(or $(CORE_SRC_$(t)),$(CORE_SRC))))
 LIBIK = $(BUILD)/libavatargw-ik.a
 
 SC_d = -DSC_TYPE=SC_DOUBLE
 SC_f = -DSC_TYPE=SC_FLOAT
+SC_q = -DSC_TYPE=SC_FIXQ
 
 $(BUILD)/obj/ik/%.d.o: src/ik/%.c
 	@mkdir -p $(dir $@)
@@ -49,6 +53,9 @@ $(BUILD)/obj/ik/%.d.o: src/ik/%.c
 $(BUILD)/obj/ik/%.f.o: src/ik/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) $(CORE_CFLAGS) $(SC_f) -c $< -o $@
+$(BUILD)/obj/ik/%.q.o: src/ik/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(CORE_CFLAGS) $(SC_q) -c $< -o $@
 
 $(LIBIK): $(CORE_OBJ)
 	@rm -f $@
@@ -114,6 +121,23 @@ $(BUILD)/obj/tools/%.o: tools/%.c
 $(BUILD)/avatargw-%: $(BUILD)/obj/tools/avatargw-%.o $(LIBGW) $(LIBIK)
 	$(CC) $(LDFLAGS) -o $@ $^ $(LIBS)
 
+# tools/lib/ikx.c: the core of one scalar type behind a double interface, once per type
+IKX_OBJ = $(foreach t,$(CORE_TYPES),$(BUILD)/obj/tools/lib/ikx.$(t).o)
+
+$(BUILD)/obj/tools/lib/%.d.o: tools/lib/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(SC_d) -Itools -c $< -o $@
+$(BUILD)/obj/tools/lib/%.f.o: tools/lib/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(SC_f) -Itools -c $< -o $@
+$(BUILD)/obj/tools/lib/%.q.o: tools/lib/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(SC_q) -Itools -c $< -o $@
+
+$(BUILD)/obj/tools/avatargw-ikcompare.o: ALL_CFLAGS += -Itools
+$(BUILD)/avatargw-ikcompare: $(BUILD)/obj/tools/avatargw-ikcompare.o $(IKX_OBJ) $(LIBGW) $(LIBIK)
+	$(CC) $(LDFLAGS) -o $@ $^ $(LIBS)
+
 $(BUILD)/obj/examples/%.o: tools/examples/%.cpp
 	@mkdir -p $(dir $@)
 	$(CXX) $(ALL_CXXFLAGS) -c $< -o $@
@@ -128,8 +152,7 @@ TEST_CXX = $(wildcard tests/test_*.cpp)
 TEST_BIN = $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_C)) $(patsubst tests/%.cpp,$(BUILD)/tests/%,$(TEST_CXX))
 # helpers linked into every test binary (built once per type where named *.tmpl.c)
 TEST_LIB_SRC = $(wildcard tests/lib/*.c)
-TEST_LIB_OBJ = $(patsubst tests/lib/%.c,$(BUILD)/obj/tests/lib/%.d.o,$(TEST_LIB_SRC)) \
-	$(patsubst tests/lib/%.c,$(BUILD)/obj/tests/lib/%.f.o,$(TEST_LIB_SRC))
+TEST_LIB_OBJ = $(foreach t,$(CORE_TYPES),$(patsubst tests/lib/%.c,$(BUILD)/obj/tests/lib/%.$(t).o,$(TEST_LIB_SRC)))
 
 $(BUILD)/obj/tests/lib/%.d.o: tests/lib/%.c
 	@mkdir -p $(dir $@)
@@ -137,9 +160,12 @@ $(BUILD)/obj/tests/lib/%.d.o: tests/lib/%.c
 $(BUILD)/obj/tests/lib/%.f.o: tests/lib/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) $(SC_f) -Itests -c $< -o $@
+$(BUILD)/obj/tests/lib/%.q.o: tests/lib/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(SC_q) -Itests -c $< -o $@
 $(BUILD)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -D_GNU_SOURCE -Isrc -Itests -DSHARED_DIR='"$(SHARED)"' -c $< -o $@
+	$(CC) $(ALL_CFLAGS) $(TEST_CFLAGS) -D_GNU_SOURCE -Isrc -Itests -DSHARED_DIR='"$(SHARED)"' -c $< -o $@
 $(BUILD)/obj/tests/%.o: tests/%.cpp
 	@mkdir -p $(dir $@)
 	$(CXX) $(ALL_CXXFLAGS) -Itests -DSHARED_DIR='"$(SHARED)"' -c $< -o $@
@@ -161,6 +187,23 @@ $(BUILD)/tests/test_alloc_renderers: TEST_LDFLAGS = -Wl,--wrap=malloc,--wrap=cal
 	-Wl,--wrap=lo_message_new,--wrap=lo_send_message,--wrap=lo_send_bundle \
 	-Wl,--wrap=lws_write,--wrap=lws_callback_on_writable_all_protocol
 
+# test_fixq is the fixed-point build's own test (sc_t = Q5.26). It holds the core's
+# Q5.26 build against the double one through tools/lib/ikx.c, and links a counting
+# build of the fixed core (suffix _qs, SC_FIXQ_STATS: how many results saturated).
+SC_qs = -DSC_TYPE=SC_FIXQ -DSC_FIXQ_STATS -DSC_SUFFIX=_qs
+QS_OBJ = $(patsubst src/%.c,$(BUILD)/obj/%.qs.o,$(CORE_SRC_q)) $(BUILD)/obj/tools/lib/ikx.qs.o
+
+$(BUILD)/obj/ik/%.qs.o: src/ik/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(CORE_CFLAGS) $(SC_qs) -c $< -o $@
+$(BUILD)/obj/tools/lib/%.qs.o: tools/lib/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(SC_qs) -Itools -c $< -o $@
+$(BUILD)/obj/tests/test_fixq.o: TEST_CFLAGS = $(SC_q) -Itools
+$(BUILD)/tests/test_fixq: $(BUILD)/obj/tests/test_fixq.o $(QS_OBJ) $(IKX_OBJ) $(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
+	@mkdir -p $(dir $@)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) $(LIBS)
+
 # ---- top-level targets --------------------------------------------------------
 .SECONDARY:
 .PHONY: all test check-core bench install clean run
@@ -175,11 +218,14 @@ check-core: $(LIBIK)
 	if [ -n "$$bad" ]; then echo "check-core: the IK core references: $$bad"; exit 1; fi; \
 	echo "check-core: the IK core references nothing outside itself but: $$(nm -u $(LIBIK) | awk '/ U /{print $$2}' | sort -u | comm -23 - $(BUILD)/core-defined.txt | grep -v -E '^__(asan|ubsan)' | tr '\n' ' ')"
 
+# the core cross-built for microcontrollers and aarch64, and its self-test (docs/EMBEDDED.md)
+include tools/embedded.mk
+
 # end-to-end tests (the real daemon on loopback) and checks of docs against the code
 E2E_TESTS = $(wildcard tests/e2e/test_*.py)
 CHECK_SCRIPTS = $(wildcard tests/check-*.sh) tests/service/verify-unit.sh tools/check-man.sh
 
-test: all $(TEST_BIN) $(TEST_HELPERS) check-core
+test: all $(TEST_BIN) $(TEST_HELPERS) check-core $(EMB_IMAGES)
 	@BUILD=$(BUILD) tests/run.sh $(TEST_BIN) $(E2E_TESTS) $(CHECK_SCRIPTS)
 
 bench: $(BUILD)/avatargw-ikbench $(DAEMON) $(BUILD)/avatargw-dump $(BUILD)/avatargw-ctl

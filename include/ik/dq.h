@@ -89,7 +89,17 @@ struct line {
  * The small algebra is static inline: every product in the kinematics would
  * otherwise be a call. The larger functions (normalisation, conversions,
  * logarithms) are in dq.c.
+ *
+ * Where every product is a call anyway (fixed point on a core without a
+ * 64-bit multiply, SC_FIXQ_OUTLINE: Cortex-M0), the two largest, v3_cross
+ * and quat_mul, are one function each in dq.c (which defines
+ * DQ_DEFINE_OUTLINE) instead of a copy in every file: 0.8 kB less code.
  */
+#if SC_TYPE == SC_FIXQ && SC_FIXQ_OUTLINE
+#define DQ_OUTLINE 1
+#else
+#define DQ_OUTLINE 0
+#endif
 
 static inline sc_t v3_dot(const struct vec3 *a, const struct vec3 *b)
 {
@@ -101,7 +111,22 @@ static inline sc_t v3_dot(const struct vec3 *a, const struct vec3 *b)
 	return sc_acc_get(s);
 }
 
-static inline void v3_cross(const struct vec3 *a, const struct vec3 *b, struct vec3 *out)
+static inline sc_t v3_norm(const struct vec3 *a)
+{
+	return sc_acc_sqrt(sc_mac(sc_mac(sc_mac(sc_acc0(), a->x, a->x), a->y, a->y), a->z, a->z));
+}
+
+#if DQ_OUTLINE && !defined(DQ_DEFINE_OUTLINE)
+void v3_cross(const struct vec3 *a, const struct vec3 *b, struct vec3 *out);
+/* out = a b (Hamilton) */
+void quat_mul(const struct quat *a, const struct quat *b, struct quat *out);
+#else
+#if DQ_OUTLINE
+#define DQ_SMALL
+#else
+#define DQ_SMALL static inline
+#endif
+DQ_SMALL void v3_cross(const struct vec3 *a, const struct vec3 *b, struct vec3 *out)
 {
 	struct vec3 c;
 
@@ -111,13 +136,8 @@ static inline void v3_cross(const struct vec3 *a, const struct vec3 *b, struct v
 	*out = c;
 }
 
-static inline sc_t v3_norm(const struct vec3 *a)
-{
-	return sc_sqrt(v3_dot(a, a));
-}
-
 /* out = a b (Hamilton) */
-static inline void quat_mul(const struct quat *a, const struct quat *b, struct quat *out)
+DQ_SMALL void quat_mul(const struct quat *a, const struct quat *b, struct quat *out)
 {
 	struct quat c;
 	sc_acc_t s;
@@ -140,6 +160,7 @@ static inline void quat_mul(const struct quat *a, const struct quat *b, struct q
 	c.z = sc_acc_get(sc_mac(s, a->z, b->w));
 	*out = c;
 }
+#endif
 
 static inline void quat_conj(const struct quat *a, struct quat *out)
 {
@@ -155,7 +176,7 @@ static inline sc_t quat_norm(const struct quat *a)
 
 	s = sc_mac(s, a->x, a->x);
 	s = sc_mac(s, a->y, a->y);
-	return sc_sqrt(sc_acc_get(sc_mac(s, a->z, a->z)));
+	return sc_acc_sqrt(sc_mac(s, a->z, a->z));
 }
 
 /* Returns false (and writes the identity) if |a| is zero or not finite. */

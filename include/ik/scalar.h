@@ -2,19 +2,26 @@
 /*
  * scalar.h - the one scalar type of an IK core build.
  *
- * Every source of the IK core is compiled once per scalar type. The type is
- * chosen with -DSC_TYPE=SC_DOUBLE (default) or -DSC_TYPE=SC_FLOAT; a fixed
- * point back end (int32 Q5.26, SC_FIXQ) plugs in here later. Generic code
- * never touches the representation:
- *   - constants go through SC_C(1.5);
+ * Every source of the IK core is compiled once per scalar type, chosen with
+ * -DSC_TYPE=SC_DOUBLE (default), SC_FLOAT or SC_FIXQ (int32 Q5.26 fixed
+ * point: value = raw / 2^26, range [-32, 32), resolution 1.5e-8; see
+ * docs/EMBEDDED.md). Generic code never touches the representation:
+ *   - constants go through SC_C(1.5) (compile-time constants only: in fixed
+ *     point it is folded by the compiler); run-time integers through
+ *     sc_from_int(), sc_mul_int() and sc_div_int();
  *   - products, quotients, roots and trig go through sc_mul(), sc_div(),
  *     sc_sqrt(), sc_sincos(), sc_atan2();
- *   - dot products go through an accumulator (sc_acc0/sc_mac/sc_acc_get) so a
- *     fixed back end can accumulate in int64 and round once;
- *   - +, -, unary minus and comparisons are allowed on sc_t directly (they
- *     are exact on a Q-format int32 too).
- * SCN(name) appends the type suffix (_d, _f) so several builds of the core
- * link into one binary.
+ *   - dot products go through an accumulator (sc_acc0/sc_mac/sc_acc_get) so
+ *     the fixed back end accumulates in int64 and rounds once; a norm is
+ *     sc_acc_sqrt() of the accumulator, so that small norms keep their bits;
+ *   - a normalisation divides by a norm through sc_recip()/sc_mul_recip(),
+ *     because 1/n need not be representable in fixed point;
+ *   - +, -, unary minus, comparisons and integer multiples (2 * x) are
+ *     allowed on sc_t directly: they are exact on a Q-format int32 too, and
+ *     the core keeps its quantities small enough that they cannot overflow
+ *     (unit quaternions, metres of an arm, radians; see docs/EMBEDDED.md).
+ * SCN(name) appends the type suffix (_d, _f, _q) so several builds of the
+ * core link into one binary.
  */
 #ifndef IK_SCALAR_H
 #define IK_SCALAR_H
@@ -67,14 +74,48 @@ typedef float sc_acc_t;
 #define sc_builtin_cos __builtin_cosf
 #define sc_builtin_atan2 __builtin_atan2f
 #define sc_builtin_fabs __builtin_fabsf
+#elif SC_TYPE == SC_FIXQ
+/* Q5.26; a sum of products is Q11.52, rounded once by sc_acc_get */
+typedef int32_t sc_t;
+typedef int64_t sc_acc_t;
+#ifndef SC_SUFFIX
+#define SC_SUFFIX _q
+#endif
+#define SC_FRAC 26
+/* rounds half away from zero; a constant argument folds to an integer at compile time */
+#define SC_C(x) ((sc_t)((x) * 67108864.0 + ((x) < 0 ? -0.5 : 0.5)))
+#define SC_NAME "Q5.26"
+/* one unit in the last place */
+#define SC_EPS ((sc_t)1)
+/*
+ * The tolerances sit above the floor that rounding leaves in the
+ * kinematics (forward kinematics through 8 joints: up to 0.18 um and
+ * 0.19 urad, measured) so that Newton stops there instead of running to its
+ * cap, and far enough below the goals (1 um and 0.001 deg = 17 urad of the
+ * double solution) that a solve within them meets them. docs/EMBEDDED.md.
+ */
+#define SC_TOL_POS SC_C(3e-7)
+#define SC_TOL_ROT SC_C(1e-6)
+/* the normal equations square cond(J): too few bits; always the QR */
+#define SC_NE_COND SC_C(0)
 #else
-#error "SC_TYPE: fixed point is not implemented yet (SC_DOUBLE or SC_FLOAT)"
+#error "SC_TYPE: SC_DOUBLE, SC_FLOAT or SC_FIXQ"
 #endif
 
 #define SCN(name) SC_CAT(name, SC_SUFFIX)
 
 #define SC_PI SC_C(3.14159265358979323846)
 #define SC_HALF_PI SC_C(1.57079632679489661923)
+
+#if SC_TYPE != SC_FIXQ
+/* larger than any value the solver ranks (limit violations, distances): "none yet" */
+#define SC_BIG SC_C(1e3)
+/* a Newton step larger than this (radians) is scaled down even without max_step (0: never) */
+#define SC_STEP_CAP SC_C(0)
+/* targets farther than this (metres) are pulled in along their direction (0: never) */
+#define SC_REACH_MAX SC_C(0)
+/* inputs with a component beyond this are scaled down before their norm is taken (0: never) */
+#define SC_SQ_SAFE SC_C(0)
 
 static inline sc_t sc_mul(sc_t a, sc_t b)
 {
@@ -203,21 +244,6 @@ static inline sc_t sc_atan2(sc_t y, sc_t x)
 	return y < 0 ? -a : a;
 }
 
-static inline sc_t sc_min(sc_t a, sc_t b)
-{
-	return a < b ? a : b;
-}
-
-static inline sc_t sc_max(sc_t a, sc_t b)
-{
-	return a > b ? a : b;
-}
-
-static inline sc_t sc_clamp(sc_t a, sc_t lo, sc_t hi)
-{
-	return a < lo ? lo : (a > hi ? hi : a);
-}
-
 /* false for NaN and +-inf (a fixed back end is always finite) */
 static inline bool sc_isfinite(sc_t a)
 {
@@ -262,26 +288,43 @@ static inline double sc_to_double(sc_t a)
 	return (double)a;
 }
 
-/* sin of a limit angle (setup work, not the inner loop) */
-static inline sc_t sc_sin_lim(sc_t a)
+static inline sc_t sc_from_int(int n)
 {
-	sc_t s, c;
-
-	sc_sincos(a, &s, &c);
-	return s;
+	return (sc_t)n;
 }
 
-/* asin and acos through atan2 and sqrt, so a fixed back end needs only those */
-static inline sc_t sc_asin(sc_t x)
+/* a n and a / n for an integer n (n != 0) */
+static inline sc_t sc_mul_int(sc_t a, int n)
 {
-	x = sc_clamp(x, SC_C(-1), SC_C(1));
-	return sc_atan2(x, sc_sqrt(SC_C(1) - sc_mul(x, x)));
+	return a * (sc_t)n;
 }
 
-static inline sc_t sc_acos(sc_t x)
+static inline sc_t sc_div_int(sc_t a, int n)
 {
-	x = sc_clamp(x, SC_C(-1), SC_C(1));
-	return sc_atan2(sc_sqrt(SC_C(1) - sc_mul(x, x)), x);
+	return a / (sc_t)n;
+}
+
+/* the square root of a sum of products: the norm of a vector */
+static inline sc_t sc_acc_sqrt(sc_acc_t s)
+{
+	return sc_sqrt(s);
+}
+
+/* a / n for several a: one reciprocal, then products */
+typedef struct {
+	sc_t k;
+} sc_recip_t;
+
+static inline sc_recip_t sc_recip(sc_t n)
+{
+	sc_recip_t r = { SC_C(1) / n };
+
+	return r;
+}
+
+static inline sc_t sc_mul_recip(sc_t a, sc_recip_t r)
+{
+	return a * r.k;
 }
 
 /* wrap an angle to [-pi, pi); non-finite or absurd (|a| > 1e6) input becomes 0 */
@@ -304,6 +347,257 @@ static inline sc_t sc_wrap_pi(sc_t a)
 	if (a < -SC_PI)
 		a += 2 * SC_PI;
 	return a;
+}
+
+#else /* SC_FIXQ */
+
+/*
+ * Fixed point: every quantity is int32 Q5.26. Products are exact in int64
+ * and rounded once (half up); results that do not fit saturate to the
+ * nearest representable value instead of wrapping. The quantities of the
+ * core stay far inside the range (unit quaternions and rotation entries
+ * <= 1, lengths of an arm < 2 m, Jacobian entries < 3, angles < 2 pi); a
+ * saturation only happens on hopeless input (checked by the tests with a
+ * counting build, SC_FIXQ_STATS). Trig, square roots and quotients are
+ * out of line in src/ik/fixq.c and work at higher precision internally
+ * (Q1.31 polynomials, 64-bit integer square root, 64/32 division), so each
+ * result is within about 0.6 ulp of the exact value, and all of it is
+ * integer arithmetic: the same bits on every machine.
+ */
+#define SC_BIG ((sc_t)INT32_MAX)
+/*
+ * Bounded steps and targets: q + x must stay representable, and the sum of
+ * four squares must fit the accumulator (2^11), so input with a component
+ * beyond 16 is scaled down before its norm is taken. The solver squares
+ * distances (the law of cosines at the elbow), which must stay below 32 m^2,
+ * and its error twist holds w x (w x t) with |w| <= pi: a target farther
+ * than 2 m from the chest, out of any human arm's reach (the segments of a
+ * fixed-point arm must add up to less than that), is pulled in to 2 m
+ * along its direction, which is all that matters about it.
+ */
+#define SC_STEP_CAP SC_C(8)
+#define SC_REACH_MAX SC_C(2)
+#define SC_SQ_SAFE SC_C(16)
+
+#ifdef SC_FIXQ_STATS
+/* counting build (tests): how many results saturated */
+#define sc_saturations SCN(sc_saturations)
+extern unsigned long sc_saturations;
+#define SC_FIXQ_SATURATED() ((void)sc_saturations++)
+#else
+#define SC_FIXQ_SATURATED() ((void)0)
+#endif
+
+#define sc_div SCN(sc_div)
+#define sc_sqrt SCN(sc_sqrt)
+#define sc_acc_sqrt SCN(sc_acc_sqrt)
+#define sc_sincos SCN(sc_sincos)
+#define sc_atan2 SCN(sc_atan2)
+#define sc_recip SCN(sc_recip)
+#define sc_mul_recip SCN(sc_mul_recip)
+
+/* a / b rounded to nearest; b == 0 saturates toward the sign of a (0 / 0 = 0) */
+sc_t sc_div(sc_t a, sc_t b);
+/* sqrt of a non-negative value, rounded to nearest; negative input gives 0 */
+sc_t sc_sqrt(sc_t a);
+/* the square root of a Q11.52 sum (exact integer square root): a norm keeps every bit */
+sc_t sc_acc_sqrt(sc_acc_t s);
+/* sin and cos of any representable angle, each within 0.6 ulp */
+void sc_sincos(sc_t a, sc_t *s, sc_t *c);
+/* atan2 in [-pi, pi], within 0.6 ulp; atan2(0, 0) = 0; odd in y */
+sc_t sc_atan2(sc_t y, sc_t x);
+
+/* 1/n as a 32-bit mantissa and a shift: representable for every n != 0 */
+typedef struct {
+	uint32_t m;
+	uint8_t shift;
+	bool neg;
+} sc_recip_t;
+
+/* n != 0 (0 gives a reciprocal whose products are 0) */
+sc_recip_t sc_recip(sc_t n);
+/* a / n through the reciprocal: within 0.55 ulp when |a / n| <= 1, 1.5 ulp at most; saturates */
+sc_t sc_mul_recip(sc_t a, sc_recip_t r);
+
+static inline sc_t sc_sat(int64_t v)
+{
+	if (v > INT32_MAX) {
+		SC_FIXQ_SATURATED();
+		return INT32_MAX;
+	}
+	if (v < INT32_MIN) {
+		SC_FIXQ_SATURATED();
+		return INT32_MIN;
+	}
+	return (sc_t)v;
+}
+
+/* Q(2F) -> Q(F), rounding half up (GCC's >> on a negative int64 is arithmetic) */
+static inline sc_t sc_acc_get_inline(sc_acc_t s)
+{
+	return sc_sat((s + ((sc_acc_t)1 << (SC_FRAC - 1))) >> SC_FRAC);
+}
+
+static inline sc_t sc_mul_inline(sc_t a, sc_t b)
+{
+	return sc_acc_get_inline((sc_acc_t)a * b);
+}
+
+static inline sc_acc_t sc_mac_inline(sc_acc_t s, sc_t a, sc_t b)
+{
+	return s + (sc_acc_t)a * b;
+}
+
+/*
+ * A core without a 32 x 32 -> 64 multiply (ARMv6-M: Cortex-M0/M0+) calls a
+ * helper for every product; there products, accumulation and rounding are
+ * functions of their own (src/ik/fixq.c), so that each use is a call
+ * instead of some 40 bytes of inline code. The results are the same bits.
+ * SC_FIXQ_OUTLINE=0 or 1 overrides the choice.
+ */
+#ifndef SC_FIXQ_OUTLINE
+#if defined(__ARM_ARCH_6M__)
+#define SC_FIXQ_OUTLINE 1
+#else
+#define SC_FIXQ_OUTLINE 0
+#endif
+#endif
+
+#if SC_FIXQ_OUTLINE
+#define sc_acc_get SCN(sc_acc_get)
+#define sc_mul SCN(sc_mul)
+#define sc_mac SCN(sc_mac)
+#define sc_msb SCN(sc_msb)
+sc_t sc_acc_get(sc_acc_t s);
+sc_t sc_mul(sc_t a, sc_t b);
+sc_acc_t sc_mac(sc_acc_t s, sc_t a, sc_t b);
+sc_acc_t sc_msb(sc_acc_t s, sc_t a, sc_t b);
+#else
+static inline sc_t sc_acc_get(sc_acc_t s)
+{
+	return sc_acc_get_inline(s);
+}
+
+static inline sc_t sc_mul(sc_t a, sc_t b)
+{
+	return sc_mul_inline(a, b);
+}
+
+static inline sc_acc_t sc_mac(sc_acc_t s, sc_t a, sc_t b)
+{
+	return sc_mac_inline(s, a, b);
+}
+
+static inline sc_acc_t sc_msb(sc_acc_t s, sc_t a, sc_t b)
+{
+	return s - (sc_acc_t)a * b;
+}
+#endif
+
+static inline sc_t sc_abs(sc_t a)
+{
+	return a >= 0 ? a : (a == INT32_MIN ? INT32_MAX : -a);
+}
+
+static inline bool sc_isfinite(sc_t a)
+{
+	(void)a;
+	return true;
+}
+
+static inline sc_acc_t sc_acc0(void)
+{
+	return 0;
+}
+
+static inline sc_acc_t sc_acc_add(sc_acc_t a, sc_acc_t b)
+{
+	return a + b;
+}
+
+/* saturates beyond [-32, 31] */
+static inline sc_t sc_from_int(int n)
+{
+	return sc_sat((int64_t)n * ((int64_t)1 << SC_FRAC));
+}
+
+/* a n, saturating */
+static inline sc_t sc_mul_int(sc_t a, int n)
+{
+	return sc_sat((int64_t)a * n);
+}
+
+#define sc_div_int SCN(sc_div_int)
+/* a / n rounded to nearest (half away from zero); n != 0 */
+sc_t sc_div_int(sc_t a, int n);
+
+#ifndef SC_NO_DOUBLE
+/* host-side conversions (tests, tools): saturating, NaN gives 0; never in the core */
+static inline sc_t sc_from_double(double x)
+{
+	double v = x * 67108864.0;
+
+	if (!(v == v))
+		return 0;
+	if (v >= 2147483647.0)
+		return INT32_MAX;
+	if (v <= -2147483648.0)
+		return INT32_MIN;
+	return (sc_t)(v < 0 ? v - 0.5 : v + 0.5);
+}
+
+static inline double sc_to_double(sc_t a)
+{
+	return (double)a / 67108864.0;
+}
+#endif
+
+/* wrap an angle to [-pi, pi): whole turns of the representable 2 pi, exactly */
+static inline sc_t sc_wrap_pi(sc_t a)
+{
+	while (a >= SC_PI)
+		a -= 2 * SC_PI;
+	while (a < -SC_PI)
+		a += 2 * SC_PI;
+	return a;
+}
+#endif /* SC_TYPE */
+
+static inline sc_t sc_min(sc_t a, sc_t b)
+{
+	return a < b ? a : b;
+}
+
+static inline sc_t sc_max(sc_t a, sc_t b)
+{
+	return a > b ? a : b;
+}
+
+static inline sc_t sc_clamp(sc_t a, sc_t lo, sc_t hi)
+{
+	return a < lo ? lo : (a > hi ? hi : a);
+}
+
+/* sin of a limit angle (setup work, not the inner loop) */
+static inline sc_t sc_sin_lim(sc_t a)
+{
+	sc_t s, c;
+
+	sc_sincos(a, &s, &c);
+	return s;
+}
+
+/* asin and acos through atan2 and sqrt, so a fixed back end needs only those */
+static inline sc_t sc_asin(sc_t x)
+{
+	x = sc_clamp(x, SC_C(-1), SC_C(1));
+	return sc_atan2(x, sc_sqrt(SC_C(1) - sc_mul(x, x)));
+}
+
+static inline sc_t sc_acos(sc_t x)
+{
+	x = sc_clamp(x, SC_C(-1), SC_C(1));
+	return sc_atan2(sc_sqrt(SC_C(1) - sc_mul(x, x)), x);
 }
 
 #endif /* IK_SCALAR_H */

@@ -3,6 +3,8 @@
  * dq.c - quaternion and dual-quaternion algebra. See ik/dq.h for contracts.
  * Compiled once per scalar type.
  */
+/* with SC_FIXQ_OUTLINE this file holds the one copy of the largest small algebra (dq.h) */
+#define DQ_DEFINE_OUTLINE
 #include "ik/dq.h"
 #include "ik_private.h"
 
@@ -15,6 +17,37 @@ static sc_t quat_dot(const struct quat *a, const struct quat *b)
 	return sc_acc_get(sc_mac(s, a->z, b->z));
 }
 
+/* a / n, n the norm of a (or of a larger vector a belongs to) */
+static void quat_div_norm(const struct quat *a, sc_t n, struct quat *out)
+{
+	sc_recip_t k = sc_recip(n);
+
+	out->w = sc_mul_recip(a->w, k);
+	out->x = sc_mul_recip(a->x, k);
+	out->y = sc_mul_recip(a->y, k);
+	out->z = sc_mul_recip(a->z, k);
+}
+
+/*
+ * The four squares of a quaternion's norm must fit the accumulator. In
+ * fixed point (SC_SQ_SAFE > 0) a component beyond SC_SQ_SAFE (possible only
+ * in input from outside) scales the quaternion by 1/8 first: its direction
+ * is all a normalisation keeps. Unit quaternions are never touched.
+ */
+static bool quat_tame(const struct quat *a, struct quat *out)
+{
+	*out = *a;
+	if (SC_SQ_SAFE > 0 && (sc_abs(a->w) > SC_SQ_SAFE || sc_abs(a->x) > SC_SQ_SAFE || sc_abs(a->y) > SC_SQ_SAFE ||
+			       sc_abs(a->z) > SC_SQ_SAFE)) {
+		out->w = sc_mul(a->w, SC_C(0.125));
+		out->x = sc_mul(a->x, SC_C(0.125));
+		out->y = sc_mul(a->y, SC_C(0.125));
+		out->z = sc_mul(a->z, SC_C(0.125));
+		return true;
+	}
+	return false;
+}
+
 static void quat_scale(const struct quat *a, sc_t k, struct quat *out)
 {
 	out->w = sc_mul(a->w, k);
@@ -25,13 +58,16 @@ static void quat_scale(const struct quat *a, sc_t k, struct quat *out)
 
 bool quat_normalize(const struct quat *a, struct quat *out)
 {
-	sc_t n = quat_norm(a);
+	struct quat t;
+	sc_t n;
 
+	quat_tame(a, &t);
+	n = quat_norm(&t);
 	if (!sc_isfinite(n) || n < SC_EPS) {
 		*out = (struct quat){ SC_C(1), 0, 0, 0 };
 		return false;
 	}
-	quat_scale(a, sc_div(SC_C(1), n), out);
+	quat_div_norm(&t, n, out);
 	return true;
 }
 
@@ -100,22 +136,33 @@ sc_t quat_angle_between(const struct quat *a, const struct quat *b)
 
 	quat_conj(a, &ac);
 	quat_mul(&ac, b, &e);
-	s = sc_sqrt(sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), e.x, e.x), e.y, e.y), e.z, e.z)));
+	s = sc_acc_sqrt(sc_mac(sc_mac(sc_mac(sc_acc0(), e.x, e.x), e.y, e.y), e.z, e.z));
 	return 2 * sc_atan2(s, sc_abs(e.w));
 }
 
 bool dq_normalize(const struct dq *a, struct dq *out)
 {
-	sc_t n = quat_norm(&a->r), k, rd;
+	sc_t n, rd;
 	struct quat r, d;
+	bool tamed;
 
+	tamed = quat_tame(&a->r, &r);
+	n = quat_norm(&r);
 	if (!sc_isfinite(n) || n < SC_EPS || !dq_is_finite(a)) {
 		dq_identity(out);
 		return false;
 	}
-	k = sc_div(SC_C(1), n);
-	quat_scale(&a->r, k, &r);
-	quat_scale(&a->d, k, &d);
+	if (tamed) {
+		/* tamed: the dual part is scaled alike (a normalisation does not see the scale) */
+		d.w = sc_mul(a->d.w, SC_C(0.125));
+		d.x = sc_mul(a->d.x, SC_C(0.125));
+		d.y = sc_mul(a->d.y, SC_C(0.125));
+		d.z = sc_mul(a->d.z, SC_C(0.125));
+	} else {
+		d = a->d;
+	}
+	quat_div_norm(&r, n, &r);
+	quat_div_norm(&d, n, &d);
 	rd = quat_dot(&r, &d);
 	d.w -= sc_mul(rd, r.w);
 	d.x -= sc_mul(rd, r.x);
@@ -193,7 +240,7 @@ void dq_log_twist_rt(const struct quat *r, const struct vec3 *t, struct twist *o
 		e.y = -e.y;
 		e.z = -e.z;
 	}
-	s = sc_sqrt(sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), e.x, e.x), e.y, e.y), e.z, e.z)));
+	s = sc_acc_sqrt(sc_mac(sc_mac(sc_mac(sc_acc0(), e.x, e.x), e.y, e.y), e.z, e.z));
 	c = e.w;
 	x = ik_half_angle(s, c, &ic, &g); /* half the rotation angle, in [0, pi/2] */
 	/* 2 x / s; at small angles (2 / c) (1 - u^2/3 + u^4/5) */
@@ -222,7 +269,7 @@ void dq_log_twist(const struct dq *a, struct twist *out)
 
 void dq_exp_twist(const struct twist *tw, struct dq *out)
 {
-	sc_t th2 = v3_dot(&tw->w, &tw->w), th = sc_sqrt(th2), s, c, a, b, h;
+	sc_t th2 = v3_dot(&tw->w, &tw->w), th = v3_norm(&tw->w), s, c, a, b, h;
 	struct vec3 wv, wwv, t;
 	struct quat r;
 
@@ -257,15 +304,15 @@ void dq_log(const struct dq *a, struct screw *out)
 	dq_log_twist(a, &tw);
 	th = v3_norm(&tw.w);
 	if (th > 16 * SC_EPS) {
-		sc_t k = sc_div(SC_C(1), th);
+		sc_recip_t k = sc_recip(th);
 
 		out->angle = sc_min(th, SC_PI);
-		out->l = (struct vec3){ sc_mul(tw.w.x, k), sc_mul(tw.w.y, k), sc_mul(tw.w.z, k) };
+		out->l = (struct vec3){ sc_mul_recip(tw.w.x, k), sc_mul_recip(tw.w.y, k), sc_mul_recip(tw.w.z, k) };
 		out->d = v3_dot(&out->l, &tw.v);
 		/* v = angle m + d l */
-		out->m.x = sc_mul(tw.v.x - sc_mul(out->d, out->l.x), k);
-		out->m.y = sc_mul(tw.v.y - sc_mul(out->d, out->l.y), k);
-		out->m.z = sc_mul(tw.v.z - sc_mul(out->d, out->l.z), k);
+		out->m.x = sc_mul_recip(tw.v.x - sc_mul(out->d, out->l.x), k);
+		out->m.y = sc_mul_recip(tw.v.y - sc_mul(out->d, out->l.y), k);
+		out->m.z = sc_mul_recip(tw.v.z - sc_mul(out->d, out->l.z), k);
 		return;
 	}
 	/* (almost) pure translation: the axis is the direction of travel */
@@ -273,9 +320,9 @@ void dq_log(const struct dq *a, struct screw *out)
 	out->m = (struct vec3){ 0, 0, 0 };
 	out->d = v3_norm(&tw.v);
 	if (out->d > SC_EPS) {
-		sc_t k = sc_div(SC_C(1), out->d);
+		sc_recip_t k = sc_recip(out->d);
 
-		out->l = (struct vec3){ sc_mul(tw.v.x, k), sc_mul(tw.v.y, k), sc_mul(tw.v.z, k) };
+		out->l = (struct vec3){ sc_mul_recip(tw.v.x, k), sc_mul_recip(tw.v.y, k), sc_mul_recip(tw.v.z, k) };
 	} else {
 		out->l = (struct vec3){ SC_C(1), 0, 0 };
 	}

@@ -24,9 +24,23 @@ void ik_default_opts(struct ik_opts *o)
 void ik_target_set(struct ik_target *t, const struct vec3 *p, const struct quat *r)
 {
 	bool ok = sc_isfinite(p->x) && sc_isfinite(p->y) && sc_isfinite(p->z);
+	struct vec3 pp = *p;
 
+	if (SC_REACH_MAX > 0) {
+		/* fixed point: a target metres beyond any reach keeps its direction only (SC_REACH_MAX) */
+		struct vec3 s = { sc_mul(p->x, SC_C(0.25)), sc_mul(p->y, SC_C(0.25)), sc_mul(p->z, SC_C(0.25)) };
+		sc_t n = v3_norm(&s);
+
+		if (n > sc_mul(SC_REACH_MAX, SC_C(0.25))) {
+			sc_recip_t k = sc_recip(n);
+
+			pp.x = sc_mul(SC_REACH_MAX, sc_mul_recip(s.x, k));
+			pp.y = sc_mul(SC_REACH_MAX, sc_mul_recip(s.y, k));
+			pp.z = sc_mul(SC_REACH_MAX, sc_mul_recip(s.z, k));
+		}
+	}
 	ok = quat_normalize(r, &t->r) && ok;
-	t->p = ok ? *p : (struct vec3){ 0, 0, 0 };
+	t->p = ok ? pp : (struct vec3){ 0, 0, 0 };
 	dq_from_rt(&t->r, &t->p, &t->d);
 	{
 		/* dq_to_mat4(&t->d) with the translation p itself (not 2 d r* again) */
@@ -82,7 +96,7 @@ static bool kin_dq(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_t
 		/* the rotation error alone, as the logarithm would compute it */
 		sc_t s, c = sc_abs(re.w), ic, g;
 
-		s = sc_sqrt(sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), re.x, re.x), re.y, re.y), re.z, re.z)));
+		s = sc_acc_sqrt(sc_mac(sc_mac(sc_mac(sc_acc0(), re.x, re.x), re.y, re.y), re.z, re.z));
 		err->rot = 2 * ik_half_angle(s, c, &ic, &g);
 		if (err->rot < tol_rot)
 			return true;
@@ -124,7 +138,7 @@ const struct ik_kin ik_kin_dq = {
 #define IK_RCOND SC_C(1e-6)
 
 /* sum of a[i] b[i] for i = j..n-1, in two interleaved partial sums (half the dependency chain) */
-static inline sc_t dot_from(int j, const sc_t a[ARM_DOF], const sc_t b[ARM_DOF], int n)
+static inline sc_acc_t dot_from_acc(int j, const sc_t a[ARM_DOF], const sc_t b[ARM_DOF], int n)
 {
 	sc_acc_t s0 = sc_acc0(), s1 = sc_acc0();
 	int i;
@@ -135,7 +149,26 @@ static inline sc_t dot_from(int j, const sc_t a[ARM_DOF], const sc_t b[ARM_DOF],
 	}
 	if (i < n)
 		s0 = sc_mac(s0, a[i], b[i]);
-	return sc_acc_get(sc_acc_add(s0, s1));
+	return sc_acc_add(s0, s1);
+}
+
+static inline sc_t dot_from(int j, const sc_t a[ARM_DOF], const sc_t b[ARM_DOF], int n)
+{
+	return sc_acc_get(dot_from_acc(j, a, b, n));
+}
+
+/*
+ * Fixed point: the coordinates of the step in the QR basis are capped at
+ * +-4 (radians) so that applying the reflectors, which keep the norm (at
+ * most 4 sqrt 6 = 9.8), stays inside the range; a step that large only
+ * comes far from the target, and steps are scaled down (max_step,
+ * SC_STEP_CAP) anyway. Floating point: no cap.
+ */
+static inline sc_t lsq_cap(sc_t y)
+{
+	if (SC_STEP_CAP > 0)
+		return sc_clamp(y, SC_C(-4), SC_C(4));
+	return y;
 }
 
 /*
@@ -146,6 +179,12 @@ static inline sc_t dot_from(int j, const sc_t a[ARM_DOF], const sc_t b[ARM_DOF],
  * a[j][j+1..n-1]) stored in place of column j; R_jj = alpha_j = -sign(a_jj)
  * |a[j][j..]| is known without applying H_j to its own column, and the sums
  * below the diagonal do not wait for the square root.
+ *
+ * Floating point keeps v and beta = 2 / |v|^2 = 1 / (nrm (nrm + |a_jj|)).
+ * Fixed point keeps the unit vector v / |v| and beta = 2 (one more square
+ * root and reciprocal per column): 2 / |v|^2 is not representable when a
+ * column is nearly dependent on the others, a unit reflector keeps every
+ * quantity the size of J's entries.
  */
 static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_DOF])
 {
@@ -153,11 +192,12 @@ static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_D
 	int i, j, c, rank = 0;
 
 	for (j = 0; j < 6; j++) {
-		sc_t p[6], ajj = a[j][j], nrm, vj, b;
+		sc_acc_t p[6];
+		sc_t ajj = a[j][j], nrm, vj;
 
-		for (c = j; c < 6; c++)
-			p[c] = dot_from(j + 1, a[j], a[c], n);
-		nrm = sc_sqrt(sc_mul(ajj, ajj) + p[j]);
+		for (c = j + 1; c < 6; c++)
+			p[c] = dot_from_acc(j + 1, a[j], a[c], n);
+		nrm = sc_acc_sqrt(sc_mac(dot_from_acc(j + 1, a[j], a[j], n), ajj, ajj));
 		if (nrm < SC_EPS) {
 			/* nothing left in this column: no reflection, a tiny pivot */
 			beta[j] = 0;
@@ -166,17 +206,39 @@ static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_D
 		}
 		vj = ajj > 0 ? ajj + nrm : ajj - nrm;
 		rd[j] = ajj > 0 ? -nrm : nrm;
-		/* 2 / |v|^2, |v|^2 = 2 nrm (nrm + |a_jj|) */
-		b = sc_div(SC_C(1), sc_mul(nrm, nrm + sc_abs(ajj)));
-		beta[j] = b;
-		a[j][j] = vj;
-		for (c = j + 1; c < 6; c++) {
-			sc_t f = sc_mul(b, sc_mul(vj, a[c][j]) + p[c]);
+#if SC_TYPE == SC_FIXQ
+		{
+			/* |v|^2 = 2 nrm (nrm + |a_jj|) */
+			sc_recip_t k = sc_recip(sc_acc_sqrt(sc_mac(sc_acc0(), 2 * nrm, nrm + sc_abs(ajj))));
 
-			a[c][j] -= sc_mul(f, vj);
+			beta[j] = SC_C(2);
+			a[j][j] = sc_mul_recip(vj, k);
 			for (i = j + 1; i < n; i++)
-				a[c][i] -= sc_mul(f, a[j][i]);
+				a[j][i] = sc_mul_recip(a[j][i], k);
+			for (c = j + 1; c < 6; c++) {
+				/* a_c -= 2 (u . a_c) u, u . a_c = (v_j a_cj + p_c) / |v| */
+				sc_t f = 2 * sc_mul_recip(sc_acc_get(sc_mac(p[c], vj, a[c][j])), k);
+
+				a[c][j] -= sc_mul(f, a[j][j]);
+				for (i = j + 1; i < n; i++)
+					a[c][i] -= sc_mul(f, a[j][i]);
+			}
 		}
+#else
+		{
+			sc_t b = sc_div(SC_C(1), sc_mul(nrm, nrm + sc_abs(ajj)));
+
+			beta[j] = b;
+			a[j][j] = vj;
+			for (c = j + 1; c < 6; c++) {
+				sc_t f = sc_mul(b, sc_acc_get(sc_mac(p[c], vj, a[c][j])));
+
+				a[c][j] -= sc_mul(f, vj);
+				for (i = j + 1; i < n; i++)
+					a[c][i] -= sc_mul(f, a[j][i]);
+			}
+		}
+#endif
 	}
 	/* R(i, j) = a[j][i] above the diagonal, rd[j] on it: solve R^T y = V, dropping weak pivots */
 	for (j = 0; j < 6; j++)
@@ -192,7 +254,7 @@ static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_D
 			y[j] = 0;
 			continue;
 		}
-		y[j] = sc_div(V[j] - sc_acc_get(s), rd[j]);
+		y[j] = lsq_cap(sc_div(V[j] - sc_acc_get(s), rd[j]));
 		rank++;
 	}
 	/* y <- Q y = H_0 ... H_5 y */
@@ -208,7 +270,11 @@ static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_D
 	return rank;
 }
 
-/* Householder QR of the 6 x k matrix a (k < 6) in place; v[j] holds reflector j (rows j..5). */
+/*
+ * Householder QR of the 6 x k matrix a (k < 6) in place; v[j] holds reflector
+ * j (rows j..5), with beta[j] as in lsq_min_norm (unit reflectors in fixed
+ * point).
+ */
 static void house_qr_tall(int k, sc_t a[6][ARM_DOF], sc_t v[ARM_DOF][6], sc_t beta[ARM_DOF])
 {
 	int i, j, c;
@@ -219,7 +285,7 @@ static void house_qr_tall(int k, sc_t a[6][ARM_DOF], sc_t v[ARM_DOF][6], sc_t be
 
 		for (i = j; i < 6; i++)
 			s = sc_mac(s, a[i][j], a[i][j]);
-		nrm = sc_sqrt(sc_acc_get(s));
+		nrm = sc_acc_sqrt(s);
 		beta[j] = 0;
 		for (i = 0; i < 6; i++)
 			v[j][i] = 0;
@@ -229,7 +295,18 @@ static void house_qr_tall(int k, sc_t a[6][ARM_DOF], sc_t v[ARM_DOF][6], sc_t be
 		for (i = j; i < 6; i++)
 			v[j][i] = a[i][j];
 		v[j][j] -= alpha;
+#if SC_TYPE == SC_FIXQ
+		{
+			/* |v|^2 = 2 nrm (nrm + |a_jj|) */
+			sc_recip_t r = sc_recip(sc_acc_sqrt(sc_mac(sc_acc0(), 2 * nrm, nrm + sc_abs(a[j][j]))));
+
+			for (i = j; i < 6; i++)
+				v[j][i] = sc_mul_recip(v[j][i], r);
+			beta[j] = SC_C(2);
+		}
+#else
 		beta[j] = sc_div(SC_C(2), 2 * sc_mul(nrm, nrm + sc_abs(a[j][j])));
+#endif
 		for (c = j; c < k; c++) {
 			sc_acc_t t = sc_acc0();
 			sc_t f;
@@ -408,7 +485,7 @@ int ik_lsq_step(const sc_t J[6][ARM_DOF], const sc_t V[6], const bool *free, sc_
 				y[j] = 0;
 				continue;
 			}
-			y[j] = sc_div(y[j] - sc_acc_get(s), a[j][j]);
+			y[j] = lsq_cap(sc_div(y[j] - sc_acc_get(s), a[j][j]));
 			rank++;
 		}
 		for (j = 0; j < n; j++)
@@ -442,12 +519,14 @@ static bool kin_eval(const struct ik_kin *kin, const struct arm *a, const sc_t q
 	return err_ok(err, o);
 }
 
-/* scales x so that no joint moves more than max_step */
+/* scales x so that no joint moves more than max_step (0: SC_STEP_CAP, which is 0, none, in floating point) */
 static void limit_step(sc_t x[ARM_DOF], sc_t max_step)
 {
 	sc_t m = 0;
 	int i;
 
+	if (max_step <= 0)
+		max_step = SC_STEP_CAP;
 	if (max_step <= 0)
 		return;
 	for (i = 0; i < ARM_DOF; i++)
@@ -491,6 +570,8 @@ unsigned ik_newton(const struct arm *a, const struct ik_kin *kin, const struct i
 		ik_lsq_step((const sc_t(*)[ARM_DOF])J, V, NULL, x);
 		if (!q_finite(x))
 			break;
+		/* the paper's plain step; fixed point bounds it so that q + x stays representable */
+		limit_step(x, SC_STEP_CAP);
 		for (i = 0; i < ARM_DOF; i++)
 			q[i] = sc_wrap_pi(q[i] + x[i]);
 		res->iters++;

@@ -97,7 +97,15 @@ void dq_log_twist_rt(const struct quat *r, const struct vec3 *t, struct twist *o
  * whose next term is below 1e-21 u; g receives 1 - u^2/3 + u^4/5 = x / u there
  * and 0 otherwise.
  */
-static inline sc_t ik_half_angle(sc_t s, sc_t c, sc_t *ic, sc_t *g)
+#if DQ_OUTLINE && !defined(DQ_DEFINE_OUTLINE)
+/* one copy, in dq.c (see dq.h) */
+#define ik_half_angle SCN(ik_half_angle)
+sc_t ik_half_angle(sc_t s, sc_t c, sc_t *ic, sc_t *g);
+#else
+#if DQ_OUTLINE
+#define ik_half_angle SCN(ik_half_angle)
+#endif
+DQ_SMALL sc_t ik_half_angle(sc_t s, sc_t c, sc_t *ic, sc_t *g)
 {
 	if (s < sc_mul(SC_C(1e-3), c)) {
 		sc_t u, u2;
@@ -112,5 +120,6 @@ static inline sc_t ik_half_angle(sc_t s, sc_t c, sc_t *ic, sc_t *g)
 	*g = 0;
 	return sc_atan2(s, c);
 }
+#endif
 
 #endif /* IK_PRIVATE_H */

@@ -50,6 +50,17 @@ static inline void rot_mz(struct m3c *r, sc_t s, sc_t c)
 
 
 
+/*
+ * Above pi - ROT_LOG_NEAR_PI the axis comes from the symmetric part. Fixed
+ * point needs the margin wider: th / (2 sin th) must stay representable
+ * (below 32, so sin th > pi / 64).
+ */
+#if SC_TYPE == SC_FIXQ
+#define ROT_LOG_NEAR_PI SC_C(0.1)
+#else
+#define ROT_LOG_NEAR_PI SC_C(1e-3)
+#endif
+
 /* rotation angle and axis-times-angle of a rotation matrix */
 static void rot_log(const sc_t R[3][3], struct vec3 *w, sc_t *angle)
 {
@@ -61,7 +72,7 @@ static void rot_log(const sc_t R[3][3], struct vec3 *w, sc_t *angle)
 	if (th < SC_C(1e-3)) {
 		/* th / (2 sin th) = 1/2 (1 + th^2/6) */
 		f = sc_mul(SC_C(0.5), SC_C(1) + sc_mul(sc_mul(th, th), SC_C(1.0 / 6)));
-	} else if (th < SC_PI - SC_C(1e-3)) {
+	} else if (th < SC_PI - ROT_LOG_NEAR_PI) {
 		f = sc_div(th, s2);
 	} else {
 		/* near pi: the axis from the symmetric part, n n^T = (R + R^T - 2 c I) / (2 (1 - c)) */

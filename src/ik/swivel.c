@@ -28,11 +28,11 @@ static sc_t v3_normalize(struct vec3 *v)
 	sc_t n = v3_norm(v);
 
 	if (n > SC_EPS) {
-		sc_t k = sc_div(SC_C(1), n);
+		sc_recip_t k = sc_recip(n);
 
-		v->x = sc_mul(v->x, k);
-		v->y = sc_mul(v->y, k);
-		v->z = sc_mul(v->z, k);
+		v->x = sc_mul_recip(v->x, k);
+		v->y = sc_mul_recip(v->y, k);
+		v->z = sc_mul_recip(v->z, k);
 	}
 	return n;
 }
@@ -91,11 +91,12 @@ static sc_t arc_violation(const struct arm *a, int j, sc_t c, sc_t s)
  */
 static sc_t euler_fast(const sc_t m[3][3], const struct arm *a, int i0)
 {
-	sc_t sb = -m[1][2], cb = sc_sqrt(SC_C(1) - sc_mul(sb, sb)), best = SC_C(1e3);
+	sc_t sb = -m[1][2], cb = sc_sqrt(SC_C(1) - sc_mul(sb, sb)), best = SC_BIG;
+	sc_recip_t inv;
 	int k;
 
 	for (k = 0; k < 2 && best > 0; k++) {
-		sc_t sg = k ? SC_C(-1) : SC_C(1), v, inv;
+		sc_t sg = k ? SC_C(-1) : SC_C(1), v;
 
 		v = arc_violation(a, i0 + 1, sc_mul(sg, cb), sb);
 		if (v >= best)
@@ -105,11 +106,12 @@ static sc_t euler_fast(const sc_t m[3][3], const struct arm *a, int i0)
 			best = v;
 			continue;
 		}
-		inv = sc_div(sg, cb);
-		v += arc_violation(a, i0, sc_mul(m[2][2], inv), sc_mul(m[0][2], inv));
+		/* (m22, m02) / cos b and (m11, m10) / cos b are cos and sin of the outer angles */
+		inv = sc_recip(sc_mul(sg, cb));
+		v += arc_violation(a, i0, sc_mul_recip(m[2][2], inv), sc_mul_recip(m[0][2], inv));
 		if (v >= best)
 			continue;
-		v += arc_violation(a, i0 + 2, sc_mul(m[1][1], inv), sc_mul(m[1][0], inv));
+		v += arc_violation(a, i0 + 2, sc_mul_recip(m[1][1], inv), sc_mul_recip(m[1][0], inv));
 		best = sc_min(best, v);
 	}
 	return best;
@@ -294,7 +296,7 @@ static sc_t search_eval_cs(struct search *s, const struct swivel_ctx *x, sc_t ph
 	sc_t v;
 
 	if (s->evals >= s->o->max_evals)
-		return SC_C(1e3); /* budget spent: nothing more is feasible */
+		return SC_BIG; /* budget spent: nothing more is feasible */
 	v = ctx_eval_cs(x, cp, sp, q, full);
 
 	s->evals++;
@@ -363,7 +365,7 @@ static bool ctx_refine(struct search *s, const struct swivel_ctx *x, sc_t lo, sc
 static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, bool refine, sc_t q[ARM_DOF])
 {
 	int samples = s->o->swivel_samples > 2 ? s->o->swivel_samples : 2;
-	sc_t step = sc_div(2 * SC_PI, SC_C(samples)), t[ARM_DOF], v, bv, bphi;
+	sc_t step = sc_div_int(2 * SC_PI, samples), t[ARM_DOF], v, bv, bphi;
 	sc_t c0, s0, cs, ss, cf, sf, cb, sb;
 	int k, side, it;
 
@@ -385,7 +387,7 @@ static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, 
 		sb = sc_mul(sb, cs) - sc_mul(cb, ss);
 		cb = nc;
 		for (side = -1; side <= 1; side += 2) {
-			sc_t lo, hi = phi0 + sc_mul(SC_C(side * k), step);
+			sc_t lo, hi = phi0 + sc_mul_int(step, side * k);
 
 			v = side < 0 ? search_eval_cs(s, x, hi, cb, sb, t, false) : search_eval_cs(s, x, hi, cf, sf, t, false);
 			if (v > 0) {
@@ -395,7 +397,7 @@ static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, 
 			}
 			q_copy(q, t);
 			/* feasible at hi, not at lo: move hi toward lo */
-			lo = hi - sc_mul(SC_C(side), step);
+			lo = hi - sc_mul_int(step, side);
 			for (it = 0; it < 8; it++) {
 				sc_t mid = sc_mul(lo + hi, SC_C(0.5));
 
@@ -437,28 +439,28 @@ static bool rescue(struct search *s, const struct swivel_target *st, sc_t q[ARM_
 	sc_t q1s[24];
 	int nq = yaw_candidates(st, a->lim.lo[0], n1, q1s, 24);
 
-	s->best_v = SC_C(1e3);
+	s->best_v = SC_BIG;
 	for (i = 0; i < nq; i++) {
 		if (!ctx_init(&x, a, &st->w, (const sc_t(*)[3])st->rt, q1s[i]))
 			continue;
 		for (j = 0; j < n2; j++)
-			search_eval(s, &x, sc_div(sc_mul(2 * SC_PI, SC_C(j)), SC_C(n2)), t, true);
+			search_eval(s, &x, sc_mul_int(sc_div_int(2 * SC_PI, n2), j), t, true);
 	}
-	if (s->best_v >= SC_C(1e3))
+	if (s->best_v >= SC_BIG)
 		return false;
 	q1 = s->best_q1;
 	phi = s->best_phi;
 	v = s->best_v;
-	dq1 = sc_div(a->lim.hi[0] - a->lim.lo[0], SC_C(2 * (n1 - 1)));
-	dphi = sc_div(SC_PI, SC_C(n2));
+	dq1 = sc_div_int(a->lim.hi[0] - a->lim.lo[0], 2 * (n1 - 1));
+	dphi = sc_div_int(SC_PI, n2);
 	for (round = 0; round < 100 && v > 0 && dphi > SC_C(1e-5) && s->evals < s->o->max_evals; round++) {
 		static const signed char dir[4][2] = { { 1, 0 }, { -1, 0 }, { 0, 1 }, { 0, -1 } };
 		bool moved = false;
 		int d;
 
 		for (d = 0; d < 4 && !moved; d++) {
-			sc_t nq1 = sc_clamp(q1 + sc_mul(SC_C(dir[d][0]), dq1), a->lim.lo[0], a->lim.hi[0]);
-			sc_t nphi = phi + sc_mul(SC_C(dir[d][1]), dphi), nv;
+			sc_t nq1 = sc_clamp(q1 + sc_mul_int(dq1, dir[d][0]), a->lim.lo[0], a->lim.hi[0]);
+			sc_t nphi = phi + sc_mul_int(dphi, dir[d][1]), nv;
 
 			if (!ctx_init(&x, a, &st->w, (const sc_t(*)[3])st->rt, nq1))
 				continue;
@@ -481,6 +483,16 @@ static bool rescue(struct search *s, const struct swivel_target *st, sc_t q[ARM_
 	return true;
 }
 
+/* num / den for den > 0, clamped to [-2, 2]: a cosine's bound (fixed point cannot hold every quotient) */
+static sc_t ratio_2(sc_t num, sc_t den)
+{
+	if (num > 2 * den)
+		return SC_C(2);
+	if (num < -2 * den)
+		return SC_C(-2);
+	return sc_div(num, den);
+}
+
 /*
  * J1 values at which the wrist centre is within reach with the elbow inside
  * its limits: |w - s(q1)|^2 = |w|^2 + S^2 - 2 S rho cos(q1 - beta) must lie
@@ -500,7 +512,7 @@ static int reach_intervals(const struct swivel_target *st, sc_t lo[2], sc_t hi[2
 	sc_t beta, cl, ch, amin, amax, cand[2][2];
 	int n = 0, i;
 
-	if (srho < SC_C(1e-9)) {
+	if (!(srho > SC_C(1e-9))) {
 		/* the distance does not depend on J1 */
 		if (k > dmax2 || k < dmin2)
 			return 0;
@@ -508,8 +520,8 @@ static int reach_intervals(const struct swivel_target *st, sc_t lo[2], sc_t hi[2
 		hi[0] = h1;
 		return 1;
 	}
-	cl = sc_div(k - dmax2, srho);
-	ch = sc_div(k - dmin2, srho);
+	cl = ratio_2(k - dmax2, srho);
+	ch = ratio_2(k - dmin2, srho);
 	if (cl > SC_C(1) || ch < SC_C(-1))
 		return 0;
 	/* cos(q1 - beta) in [cl, ch]: |q1 - beta| in [acos(ch), acos(cl)] */
@@ -561,7 +573,7 @@ static int yaw_candidates(const struct swivel_target *st, sc_t q1p, int samples,
 		return 0;
 	/* the reachable J1 nearest q1p, a little inside the interval */
 	{
-		sc_t best = 0, bd = SC_C(1e3);
+		sc_t best = 0, bd = SC_BIG;
 
 		for (i = 0; i < n; i++) {
 			sc_t mg = sc_min(margin, sc_mul(hi[i] - lo[i], SC_C(0.5)));
@@ -577,7 +589,7 @@ static int yaw_candidates(const struct swivel_target *st, sc_t q1p, int samples,
 		sc_t a0 = lo[i] + mg, a1 = hi[i] - mg;
 
 		for (j = 0; j < samples && m < max; j++) {
-			out[m++] = samples > 1 ? a0 + sc_div(sc_mul(a1 - a0, SC_C(j)), SC_C(samples - 1))
+			out[m++] = samples > 1 ? a0 + sc_div_int(sc_mul_int(a1 - a0, j), samples - 1)
 					       : sc_mul(a0 + a1, SC_C(0.5));
 		}
 	}
@@ -606,7 +618,7 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 
 	s.o = o;
 	s.evals = 0;
-	s.best_v = SC_C(1e3);
+	s.best_v = SC_BIG;
 	s.best_q1 = s.best_phi = 0;
 	q_copy(s.best_q, pref);
 	st.a = a;
@@ -647,7 +659,7 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 	}
 	if (!found && nc > 1 && ctx_init(&x, a, &st.w, (const sc_t(*)[3])st.rt, s.best_q1) && x.viol15 == 0) {
 		/* around the least violating sample of the coarse scans */
-		sc_t step = sc_div(2 * SC_PI, SC_C(o->swivel_samples > 2 ? o->swivel_samples : 2));
+		sc_t step = sc_div_int(2 * SC_PI, o->swivel_samples > 2 ? o->swivel_samples : 2);
 
 		found = ctx_refine(&s, &x, s.best_phi - step, s.best_phi + step, q);
 	}

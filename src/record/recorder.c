@@ -349,11 +349,14 @@ static void rotate(struct recorder *r)
 	open_file(r);
 }
 
+/* what may still be appended after the last rotation check: a GAP mark and the END record */
+#define ROTATE_RESERVE (2 * RECFILE_REC_OVERHEAD + RECFILE_GAP_LEN + RECFILE_END_LEN)
+
 static bool want_rotation(const struct recorder *r, size_t next, uint64_t now)
 {
 	if (r->fd < 0 || r->file_records + r->wrecords <= (r->session_len ? 1 : 0))
 		return false; /* never an empty file */
-	if (r->rotate_bytes && r->file_bytes + r->wlen + next > r->rotate_bytes)
+	if (r->rotate_bytes && r->file_bytes + r->wlen + next + ROTATE_RESERVE > r->rotate_bytes)
 		return true;
 	return r->rotate_ns && now > r->file_opened_ns && now - r->file_opened_ns >= r->rotate_ns;
 }

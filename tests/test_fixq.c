@@ -1,0 +1,532 @@
+// SPDX-License-Identifier: MIT
+/*
+ * test_fixq.c - the Q5.26 fixed-point build of the IK core (compiled with
+ * SC_TYPE=SC_FIXQ): its scalar operations against long double, its
+ * kinematics and solves against the double build on the shared benchmark
+ * targets (the goals: within 1 um and 0.001 deg of the double solution,
+ * the same success and in-limits rates), and a counting build of the core
+ * (suffix _qs, SC_FIXQ_STATS) that proves no result saturates on valid
+ * input. Hopeless input must stay well defined (the SAN build runs this
+ * under UBSan, which catches any signed overflow).
+ */
+#define _DEFAULT_SOURCE
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "ik/ik.h"
+#include "lib/ikx.h"
+#include "testutil.h"
+
+IKX_DECLARE(_qs)
+extern unsigned long sc_saturations_qs;
+
+#define ULP (1.0 / 67108864.0)
+#define DEG (M_PI / 180.0)
+#define RAD2DEG (180.0 / M_PI)
+
+struct row {
+	double q[ARM_DOF], p[3], r[4];
+};
+
+static const struct ikx_setup bench = { .dims = { 0.18, 0.30, 0.26, 0.08 } };
+
+/* up to max rows of a benchmark file, every step-th */
+static size_t load(const char *name, struct row *rows, size_t max, size_t step)
+{
+	char path[512], line[1024];
+	size_t n = 0, k = 0;
+	FILE *f;
+
+	snprintf(path, sizeof(path), "%s/bench/%s", SHARED_DIR, name);
+	f = fopen(path, "r");
+	if (!f) {
+		fail_msg("cannot open %s (the shared benchmark files are needed)", path);
+		return 0;
+	}
+	assert_non_null(fgets(line, sizeof(line), f));
+	while (n < max && fgets(line, sizeof(line), f)) {
+		double v[15];
+		char *s = line;
+		int j;
+
+		if (k++ % step)
+			continue;
+		for (j = 0; j < 15; j++) {
+			v[j] = strtod(s, &s);
+			if (*s == ',')
+				s++;
+		}
+		memcpy(rows[n].q, v, sizeof(rows[n].q));
+		memcpy(rows[n].p, v + 8, sizeof(rows[n].p));
+		memcpy(rows[n].r, v + 11, sizeof(rows[n].r));
+		n++;
+	}
+	fclose(f);
+	return n;
+}
+
+static double dist3(const double a[3], const double b[3])
+{
+	return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+/* angle of a* b: insensitive to sign and to norms off 1 */
+static double rot_between(const double a[4], const double b[4])
+{
+	double w = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
+	double x = a[0] * b[1] - a[1] * b[0] - a[2] * b[3] + a[3] * b[2];
+	double y = a[0] * b[2] - a[2] * b[0] - a[3] * b[1] + a[1] * b[3];
+	double z = a[0] * b[3] - a[3] * b[0] - a[1] * b[2] + a[2] * b[1];
+
+	return 2 * atan2(sqrt(x * x + y * y + z * z), fabs(w));
+}
+
+static double joint_diff(const double a[ARM_DOF], const double b[ARM_DOF])
+{
+	double m = 0;
+
+	for (int k = 0; k < ARM_DOF; k++)
+		m = fmax(m, fabs(remainder(a[k] - b[k], 2 * M_PI)));
+	return m;
+}
+
+static bool in_limits_q(const struct ikx_setup *o, const double q[ARM_DOF])
+{
+	double lo[ARM_DOF], hi[ARM_DOF];
+
+	ikx_limits_q(o, lo, hi);
+	for (int i = 0; i < ARM_DOF; i++)
+		if (!(q[i] >= lo[i] && q[i] <= hi[i]))
+			return false;
+	return true;
+}
+
+/* ---- the scalar operations ------------------------------------------------------ */
+
+static double ulps(sc_t got, long double want)
+{
+	return fabs((double)((long double)got - want * 67108864.0L));
+}
+
+static void test_mul_div_sqrt(void **state)
+{
+	double m_div = 0, m_sqrt = 0, m_acc = 0, m_rec1 = 0, m_rec = 0;
+	int i;
+
+	(void)state;
+	/* constants round to nearest, half away from zero */
+	assert_int_equal(SC_C(1), 1 << 26);
+	assert_int_equal(SC_C(-0.5), -(1 << 25));
+	assert_int_equal(SC_C(1.5 / 67108864.0), 2);
+	assert_int_equal(SC_C(-1.5 / 67108864.0), -2);
+	assert_int_equal(SC_PI, 210828714);
+	/* products: exact, rounded once (half up), saturating */
+	assert_int_equal(sc_mul(SC_C(1.5), SC_C(-2)), SC_C(-3));
+	assert_int_equal(sc_mul(3, 1 << 25), 2);   /* 1.5 ulp -> 2 */
+	assert_int_equal(sc_mul(-3, 1 << 25), -1); /* -1.5 ulp -> -1 (half up) */
+	assert_int_equal(sc_mul(SC_C(8), SC_C(8)), INT32_MAX);
+	assert_int_equal(sc_mul(SC_C(-8), SC_C(8)), INT32_MIN);
+	assert_int_equal(sc_acc_get(sc_mac(sc_mac(sc_acc0(), SC_C(20), SC_C(20)), SC_C(-20), SC_C(20))), 0);
+	/* quotients: correctly rounded, saturating, x / 0 toward the sign */
+	assert_int_equal(sc_div(SC_C(1), SC_C(3)), 22369621);
+	assert_int_equal(sc_div(SC_C(-1), SC_C(3)), -22369621);
+	assert_int_equal(sc_div(SC_C(20), SC_C(0.5)), INT32_MAX);
+	assert_int_equal(sc_div(SC_C(1), 0), INT32_MAX);
+	assert_int_equal(sc_div(SC_C(-1), 0), INT32_MIN);
+	assert_int_equal(sc_div(0, 0), 0);
+	assert_int_equal(sc_abs(INT32_MIN), INT32_MAX);
+	assert_int_equal(sc_sqrt(SC_C(4)), SC_C(2));
+	assert_int_equal(sc_sqrt(SC_C(-4)), 0);
+	assert_int_equal(sc_from_int(-3), SC_C(-3));
+	assert_int_equal(sc_from_double(1e9), INT32_MAX);
+	assert_int_equal(sc_from_double(-1e9), INT32_MIN);
+	assert_int_equal(sc_from_double(NAN), 0);
+	assert_int_equal(sc_from_double(0.75), SC_C(0.75));
+	rng_seed(5);
+	for (i = 0; i < 200000; i++) {
+		sc_t a = (sc_t)(int32_t)(rnd() * 4294967296.0 - 2147483648.0) >> (i % 24);
+		sc_t b = (sc_t)(int32_t)(rnd() * 4294967296.0 - 2147483648.0) >> ((i / 24) % 24);
+		long double q, s;
+		sc_acc_t acc;
+
+		if (b != 0) {
+			q = (long double)a / b;
+			if (fabsl(q) < 31.9L) {
+				m_div = fmax(m_div, ulps(sc_div(a, b), q));
+				if (fabsl(q) <= 1)
+					m_rec1 = fmax(m_rec1, ulps(sc_mul_recip(a, sc_recip(b)), q));
+				else
+					m_rec = fmax(m_rec, ulps(sc_mul_recip(a, sc_recip(b)), q));
+			}
+		}
+		s = sqrtl(fabsl((long double)a) / 67108864.0L);
+		m_sqrt = fmax(m_sqrt, ulps(sc_sqrt(a < 0 ? -a : a), s));
+		/* a norm from the accumulator keeps the bits a rounded square would lose */
+		acc = sc_mac(sc_mac(sc_acc0(), a >> 8, a >> 8), b >> 8, b >> 8);
+		s = sqrtl(((long double)(a >> 8) * (a >> 8) + (long double)(b >> 8) * (b >> 8))) / 67108864.0L;
+		m_acc = fmax(m_acc, ulps(sc_acc_sqrt(acc), s));
+	}
+	set_ctx("quotients");
+	assert_near(m_div, 0, 0.5);
+	set_ctx("square roots");
+	assert_near(m_sqrt, 0, 0.5);
+	assert_near(m_acc, 0, 0.5);
+	set_ctx("reciprocals");
+	assert_near(m_rec1, 0, 0.55);
+	assert_near(m_rec, 0, 1.5);
+	/* a tiny norm keeps its bits: |(1e-7, 1e-7, 0)| */
+	{
+		struct vec3 v = { SC_C(1e-7), SC_C(1e-7), 0 };
+
+		assert_near(sc_to_double(v3_norm(&v)), sqrt(2) * 1e-7, ULP);
+	}
+}
+
+static void test_trig(void **state)
+{
+	double m_s = 0, m_c = 0, m_a = 0;
+	long i;
+
+	(void)state;
+	for (i = INT32_MIN; i <= INT32_MAX; i += 4099) {
+		sc_t s, c;
+		long double x = (long double)i / 67108864.0L;
+
+		sc_sincos((sc_t)i, &s, &c);
+		m_s = fmax(m_s, ulps(s, sinl(x)));
+		m_c = fmax(m_c, ulps(c, cosl(x)));
+	}
+	set_ctx("sin, cos over the whole range");
+	assert_near(m_s, 0, 0.6);
+	assert_near(m_c, 0, 0.6);
+	rng_seed(11);
+	for (i = 0; i < 300000; i++) {
+		sc_t y = (sc_t)(int32_t)(rnd() * 4294967296.0 - 2147483648.0) >> (i % 28);
+		sc_t x = (sc_t)(int32_t)(rnd() * 4294967296.0 - 2147483648.0) >> ((i / 28) % 28);
+		sc_t a = sc_atan2(y, x);
+
+		m_a = fmax(m_a, ulps(a, atan2l(y, x)));
+		if (y != INT32_MIN && y != 0)
+			assert_int_equal(sc_atan2(-y, x), -a); /* odd, exactly (y = 0, x < 0: pi either way) */
+	}
+	set_ctx("atan2");
+	assert_near(m_a, 0, 0.6);
+	assert_int_equal(sc_atan2(0, 0), 0);
+	assert_int_equal(sc_atan2(0, SC_C(-1)), SC_PI);
+	assert_int_equal(sc_atan2(SC_C(1), 0), SC_HALF_PI);
+	assert_int_equal(sc_atan2(SC_C(-2), 0), -SC_HALF_PI);
+	assert_int_equal(sc_atan2(SC_C(1), SC_C(1)), SC_C(M_PI / 4));
+	{
+		sc_t s, c;
+
+		sc_sincos(0, &s, &c);
+		assert_int_equal(s, 0);
+		assert_int_equal(c, SC_C(1));
+		sc_sincos(SC_HALF_PI, &s, &c);
+		assert_int_equal(s, SC_C(1));
+		assert_true(sc_abs(c) <= 1);
+	}
+	/* wrapping subtracts whole turns of the representable 2 pi, exactly */
+	assert_int_equal(sc_wrap_pi(SC_PI), -SC_PI);
+	assert_int_equal(sc_wrap_pi(-SC_PI), -SC_PI);
+	assert_int_equal(sc_wrap_pi(SC_C(1) + 4 * SC_PI), SC_C(1));
+	assert_int_equal(sc_wrap_pi(INT32_MAX), INT32_MAX - 10 * SC_PI);
+	assert_int_equal(sc_wrap_pi(INT32_MIN), INT32_MIN + 10 * SC_PI);
+}
+
+/* ---- kinematics against the double build ---------------------------------------- */
+
+static void test_fk_jacobian(void **state)
+{
+	double q[ARM_DOF] = { 0 }, out[7], J[6][ARM_DOF], Jd[6][ARM_DOF], fd[7], m_p = 0, m_r = 0, m_j = 0;
+	int n, i, r;
+
+	(void)state;
+	ikx_fk_q(&bench, q, out);
+	set_ctx("q = 0");
+	assert_near(out[0], 0.18, 2 * ULP);
+	assert_near(out[1], 0.34, 2 * ULP);
+	assert_near(out[2], -0.30, 2 * ULP);
+	assert_near(out[3], 1, ULP);
+	q[4] = M_PI / 2;
+	ikx_fk_q(&bench, q, out);
+	set_ctx("q5 = 90 deg");
+	assert_near(out[0], 0.18, 2 * ULP);
+	assert_near(out[1], 0, 4 * ULP);
+	assert_near(out[2], 0.04, 4 * ULP);
+	rng_seed(3);
+	for (n = 0; n < 3000; n++) {
+		struct ikx_setup o = bench;
+
+		o.left = n & 1;
+		for (i = 0; i < ARM_DOF; i++)
+			q[i] = sc_to_double(sc_from_double(rnd_range(-M_PI, M_PI)));
+		ikx_fk_q(&o, q, out);
+		ikx_fk_d(&o, q, fd);
+		m_p = fmax(m_p, dist3(out, fd));
+		m_r = fmax(m_r, rot_between(out + 3, fd + 3));
+		ikx_jacobian_q(&o, q, J);
+		ikx_jacobian_d(&o, q, Jd);
+		for (r = 0; r < 6; r++)
+			for (i = 0; i < ARM_DOF; i++)
+				m_j = fmax(m_j, fabs(J[r][i] - Jd[r][i]));
+	}
+	/* 8 joints of rounding, a few ulp (1.5e-8) each, times lever arms */
+	set_ctx("FK and Jacobian, Q5.26 against double, 3000 postures");
+	assert_near(m_p, 0, 3e-7);
+	assert_near(m_r, 0, 3e-7);
+	assert_near(m_j, 0, 4e-7);
+	print_message("FK: position %.3g m, rotation %.3g rad; Jacobian %.3g\n", m_p, m_r, m_j);
+}
+
+/* minimum-norm least squares: the same step as double, and with held joints */
+static void test_lsq(void **state)
+{
+	int trial, i, j;
+
+	(void)state;
+	rng_seed(17);
+	for (trial = 0; trial < 300; trial++) {
+		double J[6][ARM_DOF], V[6], x[ARM_DOF], xd[ARM_DOF];
+		bool free[ARM_DOF];
+
+		for (i = 0; i < 6; i++) {
+			for (j = 0; j < ARM_DOF; j++)
+				J[i][j] = sc_to_double(sc_from_double(rnd() - 0.5));
+			V[i] = sc_to_double(sc_from_double(0.02 * (rnd() - 0.5)));
+		}
+		set_ctx("trial %d", trial);
+		assert_int_equal(ikx_lsq_q((const double(*)[ARM_DOF])J, V, NULL, x), 6);
+		ikx_lsq_d((const double(*)[ARM_DOF])J, V, NULL, xd);
+		for (j = 0; j < ARM_DOF; j++)
+			assert_near(x[j], xd[j], 1e-5 * (1 + fabs(xd[j])));
+		for (j = 0; j < ARM_DOF; j++)
+			free[j] = j % 3 != 0;
+		ikx_lsq_q((const double(*)[ARM_DOF])J, V, free, x);
+		ikx_lsq_d((const double(*)[ARM_DOF])J, V, free, xd);
+		for (j = 0; j < ARM_DOF; j++)
+			assert_near(x[j], xd[j], 1e-5 * (1 + fabs(xd[j])));
+		for (j = 0; j < ARM_DOF; j++)
+			free[j] = j % 2 == 0;
+		ikx_lsq_q((const double(*)[ARM_DOF])J, V, free, x);
+		ikx_lsq_d((const double(*)[ARM_DOF])J, V, free, xd);
+		for (j = 0; j < ARM_DOF; j++)
+			assert_near(x[j], xd[j], 1e-5 * (1 + fabs(xd[j])));
+	}
+}
+
+/* ---- solves: the goals ------------------------------------------------------------ */
+
+struct tally {
+	size_t n, strict_d, strict_q, inlim_q, same, both;
+	double dp, dr;
+};
+
+/* one row through double and the counting fixed build; warm rows start from their own previous solution */
+static void solve_both(const struct ikx_setup *o, const struct row *r, const double *seed_d, const double *seed_q,
+		       double qd[ARM_DOF], double qq[ARM_DOF], struct tally *t)
+{
+	struct ikx_result rd, rq;
+	double fd[7], fq[7];
+	bool sd, sq;
+
+	ikx_solve_d(o, r->p, r->r, seed_d, qd, &rd);
+	ikx_solve_qs(o, r->p, r->r, seed_q, qq, &rq);
+	ikx_fk_d(o, qd, fd);
+	ikx_fk_d(o, qq, fq);
+	sd = dist3(fd, r->p) < 1e-4 && rot_between(fd + 3, r->r) < 0.01 * DEG;
+	sq = dist3(fq, r->p) < 1e-4 && rot_between(fq + 3, r->r) < 0.01 * DEG;
+	t->n++;
+	t->strict_d += sd;
+	t->strict_q += sq;
+	t->inlim_q += in_limits_q(o, qq);
+	if (sq)
+		assert_true(rq.flags & IK_REACHED);
+	if (sd) {
+		t->both++;
+		t->dp = fmax(t->dp, dist3(fq, fd));
+		t->dr = fmax(t->dr, rot_between(fq + 3, fd + 3));
+		t->same += joint_diff(qq, qd) < 0.01 * DEG;
+	}
+}
+
+static void check_goals(const char *what, const struct tally *t)
+{
+	print_message("%s: %zu rows, strict double %zu, Q5.26 %zu, in limits %zu; against double: %.3g um, %.3g deg;"
+		      " same posture %zu of %zu\n",
+		      what, t->n, t->strict_d, t->strict_q, t->inlim_q, t->dp * 1e6, t->dr * RAD2DEG, t->same, t->both);
+	set_ctx("%s", what);
+	assert_int_equal(t->strict_q, t->strict_d);
+	assert_int_equal(t->inlim_q, t->n);
+	assert_near(t->dp, 0, 1e-6);
+	assert_near(t->dr * RAD2DEG, 0, 0.001);
+}
+
+static void test_random_reset(void **state)
+{
+	static struct row rows[1000];
+	size_t n = load("targets.csv", rows, 1000, 10), i;
+	struct tally t = { 0 };
+	unsigned long sat = sc_saturations_qs;
+
+	(void)state;
+	assert_int_equal(n, 1000);
+	for (i = 0; i < n; i++) {
+		double qd[ARM_DOF], qq[ARM_DOF];
+
+		solve_both(&bench, &rows[i], NULL, NULL, qd, qq, &t);
+	}
+	check_goals("random targets, reset", &t);
+	assert_true(t.strict_q >= n - 1);
+	assert_true(t.same >= t.both * 85 / 100);
+	assert_int_equal(sc_saturations_qs - sat, 0);
+}
+
+static void test_trajectory_warm(void **state)
+{
+	static struct row rows[3000];
+	size_t n = load("trajectory.csv", rows, 3000, 1), i;
+	struct tally t = { 0 };
+	double pd[ARM_DOF], pq[ARM_DOF];
+	unsigned long sat = sc_saturations_qs;
+
+	(void)state;
+	assert_int_equal(n, 3000);
+	for (i = 0; i < n; i++) {
+		double qd[ARM_DOF], qq[ARM_DOF];
+
+		solve_both(&bench, &rows[i], i ? pd : NULL, i ? pq : NULL, qd, qq, &t);
+		if (i)
+			assert_true(joint_diff(qq, pq) < 10 * DEG);
+		memcpy(pd, qd, sizeof(pd));
+		memcpy(pq, qq, sizeof(pq));
+	}
+	check_goals("trajectory, warm", &t);
+	assert_int_equal(t.strict_q, n);
+	/* tracking follows the same postures */
+	assert_int_equal(t.same, t.both);
+	assert_int_equal(sc_saturations_qs - sat, 0);
+}
+
+/* the matrix backend and the left arm in fixed point too */
+static void test_matrix_and_left(void **state)
+{
+	static struct row rows[300];
+	size_t n = load("targets.csv", rows, 300, 31), i, mirrored = 0;
+	struct ikx_setup mat = bench, left = bench;
+	struct tally t = { 0 };
+	unsigned long sat = sc_saturations_qs;
+
+	(void)state;
+	mat.matrix = 1;
+	left.left = 1;
+	for (i = 0; i < n; i++) {
+		double qd[ARM_DOF], qq[ARM_DOF], ql[ARM_DOF], pl[3], rl[4];
+		struct ikx_result res;
+
+		solve_both(&mat, &rows[i], NULL, NULL, qd, qq, &t);
+		/* the mirror image M T M, M = diag(-1, 1, 1): x negated, the rotation's y and z parts negated */
+		pl[0] = -rows[i].p[0], pl[1] = rows[i].p[1], pl[2] = rows[i].p[2];
+		rl[0] = rows[i].r[0], rl[1] = rows[i].r[1], rl[2] = -rows[i].r[2], rl[3] = -rows[i].r[3];
+		ikx_solve_qs(&bench, rows[i].p, rows[i].r, NULL, qq, &res);
+		ikx_solve_qs(&left, pl, rl, NULL, ql, &res);
+		set_ctx("row %zu, left arm", i);
+		assert_true(in_limits_q(&left, ql));
+		assert_true(res.flags & IK_REACHED);
+		assert_true(res.err_pos < SC_TOL_POS * ULP * 1.0001 && res.err_rot < SC_TOL_ROT * ULP * 1.0001);
+		/* the same angles as the right arm, up to rounding (or another posture where the search is narrow) */
+		mirrored += joint_diff(qq, ql) < 1e-5;
+	}
+	check_goals("random targets, reset, matrix kinematics", &t);
+	print_message("left arm: %zu of %zu mirrored postures equal the right arm's to 1e-5 rad\n", mirrored, n);
+	assert_true(mirrored >= n * 95 / 100);
+	assert_int_equal(sc_saturations_qs - sat, 0);
+}
+
+/* the paper's Newton from q = 0: converges in fixed point as in double */
+static void test_paper_newton(void **state)
+{
+	static struct row rows[200];
+	size_t n = load("targets.csv", rows, 200, 7), i, reached = 0;
+	struct ikx_setup o = bench;
+	double zero[ARM_DOF] = { 0 };
+
+	(void)state;
+	o.newton = 1;
+	for (i = 0; i < n; i++) {
+		struct ikx_result res;
+		double q[ARM_DOF], f[7];
+
+		ikx_solve_q(&o, rows[i].p, rows[i].r, zero, q, &res);
+		if (!(res.flags & IK_REACHED))
+			continue;
+		ikx_fk_d(&o, q, f);
+		set_ctx("row %zu", i);
+		assert_true(dist3(f, rows[i].p) < 1e-6);
+		assert_true(rot_between(f + 3, rows[i].r) < 1e-5);
+		reached++;
+	}
+	/* double reaches all 200 */
+	assert_true(reached >= n * 99 / 100);
+}
+
+/*
+ * Input no arm can use: far targets, huge or zero quaternions, absurd seeds.
+ * Well defined (UBSan in the SAN build), inside the limits, flagged.
+ */
+static void test_hopeless_input(void **state)
+{
+	static const double far[][3] = { { 31.9, 0, 0 }, { -32, -32, -32 }, { 0, 20, 0 }, { 1.5, -1.2, 0.3 } };
+	static const double rots[][4] = { { 1, 0, 0, 0 }, { 31, -31, 31, -31 }, { 1e-7, 0, 0, 0 }, { -32, 0, 0, 0 } };
+	static const double seeds[][ARM_DOF] = { { 31, -31, 30, -30, 29, -29, 28, -28 }, { 0, 0, 0, 0, 0, 0, 0, 0 } };
+	size_t i, j, k;
+
+	(void)state;
+	for (i = 0; i < sizeof(far) / sizeof(far[0]); i++) {
+		for (j = 0; j < sizeof(rots) / sizeof(rots[0]); j++) {
+			for (k = 0; k < 3; k++) {
+				struct ikx_result res;
+				double q[ARM_DOF], f[7];
+
+				set_ctx("target %zu, rotation %zu, seed %zu", i, j, k);
+				ikx_solve_q(&bench, far[i], rots[j], k < 2 ? seeds[k] : NULL, q, &res);
+				assert_true(in_limits_q(&bench, q));
+				assert_false(res.flags & IK_REACHED);
+				assert_true(res.flags & (IK_UNREACHABLE | IK_BAD_TARGET));
+				if (i == 2 && j == 0 && k == 2) {
+					/* 20 m in front: the closest posture reaches forward */
+					ikx_fk_d(&bench, q, f);
+					assert_true(f[1] > 0.5);
+				}
+			}
+		}
+	}
+	{
+		/* a zero quaternion is no orientation */
+		struct ikx_result res;
+		double q[ARM_DOF], p[3] = { 0.2, 0.3, -0.1 }, r[4] = { 0, 0, 0, 0 };
+
+		ikx_solve_q(&bench, p, r, NULL, q, &res);
+		assert_true(res.flags & IK_BAD_TARGET);
+	}
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_mul_div_sqrt),	cmocka_unit_test(test_trig),
+		cmocka_unit_test(test_fk_jacobian),	cmocka_unit_test(test_lsq),
+		cmocka_unit_test(test_random_reset),	cmocka_unit_test(test_trajectory_warm),
+		cmocka_unit_test(test_matrix_and_left), cmocka_unit_test(test_paper_newton),
+		cmocka_unit_test(test_hopeless_input),
+	};
+
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}

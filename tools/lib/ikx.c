@@ -1,0 +1,133 @@
+// SPDX-License-Identifier: MIT
+/*
+ * ikx.c - the IK core of this translation unit's scalar type, with doubles
+ * in and out (see ikx.h). Compiled once per type.
+ */
+#include "ik/ik.h"
+#include "ikx.h"
+
+#define ikx_fk SCN(ikx_fk)
+#define ikx_jacobian SCN(ikx_jacobian)
+#define ikx_lsq SCN(ikx_lsq)
+#define ikx_solve SCN(ikx_solve)
+#define ikx_name SCN(ikx_name)
+#define ikx_limits SCN(ikx_limits)
+
+static void setup_arm(const struct ikx_setup *o, struct arm *a)
+{
+	struct arm_dims d = { sc_from_double(o->dims[0]), sc_from_double(o->dims[1]), sc_from_double(o->dims[2]),
+			      sc_from_double(o->dims[3]) };
+	struct arm_limits lim;
+	int i;
+
+	for (i = 0; i < ARM_DOF; i++) {
+		lim.lo[i] = sc_from_double(o->lo[i]);
+		lim.hi[i] = sc_from_double(o->hi[i]);
+	}
+	arm_init(a, o->left ? ARM_LEFT : ARM_RIGHT, &d, o->limits ? &lim : NULL);
+}
+
+const char *ikx_name(void)
+{
+	return SC_NAME;
+}
+
+void ikx_limits(const struct ikx_setup *o, double lo[IKX_DOF], double hi[IKX_DOF])
+{
+	struct arm a;
+	int i;
+
+	setup_arm(o, &a);
+	for (i = 0; i < ARM_DOF; i++) {
+		lo[i] = sc_to_double(a.lim.lo[i]);
+		hi[i] = sc_to_double(a.lim.hi[i]);
+	}
+}
+
+void ikx_fk(const struct ikx_setup *o, const double q[IKX_DOF], double out[7])
+{
+	struct arm a;
+	struct dq ee;
+	struct vec3 p;
+	sc_t qs[ARM_DOF];
+	int i;
+
+	setup_arm(o, &a);
+	for (i = 0; i < ARM_DOF; i++)
+		qs[i] = sc_from_double(q[i]);
+	arm_fk(&a, qs, &ee);
+	dq_translation(&ee, &p);
+	out[0] = sc_to_double(p.x);
+	out[1] = sc_to_double(p.y);
+	out[2] = sc_to_double(p.z);
+	out[3] = sc_to_double(ee.r.w);
+	out[4] = sc_to_double(ee.r.x);
+	out[5] = sc_to_double(ee.r.y);
+	out[6] = sc_to_double(ee.r.z);
+}
+
+void ikx_jacobian(const struct ikx_setup *o, const double q[IKX_DOF], double J[6][IKX_DOF])
+{
+	struct arm a;
+	sc_t qs[ARM_DOF], Js[6][ARM_DOF];
+	int i, r;
+
+	setup_arm(o, &a);
+	for (i = 0; i < ARM_DOF; i++)
+		qs[i] = sc_from_double(q[i]);
+	arm_jacobian(&a, qs, Js, NULL);
+	for (r = 0; r < 6; r++)
+		for (i = 0; i < ARM_DOF; i++)
+			J[r][i] = sc_to_double(Js[r][i]);
+}
+
+int ikx_lsq(const double J[6][IKX_DOF], const double V[6], const bool *free, double x[IKX_DOF])
+{
+	sc_t Js[6][ARM_DOF], Vs[6], xs[ARM_DOF];
+	int i, r, rank;
+
+	for (r = 0; r < 6; r++) {
+		for (i = 0; i < ARM_DOF; i++)
+			Js[r][i] = sc_from_double(J[r][i]);
+		Vs[r] = sc_from_double(V[r]);
+	}
+	rank = ik_lsq_step((const sc_t(*)[ARM_DOF])Js, Vs, free, xs);
+	for (i = 0; i < ARM_DOF; i++)
+		x[i] = sc_to_double(xs[i]);
+	return rank;
+}
+
+unsigned ikx_solve(const struct ikx_setup *o, const double p[3], const double r[4], const double *seed,
+		   double q[IKX_DOF], struct ikx_result *res)
+{
+	struct vec3 pp = { sc_from_double(p[0]), sc_from_double(p[1]), sc_from_double(p[2]) };
+	struct quat rr = { sc_from_double(r[0]), sc_from_double(r[1]), sc_from_double(r[2]), sc_from_double(r[3]) };
+	const struct ik_kin *kin = o->matrix ? &ik_kin_mat : &ik_kin_dq;
+	struct arm a;
+	struct ik_opts opts;
+	struct ik_target t;
+	struct ik_result ir;
+	sc_t qs[ARM_DOF], ss[ARM_DOF];
+	int i;
+
+	setup_arm(o, &a);
+	ik_default_opts(&opts);
+	ik_target_set(&t, &pp, &rr);
+	for (i = 0; i < ARM_DOF; i++)
+		ss[i] = seed ? sc_from_double(seed[i]) : 0;
+	if (o->newton) {
+		opts.max_step = 0; /* the paper's plain step */
+		opts.max_iter = 100;
+		ik_newton(&a, kin, &t, ss, &opts, qs, &ir);
+	} else {
+		ik_solve(&a, kin, &t, seed ? ss : NULL, &opts, qs, &ir);
+	}
+	for (i = 0; i < ARM_DOF; i++)
+		q[i] = sc_to_double(qs[i]);
+	res->flags = ir.flags;
+	res->iters = ir.iters;
+	res->evals = ir.evals;
+	res->err_pos = sc_to_double(ir.err.pos);
+	res->err_rot = sc_to_double(ir.err.rot);
+	return ir.flags;
+}
