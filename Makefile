@@ -65,6 +65,8 @@ MODBUS_LIBS = $(shell pkg-config --libs libmodbus 2>/dev/null || echo -lmodbus)
 LWS_LIBS = $(shell pkg-config --libs libwebsockets 2>/dev/null || echo -lwebsockets)
 LO_LIBS = $(shell pkg-config --libs liblo 2>/dev/null || echo -llo)
 DEP_LIBS = $(INIH_LIBS)
+DEP_LIBS += $(HIDAPI_LIBS)
+DEP_LIBS += $(LIBUSB_LIBS)
 LIBS = $(DEP_LIBS) -lpthread -lm
 GW_SRC = $(filter-out src/daemon/main.c,$(wildcard src/wire/*.c src/config/*.c src/trackers/*.c \
 	src/frames/*.c src/publish/*.c src/daemon/*.c))

@@ -654,7 +654,7 @@ static void test_err_key_of_other_type(void **state)
 {
 	expect_text_err(*state, "[source clip]\ntype = replay\nfile = builtin:cmu_141_16.csv\npeople = 2\n",
 			"e.conf:4: [source clip] people: unknown key for type replay",
-			"(known: type, origin, yaw, file, speed, loop, start)", NULL);
+			"(known: type, origin, yaw, file, speed, loop, start, mount_SENSOR)", NULL);
 	expect_text_err(*state, "[output o]\ntype = udp\npath = /tmp/x\n",
 			"e.conf:3: [output o] path: unknown key for type udp",
 			"(known: type, address, port, decimate, avatars)", NULL);
@@ -755,9 +755,9 @@ static void test_err_range(void **state)
 static void test_err_source_type(void **state)
 {
 	expect_text_err(*state, "[daemon]\nrate = 100\n[source s]\npeople = 2\n",
-			"e.conf:4: [source s] type: missing (sim or replay)", NULL);
-	expect_text_err(*state, "[source s]\n\ntype = hydra\n",
-			"e.conf:3: [source s] type: unknown driver 'hydra' (known: sim, replay)", NULL);
+			"e.conf:4: [source s] type: missing (sim, replay, hydra or polhemus)", NULL);
+	expect_text_err(*state, "[source s]\n\ntype = vive\n",
+			"e.conf:3: [source s] type: unknown driver 'vive' (known: sim, replay, hydra, polhemus)", NULL);
 }
 
 static void test_err_replay_file(void **state)

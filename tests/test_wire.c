@@ -180,6 +180,8 @@ static void make_frame(struct wire_frame *f)
 {
 	memset(f, 0, sizeof(*f));
 	rnd_header(&f->h);
+	/* every flag but the one that adds the input block (test_inputs_*) */
+	f->h.flags &= (uint16_t)~WIRE_F_INPUTS;
 	for (int i = 0; i < WIRE_SENSORS; i++) {
 		f->sensor[i].state = (uint8_t)(rnd() * 256);
 		f->sensor[i].age_100us = (uint16_t)(rnd() * 65536);

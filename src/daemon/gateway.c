@@ -238,6 +238,7 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		}
 		memset(&wf.h, 0, sizeof(wf.h));
 		encode_frame(&in, &wf);
+		frame_inputs(pf, &wf); /* buttons and analog values: an input block after the FRAME */
 		if (in.pose && !encode_frame_finite(&wf)) {
 			/* never publish a NaN posture: count, and forget it as a seed */
 			stat_add(&a->st.nan_blocked, 1);
