@@ -146,6 +146,23 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
 # test_alloc counts every allocation made by our code: wrapped at link time
 $(BUILD)/tests/test_alloc: TEST_LDFLAGS = -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free
 
+# The hardware drivers' tests: simulated devices (tests/fake) take the place of
+# every hidapi and libusb function the drivers call, and count the loop
+# thread's allocations.
+FAKE_OBJ = $(patsubst tests/%.c,$(BUILD)/obj/tests/%.o,$(wildcard tests/fake/*.c))
+FAKE_WRAP = hid_init hid_exit hid_enumerate hid_free_enumeration hid_open_path hid_close hid_read_timeout \
+	hid_send_feature_report hid_get_feature_report hid_error \
+	libusb_init libusb_exit libusb_has_capability libusb_hotplug_register_callback \
+	libusb_hotplug_deregister_callback libusb_handle_events_timeout_completed libusb_get_device_list \
+	libusb_free_device_list libusb_get_device_descriptor libusb_get_bus_number libusb_get_device_address \
+	libusb_get_port_numbers libusb_get_active_config_descriptor libusb_free_config_descriptor libusb_open \
+	libusb_close libusb_set_auto_detach_kernel_driver libusb_set_configuration libusb_claim_interface \
+	libusb_release_interface libusb_clear_halt libusb_bulk_transfer \
+	malloc calloc realloc free
+FAKE_TESTS = $(BUILD)/tests/test_hydra $(BUILD)/tests/test_polhemus
+$(FAKE_TESTS): $(FAKE_OBJ)
+$(FAKE_TESTS): TEST_LDFLAGS = $(foreach f,$(FAKE_WRAP),-Wl,--wrap=$(f))
+
 # ---- top-level targets --------------------------------------------------------
 .SECONDARY:
 .PHONY: all test check-core bench install clean run

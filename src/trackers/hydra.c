@@ -74,8 +74,20 @@ struct hydra_codec_st {
 	uint8_t seq;
 	bool tracking[2];
 	double prev[2][3];  /* the previous position of each wand, base frame, mm, hemisphere resolved */
+	int jumps;          /* reports in a row rejected for an impossible jump */
 	uint64_t flips;     /* positions taken as -p */
 };
+
+/*
+ * Plausibility: a hand moves at most a few m/s, 10-40 mm per report; 150
+ * mm per report elapsed (2 m at most) is impossible, so such a report is
+ * garbage. After
+ * HYDRA_MAX_JUMPS of them in a row the wands are taken to really be where
+ * the reports say (continuity was lost): tracking restarts from the sides.
+ */
+#define HYDRA_MAX_STEP_MM 150.0
+#define HYDRA_MAX_GAP_MM 2000.0 /* however many reports were lost (the counter wraps at 256) */
+#define HYDRA_MAX_JUMPS 25
 
 static int16_t le16(const uint8_t *p)
 {
@@ -120,6 +132,7 @@ static void hydra_codec_reset(void *st)
 
 	h->have_seq = false;
 	h->tracking[0] = h->tracking[1] = false;
+	h->jumps = 0;
 }
 
 static double hydra_period(const void *st)
@@ -132,6 +145,9 @@ static int hydra_feed(void *st, const uint8_t *buf, size_t len, device_emit_fn *
 {
 	struct hydra_codec_st *h = st;
 	struct device_sample s[2];
+	double p[2][3];
+	unsigned step = 1;
+	bool jump = false, neg[2] = { false, false };
 
 	if (len != HYDRA_REPORT_LEN) {
 		h->c.malformed++;
@@ -150,48 +166,71 @@ static int hydra_feed(void *st, const uint8_t *buf, size_t len, device_emit_fn *
 		}
 	}
 	if (h->have_seq) {
-		uint8_t step = (uint8_t)(buf[7] - h->seq);
-
+		step = (uint8_t)(buf[7] - h->seq);
 		if (!step) {
 			/* the same report twice: nothing new */
 			h->c.malformed++;
 			return -EINVAL;
 		}
-		h->c.lost += step - 1u;
 	}
+	/* positions, each on its side of the base */
+	for (int w = 0; w < 2; w++) {
+		const uint8_t *b = buf + 8 + 22 * w;
+
+		p[w][0] = le16(b);
+		p[w][1] = le16(b + 2);
+		p[w][2] = le16(b + 4);
+		if (!h->tracking[w]) {
+			/* the known start: the left wand left of the base, the right one right of it */
+			if (w == HYDRA_LEFT ? p[w][0] > 0 : p[w][0] < 0)
+				for (int i = 0; i < 3; i++)
+					p[w][i] = -p[w][i];
+		} else {
+			double dp = 0, dm = 0;
+
+			/* continuity: of p and -p, the one closer to where the wand was */
+			for (int i = 0; i < 3; i++) {
+				dp += (p[w][i] - h->prev[w][i]) * (p[w][i] - h->prev[w][i]);
+				dm += (-p[w][i] - h->prev[w][i]) * (-p[w][i] - h->prev[w][i]);
+			}
+			if (dm < dp) {
+				for (int i = 0; i < 3; i++)
+					p[w][i] = -p[w][i];
+				dp = dm;
+				neg[w] = true;
+			}
+			/* a hand does not move this far in one report: the bytes are not a report */
+			if (sqrt(dp) > fmin(HYDRA_MAX_STEP_MM * step, HYDRA_MAX_GAP_MM))
+				jump = true;
+		}
+	}
+	if (jump) {
+		h->c.malformed++;
+		/* so many in a row that the wands must really be there: start over from the sides */
+		if (++h->jumps >= HYDRA_MAX_JUMPS) {
+			h->tracking[0] = h->tracking[1] = false;
+			h->jumps = 0;
+		}
+		return -EINVAL;
+	}
+	h->jumps = 0;
+	if (h->have_seq)
+		h->c.lost += step - 1u;
 	h->have_seq = true;
 	h->seq = buf[7];
 	for (int w = 0; w < 2; w++) {
 		const uint8_t *b = buf + 8 + 22 * w;
-		double p[3] = { le16(b), le16(b + 2), le16(b + 4) };
 		const struct quat flip = { 0, 1, 0, 0 }; /* Rx(180): base frame (z down) -> tracker frame (z up) */
 		struct quat qb = { le16(b + 6), le16(b + 8), -le16(b + 10), -le16(b + 12) }, qn, qt;
 		struct vec3 pt;
 
-		if (!h->tracking[w]) {
-			/* the known start: the left wand left of the base, the right one right of it */
-			if (w == HYDRA_LEFT ? p[0] > 0 : p[0] < 0)
-				for (int i = 0; i < 3; i++)
-					p[i] = -p[i];
-			h->tracking[w] = true;
-		} else {
-			double dp = 0, dm = 0;
-
-			for (int i = 0; i < 3; i++) {
-				dp += (p[i] - h->prev[w][i]) * (p[i] - h->prev[w][i]);
-				dm += (-p[i] - h->prev[w][i]) * (-p[i] - h->prev[w][i]);
-			}
-			if (dm < dp) {
-				for (int i = 0; i < 3; i++)
-					p[i] = -p[i];
-				h->flips++;
-			}
-		}
+		h->flips += neg[w];
+		h->tracking[w] = true;
 		for (int i = 0; i < 3; i++)
-			h->prev[w][i] = p[i];
+			h->prev[w][i] = p[w][i];
 		quat_normalize(&qb, &qn);
 		quat_mul(&flip, &qn, &qt);
-		pt = (struct vec3){ p[0] * 1e-3, -p[1] * 1e-3, -p[2] * 1e-3 };
+		pt = (struct vec3){ p[w][0] * 1e-3, -p[w][1] * 1e-3, -p[w][2] * 1e-3 };
 		dq_from_rt(&qt, &pt, &s[w].pose);
 		s[w].buttons = hydra_buttons(b[14]);
 		s[w].analog[HYDRA_AN_JOY_X] = (float)(le16(b + 15) / 32768.0);
@@ -297,6 +336,8 @@ struct hydra {
 	char path[PATH_MAX];
 	char port[64];
 	unsigned attempts;    /* mode requests of this connection */
+	char told[PATH_MAX];  /* the node last told about (an open failure): not again every second */
+	int told_errno;
 	uint64_t requests;    /* mode requests in all */
 };
 
@@ -397,6 +438,10 @@ static int hydra_open_dev(struct hydra *h)
 		const char *bad = found[k][h->ctrl_is_data ? 0 : 1].path;
 
 		device_set_status(&h->dev, "Razer Hydra: cannot open %s: %s", bad, e ? strerror(e) : "failed");
+		if (!strcmp(h->told, bad) && h->told_errno == e)
+			return e ? -e : -EIO;
+		snprintf(h->told, sizeof(h->told), "%s", bad);
+		h->told_errno = e;
 		device_note(&h->dev, LOG_ERR,
 			    "[source %s] Razer Hydra: cannot open %s: %s%s", h->dev.t->name, bad,
 			    e ? strerror(e) : "failed",
@@ -407,6 +452,7 @@ static int hydra_open_dev(struct hydra *h)
 	}
 	snprintf(h->path, sizeof(h->path), "%s", found[k][0].path);
 	snprintf(h->port, sizeof(h->port), "%s", found[k][0].port[0] ? found[k][0].port : "?");
+	h->told[0] = '\0';
 	return 0;
 }
 
