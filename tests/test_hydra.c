@@ -33,6 +33,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #define CAPTURE "tests/data/hydra-cmu_141_16.cap"
 #define CLIP "config/clips/cmu_141_16.csv"
@@ -905,6 +906,48 @@ static void test_capture_source_and_mount(void **state)
 	clip_free(&clip);
 }
 
+/* record = FILE: what the device sent, as a capture that plays back the same */
+static void test_record(void **state)
+{
+	static struct gwt t;
+	char conf[2048], path[64], err[256];
+	struct capture cap;
+	int one = 1;
+
+	(void)state;
+	snprintf(path, sizeof(path), "/tmp/avatargw-test-record-%d.cap", (int)getpid());
+	snprintf(conf, sizeof(conf), CONF_HEAD "record = %s\n", path);
+	fake_hid_stepped(true);
+	fake_hid_plug(false);
+	gwt_open(&t, conf);
+	assert_true(gwt_until(&t, requested, &one, 3000) >= 0);
+	for (int i = 0; i < 10; i++) {
+		uint64_t before = ctr_get(&gwt_tracker(&t, "hydra")->st.samples);
+
+		fake_hid_release(1);
+		assert_true(gwt_until(&t, samples_above, &before, 2000) >= 0);
+	}
+	gwt_close(&t);
+	assert_int_equal(capture_load(&cap, path, err, sizeof(err)), 0);
+	unlink(path);
+	assert_int_equal(cap.n, 10);
+	assert_true(cap.timed);
+	for (int i = 0; i < 10; i++) {
+		size_t len;
+		const uint8_t *want = fake_hid_capture_report(i, &len), *got = cap.bytes + cap.rep[i].off;
+
+		assert_int_equal(cap.rep[i].len, 52);
+		/* the device's bytes, its own sequence number in 7 and 29 */
+		for (int b = 0; b < 52; b++)
+			if (b != 7 && b != 29)
+				assert_int_equal(got[b], want[b]);
+		if (i)
+			assert_int_equal((uint8_t)(got[7] - cap.bytes[cap.rep[i - 1].off + 7]), 1);
+		assert_true(cap.rep[i].t >= (i ? cap.rep[i - 1].t : 0));
+	}
+	capture_free(&cap);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -927,6 +970,7 @@ int main(void)
 		cmocka_unit_test_setup_teardown(test_loop_allocates_nothing, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_event_fd, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_capture_source_and_mount, setup, gwt_teardown),
+		cmocka_unit_test_setup_teardown(test_record, setup, gwt_teardown),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

@@ -126,6 +126,9 @@ static const struct key_def keys[] = {
 	{ S_SOURCE, "capture", K_PATH, SRC(capture), 0, 0, 0, "", NULL, NULL, "hydra polhemus",
 	  "play this capture of raw reports (hex, one report per line) instead of reading the device; "
 	  "relative to this file's directory; empty = the device" },
+	{ S_SOURCE, "record", K_PATH, SRC(record), 0, 0, 0, "", NULL, NULL, "hydra polhemus",
+	  "write every raw report read from the device to this capture file, with timestamps (for a bug report "
+	  "or a test; avatargw-decode reads it); relative to this file's directory; empty = none" },
 	{ S_SOURCE, "interface", K_INT, SRC(interface), 0, 0, 255, "0", NULL, NULL, "hydra",
 	  "USB interface number of the 52-byte motion reports" },
 	{ S_SOURCE, "control_interface", K_INT, SRC(control_interface), 0, 0, 255, "1", NULL, NULL, "hydra",

@@ -79,6 +79,7 @@ struct cfg_source {
 	/* hydra, polhemus */
 	char device[CFG_PATH_MAX];  /* auto, or which one: hidraw node (hydra), USB port (polhemus) */
 	char capture[CFG_PATH_MAX]; /* a capture of raw reports to play instead of the device; "" = none */
+	char record[CFG_PATH_MAX];  /* write the raw reports read from the device to this capture; "" = none */
 	int interface;              /* hydra: USB interface of the motion reports */
 	int control_interface;      /* hydra: USB interface that takes the mode feature report */
 	int model;                  /* polhemus: enum cfg_polhemus_model */

@@ -116,7 +116,7 @@ static void drain_notes(struct gateway *g)
 {
 	for (int i = 0; i < g->n_trackers; i++) {
 		struct tracker *t = &g->trk[i];
-		char text[512];
+		char text[600]; /* a device note: DEVICE_NOTE_LEN */
 		int level;
 
 		while (t->drv->note && t->drv->note(t, &level, text, sizeof(text)))

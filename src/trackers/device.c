@@ -117,6 +117,20 @@ int device_start(struct device *d, device_run_fn *run, void *drv, const char *na
 	return 0;
 }
 
+int device_record(struct device *d, const char *path, char *err, size_t errlen)
+{
+	d->rec = fopen(path, "we");
+	if (!d->rec) {
+		int e = errno;
+
+		snprintf(err, errlen, "[source %s] record: %s: %s", d->t->name, path, strerror(e));
+		return -e;
+	}
+	fprintf(d->rec, "# avatargw %s capture of source %s: seconds since the first report, then its bytes\n",
+		d->codec->name, d->t->name);
+	return 0;
+}
+
 void device_close(struct device *d)
 {
 	if (d->started) {
@@ -130,6 +144,9 @@ void device_close(struct device *d)
 	if (d->efd >= 0)
 		close(d->efd);
 	d->efd = -1;
+	if (d->rec)
+		fclose(d->rec);
+	d->rec = NULL;
 	pthread_cond_destroy(&d->cv);
 	pthread_mutex_destroy(&d->mu);
 	free(d->buf);
@@ -234,7 +251,25 @@ static void device_count(struct device *d)
 	d->told = *c;
 }
 
+/* one capture line: the device thread writes it, buffered (the file is flushed when the source closes) */
+static void record_report(struct device *d, uint64_t mono, const uint8_t *buf, size_t len)
+{
+	if (!d->rec_t0)
+		d->rec_t0 = mono;
+	fprintf(d->rec, "%.6f", (double)(mono - d->rec_t0) * 1e-9);
+	for (size_t i = 0; i < len; i++)
+		fprintf(d->rec, " %02x", buf[i]);
+	fputc('\n', d->rec);
+}
+
 int device_feed(struct device *d, const uint8_t *buf, size_t len)
+{
+	if (d->rec)
+		record_report(d, device_mono_ns(), buf, len);
+	return device_feed_quiet(d, buf, len);
+}
+
+int device_feed_quiet(struct device *d, const uint8_t *buf, size_t len)
 {
 	struct feed_ctx f = { d, real_ns(), device_mono_ns() };
 	int n = d->codec->feed(d->codec_st, buf, len, feed_emit, &f);
@@ -329,7 +364,7 @@ void device_play(struct device *d, const struct capture *cap, double speed, bool
 
 			if (!sleep_until(d, t0 + (uint64_t)(at * 1e9)))
 				return;
-			device_feed(d, cap->bytes + r->off, r->len);
+			device_feed_quiet(d, cap->bytes + r->off, r->len);
 		}
 		/* one period after the last report: the next pass starts on the beat */
 		if (!sleep_until(d, t0 + (uint64_t)((cap->timed ? cap->rep[cap->n - 1].t + period : cap->n * period) /

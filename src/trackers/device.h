@@ -36,7 +36,7 @@
 
 #define DEVICE_MAX_SENSORS CFG_MAX_STATIONS
 #define DEVICE_NOTES 16        /* notes kept for the control thread; older ones are dropped (and counted) */
-#define DEVICE_NOTE_LEN 240
+#define DEVICE_NOTE_LEN 512
 
 /* one decoded sample, in the tracker's frame (z up, metres, unit quaternion) */
 struct device_sample {
@@ -104,6 +104,8 @@ struct device {
 	int n_sensors;
 	void *drv;                 /* the driver's own state */
 	device_run_fn *run;        /* the thread's body: returns when device_stopping() */
+	FILE *rec;                 /* record = FILE: every report fed, as a capture line */
+	uint64_t rec_t0;           /* CLOCK_MONOTONIC of the first recorded report */
 
 	pthread_t thread;
 	bool started;
@@ -130,6 +132,8 @@ struct device {
 /* start-up (control thread): the handoff, the codec; 0 or a negative errno with err */
 int device_init(struct device *d, struct tracker *t, const struct device_codec *codec, int n_sensors, char *err,
 		size_t errlen);
+/* record = FILE: opens the capture the device thread writes (control thread, at start-up); 0 or -errno with err */
+int device_record(struct device *d, const char *path, char *err, size_t errlen);
 /* starts the device thread on run (named name, at most 15 characters); 0 or a negative errno */
 int device_start(struct device *d, device_run_fn *run, void *drv, const char *name, char *err, size_t errlen);
 /* asks the thread to stop and joins it (its reads time out within 100 ms), then frees */
@@ -150,8 +154,10 @@ static inline bool device_stopping(struct device *d)
 
 void device_set_link(struct device *d, enum device_link link);
 enum device_link device_link_of(struct device *d);
-/* one report or transfer, read now: decoded, counted, handed to the loop; returns samples */
+/* one report or transfer, read now: recorded (record = FILE), decoded, counted, handed to the loop; returns samples */
 int device_feed(struct device *d, const uint8_t *buf, size_t len);
+/* the same, never recorded: what device_play() feeds */
+int device_feed_quiet(struct device *d, const uint8_t *buf, size_t len);
 /* sleeps, waking early when asked to stop; false when stopping */
 bool device_sleep_ms(struct device *d, int ms);
 /* a message for the log (kept until the control thread takes it) */

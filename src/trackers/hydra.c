@@ -658,6 +658,10 @@ static int hydra_open(struct tracker *t, char *err, size_t errlen)
 			return -EINVAL;
 		}
 		h->use_capture = true;
+	} else if (t->cfg->record[0] && (rc = device_record(&h->dev, t->cfg->record, err, errlen))) {
+		device_close(&h->dev);
+		free(h);
+		return rc;
 	}
 	t->priv = h;
 	rc = device_start(&h->dev, hydra_run, h, "agw-hydra", err, errlen);

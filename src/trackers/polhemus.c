@@ -258,14 +258,33 @@ static int polhemus_feed(void *st, const uint8_t *in, size_t n, device_emit_fn *
 			pos++;
 			continue;
 		}
-		if (p->len - pos < POLHEMUS_HEADER + size)
-			break; /* the rest is in a later transfer */
 		if (r[3] != 'C' && r[3] != 'P') {
-			/* the answer to another command: not ours to read */
+			/*
+			 * The answer to another command (the station map is 4
+			 * bytes): not ours to read. A long one is a corrupt
+			 * header that would swallow good records.
+			 */
+			if (size > 256) {
+				lose_sync(p);
+				p->skipped++;
+				pos++;
+				continue;
+			}
+			if (p->len - pos < POLHEMUS_HEADER + size)
+				break;
 			pos += POLHEMUS_HEADER + size;
 			continue;
 		}
-		if (size != POLHEMUS_PAYLOAD || r[POLHEMUS_RECORD - 1] != ' ') {
+		if (size != POLHEMUS_PAYLOAD) {
+			/* a header look-alike, or not our output list: search on from the next byte */
+			lose_sync(p);
+			p->skipped++;
+			pos++;
+			continue;
+		}
+		if (p->len - pos < POLHEMUS_RECORD)
+			break; /* the rest is in a later transfer */
+		if (r[POLHEMUS_RECORD - 1] != ' ') {
 			/* a header look-alike, or not our output list: search on from the next byte */
 			lose_sync(p);
 			p->skipped++;
@@ -336,6 +355,9 @@ struct polhemus {
 	bool ever_up;
 	char told_fw[64];       /* the port last told to need firmware */
 	uint64_t error_records; /* told so far */
+	int failures;           /* set-ups or streams that failed in a row (notes are spared after the first few) */
+	char told_open[64];     /* the port whose open failure was told (not again every second) */
+	int told_rc;
 };
 
 static void port_of(libusb_device *dev, char *buf, size_t len)
@@ -379,15 +401,18 @@ static int usb_write(struct polhemus *p, const char *cmd)
 static int usb_drain(struct polhemus *p)
 {
 	unsigned char buf[4096];
-	int total = 0;
+	int pipes = 0;
 
+	/* 200 reads at most: a device that never stops talking has not heard P */
 	for (int i = 0; i < 200 && !device_stopping(&p->dev); i++) {
 		int got = 0, rc = libusb_bulk_transfer(p->h, p->ep_in, buf, sizeof(buf), &got, (unsigned)polhemus_timing.drain_ms);
 
-		total += got;
 		if (rc == LIBUSB_ERROR_TIMEOUT && !got)
 			return 0;
 		if (rc == LIBUSB_ERROR_PIPE) {
+			/* one halt is cleared; an endpoint that halts again is stuck */
+			if (pipes++)
+				return rc;
 			libusb_clear_halt(p->h, p->ep_in);
 			continue;
 		}
@@ -495,6 +520,11 @@ static int usb_open(struct polhemus *p)
 	if (rc) {
 		device_set_status(&p->dev, "Polhemus %s on USB port %s: cannot open: %s", pick_pr->name, pick_port,
 				  libusb_error_name(rc));
+		p->h = NULL;
+		if (!strcmp(p->told_open, pick_port) && p->told_rc == rc)
+			return -EACCES;
+		snprintf(p->told_open, sizeof(p->told_open), "%s", pick_port);
+		p->told_rc = rc;
 		device_note(&p->dev, LOG_ERR, "[source %s] Polhemus %s on USB port %s: cannot open: %s%s", p->dev.t->name,
 			    pick_pr->name, pick_port, libusb_strerror(rc),
 			    rc == LIBUSB_ERROR_ACCESS
@@ -503,6 +533,7 @@ static int usb_open(struct polhemus *p)
 		p->h = NULL;
 		return -EACCES;
 	}
+	p->told_open[0] = '\0';
 	/* configuration 1 is the only one; busy means it is set already, which is what we want */
 	rc = libusb_set_configuration(p->h, 1);
 	if (rc && rc != LIBUSB_ERROR_BUSY)
@@ -601,15 +632,20 @@ static int usb_stream(struct polhemus *p)
 			/* the endpoint halted: clear it and go on; a device that keeps halting is reopened */
 			libusb_clear_halt(p->h, p->ep_in);
 			if (++pipes >= polhemus_timing.pipe_limit) {
-				device_note(&p->dev, LOG_ERR, "[source %s] Polhemus %s: endpoint 0x%02x halted %d times in a row: reopening",
-					    p->dev.t->name, p->prod->name, p->ep_in, pipes);
+				if (p->failures < 3)
+					device_note(&p->dev, LOG_ERR,
+						    "[source %s] Polhemus %s: endpoint 0x%02x halted %d times in a row: reopening",
+						    p->dev.t->name, p->prod->name, p->ep_in, pipes);
+				device_set_status(&p->dev, "Polhemus %s on USB port %s: endpoint 0x%02x keeps halting",
+						  p->prod->name, p->port, p->ep_in);
 				return -2;
 			}
 			continue;
 		default:
 			if (++errors >= 3) {
-				device_note(&p->dev, LOG_ERR, "[source %s] Polhemus %s: %s: reopening", p->dev.t->name,
-					    p->prod->name, libusb_strerror(rc));
+				if (p->failures < 3)
+					device_note(&p->dev, LOG_ERR, "[source %s] Polhemus %s: %s: reopening", p->dev.t->name,
+						    p->prod->name, libusb_strerror(rc));
 				return -2;
 			}
 			continue;
@@ -617,13 +653,16 @@ static int usb_stream(struct polhemus *p)
 		if (now - last <= (uint64_t)polhemus_timing.stall_ms * 1000000ull)
 			continue;
 		if (restarts >= polhemus_timing.restarts) {
-			device_note(&p->dev, LOG_ERR, "[source %s] Polhemus %s: no record after %d set-ups: reopening",
-				    p->dev.t->name, p->prod->name, restarts);
+			if (p->failures < 3)
+				device_note(&p->dev, LOG_ERR, "[source %s] Polhemus %s: no record after %d set-ups: reopening",
+					    p->dev.t->name, p->prod->name, restarts);
+			device_set_status(&p->dev, "Polhemus %s on USB port %s: sends nothing", p->prod->name, p->port);
 			return -2;
 		}
 		restarts++;
-		device_note(&p->dev, LOG_WARNING, "[source %s] Polhemus %s: no record for %d ms: setting it up again",
-			    p->dev.t->name, p->prod->name, polhemus_timing.stall_ms);
+		if (p->failures < 3)
+			device_note(&p->dev, LOG_WARNING, "[source %s] Polhemus %s: no record for %d ms: setting it up again",
+				    p->dev.t->name, p->prod->name, polhemus_timing.stall_ms);
 		rc = usb_setup(p);
 		if (rc == LIBUSB_ERROR_NO_DEVICE)
 			return -1;
@@ -694,22 +733,37 @@ static void polhemus_run(struct device *d)
 			continue;
 		}
 		told_missing = false;
-		device_note(d, LOG_INFO, "[source %s] Polhemus %s (0f44:%04x) on USB port %s opened (bulk out 0x%02x, in 0x%02x)",
-			    d->t->name, p->prod->name, p->prod->pid, p->port, p->ep_out, p->ep_in);
+		if (p->failures < 3)
+			device_note(d, LOG_INFO,
+				    "[source %s] Polhemus %s (0f44:%04x) on USB port %s opened (bulk out 0x%02x, in 0x%02x)",
+				    d->t->name, p->prod->name, p->prod->pid, p->port, p->ep_out, p->ep_in);
 		device_set_status(d, "Polhemus %s on USB port %s: setting up", p->prod->name, p->port);
 		rc = usb_setup(p);
 		if (!rc) {
+			uint64_t before = ((const struct device_counts *)d->codec_st)->reports;
+
 			if (p->ever_up)
 				ctr_add(&d->t->st.reconnects, 1);
 			p->ever_up = true;
 			rc = usb_stream(p);
+			if (((const struct device_counts *)d->codec_st)->reports != before)
+				p->failures = 0;
 		} else {
-			device_note(d, LOG_ERR, "[source %s] Polhemus %s: set-up failed: %s", d->t->name, p->prod->name,
-				    libusb_strerror(rc));
+			if (p->failures < 3)
+				device_note(d, LOG_ERR, "[source %s] Polhemus %s: set-up failed: %s%s", d->t->name,
+					    p->prod->name, libusb_strerror(rc),
+					    p->failures == 2 ? " (further failures in a row are not logged)" : "");
+			device_set_status(d, "Polhemus %s on USB port %s: set-up failed: %s", p->prod->name, p->port,
+					  libusb_error_name(rc));
 			rc = rc == LIBUSB_ERROR_NO_DEVICE ? -1 : -2;
 		}
 		device_set_link(d, DEVICE_DOWN);
 		usb_close(p, rc != -1);
+		/* a device that must be reopened is not reopened in a tight loop */
+		if (rc == -2) {
+			p->failures++;
+			device_sleep_ms(d, polhemus_timing.search_ms);
+		}
 	}
 	if (p->hotplug)
 		libusb_hotplug_deregister_callback(p->ctx, p->hp);
@@ -752,6 +806,10 @@ static int polhemus_open(struct tracker *t, char *err, size_t errlen)
 			return -EINVAL;
 		}
 		p->use_capture = true;
+	} else if (t->cfg->record[0] && (rc = device_record(&p->dev, t->cfg->record, err, errlen))) {
+		device_close(&p->dev);
+		free(p);
+		return rc;
 	}
 	t->priv = p;
 	rc = device_start(&p->dev, polhemus_run, p, "agw-polhemus", err, errlen);

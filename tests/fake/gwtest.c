@@ -4,6 +4,8 @@
  */
 #include "fake/gwtest.h"
 
+#include "trackers/device.h"
+
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -191,7 +193,7 @@ void gwt_take_notes(struct gwt *t)
 {
 	for (int i = 0; i < t->g.n_trackers; i++) {
 		struct tracker *tr = &t->g.trk[i];
-		char text[512];
+		char text[DEVICE_NOTE_LEN];
 		int level;
 
 		while (tr->drv->note && tr->drv->note(tr, &level, text, sizeof(text))) {
