@@ -717,8 +717,8 @@ static void polhemus_run(struct device *d)
 		rc = usb_open(p);
 		if (rc == -ENOENT) {
 			if (!told_missing)
-				device_note(d, LOG_WARNING, "[source %s] no Polhemus %s found; waiting for one", d->t->name,
-					    model_names[d->t->cfg->model] + (d->t->cfg->model ? 0 : 4));
+				device_note(d, LOG_WARNING, "[source %s] no Polhemus found (model = %s, device = %s); waiting for one",
+					    d->t->name, model_names[d->t->cfg->model], d->t->cfg->device);
 			if (!p->told_fw[0])
 				device_set_status(d, "no Polhemus%s%s found; waiting (%s)",
 						  strcmp(d->t->cfg->device, "auto") ? " on USB port " : "",
