@@ -948,6 +948,34 @@ static void test_record(void **state)
 	capture_free(&cap);
 }
 
+/*
+ * A reload opens the new configuration's source while the old one still
+ * reads the device, then closes the old one: the device must stay in
+ * motion mode throughout and go back to gamepad mode only at the very end.
+ */
+static void test_reload_keeps_the_mode(void **state)
+{
+	static struct gwt a, b;
+
+	(void)state;
+	fake_hid_plug(false);
+	gwt_open(&a, conf_device);
+	assert_true(gwt_until(&a, hands_ok, NULL, 2000) >= 0);
+	gwt_open(&b, conf_device);
+	assert_true(gwt_until(&b, hands_ok, NULL, 2000) >= 0);
+	gwt_close(&a);
+	for (uint64_t t0 = gwt_ms(); gwt_ms() - t0 < 800;) {
+		gwt_cycle(&b);
+		assert_true(hands_ok(&b, NULL));
+		gwt_sleep_ms(5);
+	}
+	assert_int_equal(stats().gamepad_requests, 0);
+	assert_int_equal(stats().motion_requests, 1);
+	assert_int_equal(ctr_get(&gwt_tracker(&b, "hydra")->st.reconnects), 0);
+	gwt_close(&b);
+	assert_int_equal(stats().gamepad_requests, 1);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -971,6 +999,7 @@ int main(void)
 		cmocka_unit_test_setup_teardown(test_event_fd, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_capture_source_and_mount, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_record, setup, gwt_teardown),
+		cmocka_unit_test_setup_teardown(test_reload_keeps_the_mode, setup, gwt_teardown),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

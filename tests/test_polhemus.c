@@ -878,6 +878,33 @@ static void test_capture_source(void **state)
 	gwt_close(&t);
 }
 
+/* a reload: the new source waits quietly for the old one to let go of the interface */
+static void test_reload_hands_over(void **state)
+{
+	static struct gwt a, b;
+	uint64_t t0;
+	int ms;
+
+	(void)state;
+	fake_usb_plug(0xff20);
+	gwt_open(&a, CONF);
+	assert_true(gwt_until(&a, all_ok, NULL, 2000) >= 0);
+	gwt_open(&b, CONF);
+	gwt_run(&b, 300);
+	assert_int_equal(gwt_state(&b, "polhemus"), TRACKER_FAULTY);
+	gwt_cycle(&a);
+	assert_true(all_ok(&a, NULL));
+	t0 = gwt_ms();
+	gwt_close(&a);
+	ms = gwt_until(&b, all_ok, NULL, 2000);
+	print_message("reload: the new source streams %d ms after the old one closed\n", (int)(gwt_ms() - t0));
+	assert_true(ms >= 0 && gwt_ms() - t0 < 1000);
+	gwt_take_notes(&b);
+	assert_null(strstr(b.notes, "another program"));
+	assert_int_equal(stats().claims, 2);
+	gwt_close(&b);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -903,6 +930,7 @@ int main(void)
 		cmocka_unit_test_setup_teardown(test_list_devices, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_loop_allocates_nothing, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_capture_source, setup, gwt_teardown),
+		cmocka_unit_test_setup_teardown(test_reload_hands_over, setup, gwt_teardown),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

@@ -64,6 +64,48 @@ struct hydra_timing hydra_timing = {
 /* hidapi is not thread-safe for enumeration, opening and closing: one lock for every Hydra source */
 static pthread_mutex_t hydra_hid_lock = PTHREAD_MUTEX_INITIALIZER;
 
+/*
+ * The Hydras this process has open, and how each was found. A reload opens
+ * the new configuration's sources before it closes the old ones: the new
+ * source finds the device in motion mode (the old one put it there) but
+ * must still put it back into gamepad mode in the end, and the old one
+ * must not put it back while the new one reads. So the mode it was found
+ * in belongs to the device, and the last source to close it restores it.
+ * Guarded by hydra_hid_lock.
+ */
+#define HYDRA_OPEN_MAX 8
+
+static struct hydra_open {
+	char path[PATH_MAX];
+	int users;
+	bool found_gamepad;
+} hydra_opens[HYDRA_OPEN_MAX];
+
+/* takes a user of path's entry (a new one when nobody has it); the entry, or NULL when the table is full */
+static struct hydra_open *hydra_open_get(const char *path, bool *shared)
+{
+	struct hydra_open *free_slot = NULL;
+
+	for (int i = 0; i < HYDRA_OPEN_MAX; i++) {
+		struct hydra_open *o = &hydra_opens[i];
+
+		if (o->users && !strcmp(o->path, path)) {
+			o->users++;
+			*shared = true;
+			return o;
+		}
+		if (!o->users && !free_slot)
+			free_slot = o;
+	}
+	*shared = false;
+	if (free_slot) {
+		snprintf(free_slot->path, sizeof(free_slot->path), "%s", path);
+		free_slot->users = 1;
+		free_slot->found_gamepad = false;
+	}
+	return free_slot;
+}
+
 static const char *const hydra_sensors[2] = { "left", "right" };
 
 /* ---- the codec ---------------------------------------------------------------------- */
@@ -331,7 +373,8 @@ struct hydra {
 	bool use_capture;
 	hid_device *data, *ctrl;
 	bool ctrl_is_data;
-	bool found_gamepad;   /* restore gamepad mode when closing */
+	bool found_gamepad;   /* this connection switched it from gamepad mode (or one before it did) */
+	struct hydra_open *open; /* the device's entry in hydra_opens */
 	bool ever_up;
 	char path[PATH_MAX];
 	char port[64];
@@ -380,7 +423,17 @@ static bool hydra_wanted(const char *want, const struct hydra_node pair[2])
 static void hydra_close_dev(struct hydra *h, bool restore)
 {
 	pthread_mutex_lock(&hydra_hid_lock);
-	if (restore && h->found_gamepad && h->ctrl) {
+	if (h->open) {
+		/* another source of this process still reads it (a reload): leave the mode alone */
+		if (--h->open->users)
+			restore = false;
+		else
+			restore = restore && h->open->found_gamepad;
+		h->open = NULL;
+	} else {
+		restore = restore && h->found_gamepad;
+	}
+	if (restore && h->ctrl) {
 		uint8_t rep[HYDRA_FEATURE_LEN];
 
 		/* leave it as we found it: a gamepad for the next program */
@@ -490,8 +543,13 @@ static int hydra_handshake(struct hydra *h, bool first)
 	rc = hydra_await_motion(h, hydra_timing.probe_ms);
 	if (rc || device_stopping(&h->dev))
 		return rc;
-	if (first)
+	if (first) {
 		h->found_gamepad = true;
+		pthread_mutex_lock(&hydra_hid_lock);
+		if (h->open)
+			h->open->found_gamepad = true;
+		pthread_mutex_unlock(&hydra_hid_lock);
+	}
 	for (h->attempts = 1; !device_stopping(&h->dev); h->attempts++) {
 		h->requests++;
 		hydra_feature(rep, true);
@@ -580,7 +638,15 @@ static void hydra_run(struct device *d)
 			continue;
 		}
 		told_missing = false;
-		h->found_gamepad = false;
+		{
+			bool shared;
+
+			pthread_mutex_lock(&hydra_hid_lock);
+			h->open = hydra_open_get(h->path, &shared);
+			/* opened by another source of ours already (a reload): how that one found it counts */
+			h->found_gamepad = shared && h->open->found_gamepad;
+			pthread_mutex_unlock(&hydra_hid_lock);
+		}
 		device_note(d, LOG_INFO, "[source %s] Razer Hydra on %s (USB port %s) opened", d->t->name, h->path,
 			    h->port);
 		for (;;) {

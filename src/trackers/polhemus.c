@@ -358,7 +358,15 @@ struct polhemus {
 	int failures;           /* set-ups or streams that failed in a row (notes are spared after the first few) */
 	char told_open[64];     /* the port whose open failure was told (not again every second) */
 	int told_rc;
+	uint64_t busy_since;    /* CLOCK_MONOTONIC since the interface is held by someone else, 0: it is not */
 };
+
+/*
+ * A reload opens the new sources before it closes the old ones, so for a
+ * moment our own previous source holds the interface: BUSY for this long
+ * is waited out quietly, 100 ms at a time.
+ */
+#define POLHEMUS_BUSY_GRACE_MS 3000
 
 static void port_of(libusb_device *dev, char *buf, size_t len)
 {
@@ -548,8 +556,22 @@ static int usb_open(struct polhemus *p)
 		rc = LIBUSB_ERROR_NOT_FOUND;
 		goto fail;
 	}
+	p->busy_since = 0;
 	return 0;
 fail:
+	if (rc == LIBUSB_ERROR_BUSY) {
+		uint64_t now = device_mono_ns();
+
+		if (!p->busy_since)
+			p->busy_since = now;
+		if (now - p->busy_since < POLHEMUS_BUSY_GRACE_MS * 1000000ull) {
+			device_set_status(&p->dev, "Polhemus %s on USB port %s: waiting for its interface to be released",
+					  pick_pr->name, pick_port);
+			libusb_close(p->h);
+			p->h = NULL;
+			return -EAGAIN;
+		}
+	}
 	device_note(&p->dev, LOG_ERR, "[source %s] Polhemus %s on USB port %s: %s%s", p->dev.t->name, pick_pr->name,
 		    pick_port, libusb_strerror(rc),
 		    rc == LIBUSB_ERROR_BUSY ? " (another program holds it: PiTerm, another avatargw?)" : "");
@@ -729,7 +751,7 @@ static void polhemus_run(struct device *d)
 			continue;
 		}
 		if (rc) {
-			device_sleep_ms(d, 1000);
+			device_sleep_ms(d, rc == -EAGAIN ? 100 : 1000);
 			continue;
 		}
 		told_missing = false;

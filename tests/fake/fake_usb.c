@@ -75,6 +75,7 @@ static struct {
 	uint8_t rest[4096];
 	size_t rest_len;
 	int halt_count;
+	const struct libusb_device_handle *claimed; /* the handle holding interface 0 */
 	struct fake_usb_stats st;
 	struct libusb_context *ctxs;
 } U = { .mu = PTHREAD_MUTEX_INITIALIZER };
@@ -142,6 +143,7 @@ void fake_usb_reset(const char *capture)
 	U.split_at = 0;
 	U.rest_len = 0;
 	U.halt_count = 0;
+	U.claimed = NULL;
 	memset(&U.st, 0, sizeof(U.st));
 	U.st.last_index = -1;
 	pthread_cond_broadcast(&U.cv);
@@ -154,6 +156,7 @@ void fake_usb_plug(uint16_t pid)
 	U.gen++;
 	U.addr = (uint8_t)(U.addr % 120 + 2);
 	U.pid = pid;
+	U.claimed = NULL;
 	U.plugged = true;
 	/* powered up: no set-up, no output */
 	U.f1 = U.u1 = U.olist = U.streaming = false;
@@ -595,6 +598,8 @@ void __wrap_libusb_close(libusb_device_handle *h)
 {
 	pthread_mutex_lock(&U.mu);
 	U.st.closes++;
+	if (U.claimed == h)
+		U.claimed = NULL;
 	pthread_mutex_unlock(&U.mu);
 	free(h);
 }
@@ -622,16 +627,24 @@ int __wrap_libusb_claim_interface(libusb_device_handle *h, int i)
 
 	pthread_mutex_lock(&U.mu);
 	rc = !alive(h) ? LIBUSB_ERROR_NO_DEVICE : i == 0 ? 0 : LIBUSB_ERROR_NOT_FOUND;
-	if (!rc)
+	/* one claim at a time, as the kernel's usbfs does */
+	if (!rc && U.claimed && U.claimed != h)
+		rc = LIBUSB_ERROR_BUSY;
+	if (!rc) {
+		U.claimed = h;
 		U.st.claims++;
+	}
 	pthread_mutex_unlock(&U.mu);
 	return rc;
 }
 
 int __wrap_libusb_release_interface(libusb_device_handle *h, int i)
 {
-	(void)h;
 	(void)i;
+	pthread_mutex_lock(&U.mu);
+	if (U.claimed == h)
+		U.claimed = NULL;
+	pthread_mutex_unlock(&U.mu);
 	return 0;
 }
 
