@@ -48,11 +48,11 @@ static const double base_origin[3] = { 0, 0.5, 1.45 };
 
 static const struct hydra_timing default_timing = { 250, 5000, 500, 200, 25 };
 
-#define CONF_HEAD                                                                                               \
+#define CONF_HEAD_S(stale_ms)                                                                                   \
 	"[daemon]\n"                                                                                            \
 	"rate = 500\n"                                                                                          \
 	"control_socket =\n"                                                                                    \
-	"stale_ms = 100\n"                                                                                      \
+	"stale_ms = " stale_ms "\n"                                                                             \
 	"[avatar a]\n"                                                                                          \
 	"head = clip/head\n"                                                                                    \
 	"left_hand = hydra/left\n"                                                                              \
@@ -65,8 +65,12 @@ static const struct hydra_timing default_timing = { 250, 5000, 500, 200, 25 };
 	"origin = 0 0.5 1.45\n"                                                                                 \
 	"yaw = -20\n"
 
+#define CONF_HEAD CONF_HEAD_S("100")
+
 /* the head from a replayed clip, the hands from the Hydra; more hydra keys may follow */
 static const char conf_device[] = CONF_HEAD;
+/* for the tests that step through reports: a slow machine must not make samples STALE meanwhile */
+static const char conf_stepped[] = CONF_HEAD_S("5000");
 
 static int setup(void **state)
 {
@@ -468,7 +472,7 @@ static void test_published_poses_and_inputs(void **state)
 	assert_int_equal(clip_load(&clip, CLIP), 0);
 	fake_hid_stepped(true);
 	fake_hid_plug(false);
-	gwt_open(&t, conf_device);
+	gwt_open(&t, conf_stepped);
 	/* the driver probes, finds gamepad mode, sends the motion-mode request to interface 1 */
 	assert_true(gwt_until(&t, requested, &one, 3000) >= 0);
 	for (int i = 0; i < fake_hid_capture_count(); i++) {

@@ -51,11 +51,11 @@ static const double src_origin[3] = { 0.1, 0.6, 2.2 };
 
 static const struct polhemus_timing default_timing = { 50, 500, 200, 2, 3 };
 
-#define CONF                                                                                                    \
+#define CONF_S(stale_ms)                                                                                        \
 	"[daemon]\n"                                                                                            \
 	"rate = 500\n"                                                                                          \
 	"control_socket =\n"                                                                                    \
-	"stale_ms = 100\n"                                                                                      \
+	"stale_ms = " stale_ms "\n"                                                                             \
 	"[avatar a]\n"                                                                                          \
 	"person = polhemus\n"                                                                                   \
 	"[source polhemus]\n"                                                                                   \
@@ -64,6 +64,10 @@ static const struct polhemus_timing default_timing = { 50, 500, 200, 2, 3 };
 	"yaw = 30\n"                                                                                            \
 	"model = liberty_hs\n"                                                                                  \
 	"hemisphere = 0 0 1\n"
+
+#define CONF CONF_S("100")
+/* for the tests that step through frames: a slow machine must not make samples STALE meanwhile */
+#define CONF_STEPPED CONF_S("5000")
 
 static int setup(void **state)
 {
@@ -486,7 +490,7 @@ static void test_setup_and_published_poses(void **state)
 	assert_int_equal(clip_load(&clip, CLIP), 0);
 	fake_usb_stepped(true);
 	fake_usb_plug(0xff20);
-	gwt_open(&t, CONF);
+	gwt_open(&t, CONF_STEPPED);
 	assert_true(gwt_until(&t, set_up, &one, 3000) >= 0);
 	/* stop, binary, centimetres, the hemisphere, the output list, continuous: exactly these */
 	assert_string_equal(stats().commands, "P|F1|U1|H*,0,0,1|O*,2,7,9,0|C|");
@@ -677,7 +681,7 @@ static void test_split_transfers(void **state)
 	(void)state;
 	fake_usb_stepped(true);
 	fake_usb_plug(0xff20);
-	gwt_open(&t, CONF);
+	gwt_open(&t, CONF_STEPPED);
 	assert_true(gwt_until(&t, set_up, &one, 3000) >= 0);
 	for (size_t c = 0; c < sizeof(cuts) / sizeof(cuts[0]); c++) {
 		fake_usb_split(cuts[c]);

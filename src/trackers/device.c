@@ -163,7 +163,6 @@ int device_poll(struct device *d, const struct tracker_clock *now)
 	const struct device_snap *snap;
 	int n = 0, link;
 
-	(void)now;
 	if (d->efd >= 0) {
 		uint64_t v;
 
@@ -182,7 +181,12 @@ int device_poll(struct device *d, const struct tracker_clock *now)
 
 		if (!delta)
 			continue;
-		tracker_put(t, i, &sl->s.pose, sl->t_ns, sl->arrival_ns);
+		/*
+		 * The device thread may have read it after this cycle read its clock:
+		 * the loop takes it in now, never later (ages and staleness are
+		 * differences with now).
+		 */
+		tracker_put(t, i, &sl->s.pose, sl->t_ns, sl->arrival_ns < now->mono_ns ? sl->arrival_ns : now->mono_ns);
 		/* samples that came and went between two polls count too */
 		if (delta > 1)
 			ctr_add(&t->st.samples, delta - 1);
