@@ -78,6 +78,8 @@ DEP_LIBS += $(MODBUS_LIBS)
 DEP_LIBS += $(LO_LIBS)
 DEP_LIBS += $(LWS_LIBS)
 DEP_LIBS += $(ZLIB_LIBS)
+DEP_LIBS += $(HIDAPI_LIBS)
+DEP_LIBS += $(LIBUSB_LIBS)
 LIBS = $(DEP_LIBS) -lpthread -lm
 GW_SRC = $(filter-out src/daemon/main.c,$(wildcard src/wire/*.c src/config/*.c src/trackers/*.c \
 	src/frames/*.c src/publish/*.c src/record/*.c src/daemon/*.c))
@@ -203,6 +205,23 @@ $(BUILD)/obj/tests/test_fixq.o: TEST_CFLAGS = $(SC_q) -Itools
 $(BUILD)/tests/test_fixq: $(BUILD)/obj/tests/test_fixq.o $(QS_OBJ) $(IKX_OBJ) $(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
 	@mkdir -p $(dir $@)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) $(LIBS)
+
+# The hardware drivers' tests: simulated devices (tests/fake) take the place of
+# every hidapi and libusb function the drivers call, and count the loop
+# thread's allocations.
+FAKE_OBJ = $(patsubst tests/%.c,$(BUILD)/obj/tests/%.o,$(wildcard tests/fake/*.c))
+FAKE_WRAP = hid_init hid_exit hid_enumerate hid_free_enumeration hid_open_path hid_close hid_read_timeout \
+	hid_send_feature_report hid_get_feature_report hid_error \
+	libusb_init libusb_exit libusb_has_capability libusb_hotplug_register_callback \
+	libusb_hotplug_deregister_callback libusb_handle_events_timeout_completed libusb_get_device_list \
+	libusb_free_device_list libusb_get_device_descriptor libusb_get_bus_number libusb_get_device_address \
+	libusb_get_port_numbers libusb_get_active_config_descriptor libusb_free_config_descriptor libusb_open \
+	libusb_close libusb_set_auto_detach_kernel_driver libusb_set_configuration libusb_claim_interface \
+	libusb_release_interface libusb_clear_halt libusb_bulk_transfer \
+	malloc calloc realloc free
+FAKE_TESTS = $(BUILD)/tests/test_hydra $(BUILD)/tests/test_polhemus
+$(FAKE_TESTS): $(FAKE_OBJ)
+$(FAKE_TESTS): TEST_LDFLAGS = $(foreach f,$(FAKE_WRAP),-Wl,--wrap=$(f))
 
 # ---- top-level targets --------------------------------------------------------
 .SECONDARY:

@@ -59,8 +59,10 @@ awk '
 	/^(; ?)?\[[a-z]+( [^]]*)?\][ \t]*$/ {
 		kind = $0; sub(/^(; ?)?\[/, "", kind); sub(/[] ].*$/, "", kind); next
 	}
-	/^(; ?)?[a-z][a-z0-9_]*[ \t]*=/ {
+	/^(; ?)?[a-z][a-z0-9_.]*[ \t]*=/ {
 		key = $0; sub(/^(; ?)?/, "", key); sub(/[ \t]*=.*$/, "", key)
+		# one key per sensor: mount_head, mount_p0.head ... are the key mount_SENSOR
+		if (key ~ /^mount_./) key = "mount_SENSOR"
 		print (kind == "" ? "(none)" : kind) " " key " " FNR
 	}
 ' "$conf" >"$tmp/lines"

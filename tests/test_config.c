@@ -563,6 +563,89 @@ static void test_values_sim_source(void **state)
 	assert_string_equal(c->source[1].name, "right");
 }
 
+static void test_values_hardware_sources(void **state)
+{
+	struct fx *f = *state;
+	const struct config *c = load_text_ok(f, "[source h]\n"
+						 "type = hydra\n"
+						 "device = /dev/hydra\n"
+						 "interface = 2\n"
+						 "control_interface = 2\n"
+						 "record = /tmp/h.cap\n"
+						 "mount_left = 0 0.04 0\n"
+						 "mount_right = 0.01 0 0 0 0 0 2\n"
+						 "[source p]\n"
+						 "type = polhemus\n"
+						 "model = patriot\n"
+						 "device = 1-4.2\n"
+						 "sensors = head - right_hand\n"
+						 "hemisphere = 0 0 -1\n"
+						 "[source q]\n"
+						 "type = polhemus\n"
+						 "[avatar a]\nhead = p/head\nleft_hand = h/left\nright_hand = p/right_hand\n");
+	const struct cfg_source *h = &c->source[0], *p = &c->source[1], *q = &c->source[2];
+
+	assert_int_equal(h->driver, trackers_find("hydra"));
+	assert_string_equal(h->device, "/dev/hydra");
+	assert_int_equal(h->hid_interface, 2);
+	assert_int_equal(h->control_interface, 2);
+	assert_string_equal(h->record, "/tmp/h.cap");
+	assert_string_equal(h->capture, "");
+	assert_int_equal(h->n_mounts, 2);
+	assert_string_equal(h->mount[0].sensor, "left");
+	assert_near(h->mount[0].p[1], 0.04, 0);
+	assert_near(h->mount[0].q[0], 1, 0);
+	/* the rotation is normalised: 0 0 0 2 is a half turn about z */
+	assert_string_equal(h->mount[1].sensor, "right");
+	assert_near(h->mount[1].q[0], 0, 0);
+	assert_near(h->mount[1].q[3], 1, 0);
+	assert_int_equal(p->model, CFG_PH_PATRIOT);
+	assert_string_equal(p->device, "1-4.2");
+	assert_near(p->hemisphere[2], -1, 0);
+	/* station 2 skipped: two sensors */
+	assert_int_equal(trackers_table[p->driver]->sensor_count(p), 2);
+	assert_int_equal(tracker_sensor_lookup(p, "right_hand"), 1);
+	assert_int_equal(c->avatar[0].sensor[2].sensor, 1);
+	/* defaults */
+	assert_string_equal(q->device, "auto");
+	assert_int_equal(q->model, CFG_PH_AUTO);
+	assert_string_equal(q->stations, "head left_hand right_hand");
+	assert_near(q->hemisphere[0], 1, 0);
+	assert_int_equal(c->source[0].hid_interface, 2);
+	assert_has(print_config(f), "mount_right = 0.01 0 0 0 0 0 1    ; e.conf:8\n");
+}
+
+static void test_err_hardware_sources(void **state)
+{
+	expect_text_err(*state, "[source h]\ntype = hydra\nmount_wrist = 0 0 0\n",
+			"e.conf:3: [source h] mount_wrist: the source has no sensor 'wrist' (it has: left, right)", NULL);
+	expect_text_err(*state, "[source h]\ntype = hydra\nmount_left = 0 0\n",
+			"e.conf:3: [source h] mount_left: '0 0' is not x y z or x y z qw qx qy qz", NULL);
+	expect_text_err(*state, "[source h]\ntype = hydra\nmount_left = 0 0 0 0 0 0 0\n",
+			"e.conf:3: [source h] mount_left: the rotation qw qx qy qz is zero", NULL);
+	expect_text_err(*state, "[source h]\ntype = hydra\nmount_left = 20 0 0\n",
+			"e.conf:3: [source h] mount_left: 20 is out of range [-10, 10] m", NULL);
+	expect_text_err(*state, "[source h]\ntype = hydra\nmodel = liberty\n",
+			"e.conf:3: [source h] model: unknown key for type hydra", NULL);
+	expect_text_err(*state, "[source p]\ntype = polhemus\nmodel = fastrak\n",
+			"e.conf:3: [source p] model: 'fastrak' is not one of: auto, liberty, liberty_hs, patriot, "
+			"patriot_hs", NULL);
+	expect_text_err(*state, "[source p]\ntype = polhemus\nsensors = a b a\n",
+			"e.conf:3: [source p] sensors: 'a' named twice", NULL);
+	expect_text_err(*state, "[source p]\ntype = polhemus\nsensors = - -\n",
+			"e.conf:3: [source p] sensors: no sensor named", NULL);
+	expect_text_err(*state, "[source p]\ntype = polhemus\nsensors = a/b\n",
+			"e.conf:3: [source p] sensors: 'a/b' is not a valid sensor name", NULL);
+	expect_text_err(*state, "[source p]\ntype = polhemus\nsensors = 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17\n",
+			"e.conf:3: [source p] sensors: more than 16 names", NULL);
+	expect_text_err(*state, "[source p]\ntype = polhemus\ncapture = /nonexistent.cap\n",
+			"e.conf:3: [source p] capture /nonexistent.cap: No such file or directory", NULL);
+	expect_text_err(*state, "[source p]\ntype = polhemus\n[avatar a]\nperson = p\nsensors = x\n",
+			"e.conf:5: [avatar a] sensors: unknown key", NULL);
+	expect_text_err(*state, "[source s]\ntype = sim\nmount_p1.head = 0 0 0\n",
+			"e.conf:3: [source s] mount_p1.head: the source has no sensor 'p1.head'", NULL);
+}
+
 static void test_values_avatar(void **state)
 {
 	struct fx *f = *state;
@@ -794,7 +877,7 @@ static void test_err_key_of_other_type(void **state)
 {
 	expect_text_err(*state, "[source clip]\ntype = replay\nfile = builtin:cmu_141_16.csv\npeople = 2\n",
 			"e.conf:4: [source clip] people: unknown key for type replay",
-			"(known: type, origin, yaw, sample_rate, file, speed, loop, start, step, interpolate)", NULL);
+			"(known: type, origin, yaw, sample_rate, file, speed, loop, start, step, interpolate, mount_SENSOR)", NULL);
 	expect_text_err(*state, "[output o]\ntype = udp\npath = /tmp/x\n",
 			"e.conf:3: [output o] path: unknown key for type udp",
 			"(known: type, address, port, gso, decimate, avatars)", NULL);
@@ -895,9 +978,9 @@ static void test_err_range(void **state)
 static void test_err_source_type(void **state)
 {
 	expect_text_err(*state, "[daemon]\nrate = 100\n[source s]\npeople = 2\n",
-			"e.conf:4: [source s] type: missing (sim or replay)", NULL);
-	expect_text_err(*state, "[source s]\n\ntype = hydra\n",
-			"e.conf:3: [source s] type: unknown driver 'hydra' (known: sim, replay, ", NULL);
+			"e.conf:4: [source s] type: missing (sim, replay, modbus, can, hydra or polhemus)", NULL);
+	expect_text_err(*state, "[source s]\n\ntype = vive\n",
+			"e.conf:3: [source s] type: unknown driver 'vive' (known: sim, replay, modbus, can, hydra, polhemus)", NULL);
 }
 
 static void test_err_replay_file(void **state)
@@ -1684,6 +1767,8 @@ int main(void)
 		T(test_values_replay_modes),
 		T(test_replay_recording),
 		T(test_values_sim_source),
+		T(test_values_hardware_sources),
+		T(test_err_hardware_sources),
 		T(test_values_avatar),
 		T(test_values_outputs),
 		T(test_defaults),

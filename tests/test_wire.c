@@ -180,6 +180,8 @@ static void make_frame(struct wire_frame *f)
 {
 	memset(f, 0, sizeof(*f));
 	rnd_header(&f->h);
+	/* every flag but the one that adds the input block (test_inputs_*) */
+	f->h.flags &= (uint16_t)~WIRE_F_INPUTS;
 	for (int i = 0; i < WIRE_SENSORS; i++) {
 		f->sensor[i].state = (uint8_t)(rnd() * 256);
 		f->sensor[i].age_100us = (uint16_t)(rnd() * 65536);
@@ -487,6 +489,99 @@ static void test_frame_golden_header(void **state)
 	assert_memory_equal(buf + 220, "\x00\x00\xc0\x3f", 4); /* chest p.x = 1.5f */
 	assert_memory_equal(buf + 496, "\x00\x00\x80\xbf", 4); /* l_hand q.z = -1.0f, the last bytes */
 	assert_guard(buf, len);
+}
+
+/* ---- the input block ------------------------------------------------------------------ */
+
+static void make_inputs(struct wire_frame *f)
+{
+	f->h.flags |= WIRE_F_INPUTS;
+	f->in.present = 1u << WIRE_S_LEFT_HAND | 1u << WIRE_S_RIGHT_HAND;
+	f->in.buttons[WIRE_S_LEFT_HAND] = 0x21;
+	f->in.buttons[WIRE_S_RIGHT_HAND] = 0x44;
+	f->in.analog[WIRE_S_LEFT_HAND][0] = -0.5f;
+	f->in.analog[WIRE_S_LEFT_HAND][2] = 1.0f;
+	f->in.analog[WIRE_S_RIGHT_HAND][1] = 0.25f;
+}
+
+/* the block at offset 500 as docs/PROTOCOL.md lays it out, the rest of the FRAME unchanged */
+static void test_inputs_golden_layout(void **state)
+{
+	struct wire_frame f, g;
+	uint8_t buf[BUF_LEN], plain[BUF_LEN];
+	size_t len, plain_len;
+
+	(void)state;
+	rng_seed(30);
+	make_frame(&f);
+	plain_len = wire_encode_frame(&f, plain);
+	make_inputs(&f);
+	memset(buf, GUARD, sizeof(buf));
+	len = wire_encode_frame(&f, buf);
+	assert_int_equal(len, WIRE_FRAME_LEN + WIRE_INPUTS_LEN);
+	assert_int_equal(len, 564);
+	assert_guard(buf, len);
+	assert_int_equal(buf[8] | buf[9] << 8, 524); /* payload_len */
+	assert_true((buf[10] | buf[11] << 8) & 0x0010);
+	/* every byte of the first 500 but the lengths and flags is what the plain FRAME had */
+	assert_memory_equal(buf + 12, plain + 12, plain_len - 12);
+	assert_int_equal(buf[500], 0x06);		       /* present: left and right hand */
+	assert_int_equal(buf[501], 4);			       /* n_analog */
+	assert_memory_equal(buf + 502, "\x00\x00", 2);	       /* reserved */
+	assert_memory_equal(buf + 504, "\0\0\0\0", 4);	       /* head: buttons 0 */
+	assert_memory_equal(buf + 524, "\x21\0\0\0", 4);	       /* left hand buttons */
+	assert_memory_equal(buf + 528, "\x00\x00\x00\xbf", 4);   /* left joystick x -0.5 */
+	assert_memory_equal(buf + 536, "\x00\x00\x80\x3f", 4);   /* left trigger 1.0 */
+	assert_memory_equal(buf + 544, "\x44\0\0\0", 4);	       /* right hand buttons */
+	assert_memory_equal(buf + 552, "\x00\x00\x80\x3e", 4);   /* right joystick y 0.25 */
+	memset(&g, 0x5a, sizeof(g));
+	assert_int_equal(wire_decode_frame(buf, len, &g), 0);
+	assert_frame_same(&g, &f);
+	assert_int_equal(g.in.present, f.in.present);
+	assert_memory_equal(g.in.buttons, f.in.buttons, sizeof(f.in.buttons));
+	assert_memory_equal(g.in.analog, f.in.analog, sizeof(f.in.analog));
+	/* without the flag: no block, and the decoder says so */
+	memset(&g, 0x5a, sizeof(g));
+	assert_int_equal(wire_decode_frame(plain, plain_len, &g), 0);
+	assert_false(g.h.flags & WIRE_F_INPUTS);
+	assert_int_equal(g.in.present, 0);
+	assert_int_equal(g.in.buttons[WIRE_S_LEFT_HAND], 0);
+	assert_true(g.in.analog[WIRE_S_RIGHT_HAND][3] == 0.0f);
+}
+
+static void test_inputs_errors_and_extension(void **state)
+{
+	struct wire_frame f, g;
+	uint8_t buf[BUF_LEN], ext[BUF_LEN];
+	size_t len;
+
+	(void)state;
+	rng_seed(31);
+	make_frame(&f);
+	make_inputs(&f);
+	len = wire_encode_frame(&f, buf);
+	/* the flag without the whole block: short */
+	put16(buf + 8, (uint16_t)(len - WIRE_HEADER_LEN - 1));
+	assert_int_equal(wire_decode_frame(buf, len - 1, &g), -WIRE_ESHORT);
+	put16(buf + 8, FRAME_PAYLOAD);
+	assert_int_equal(wire_decode_frame(buf, FRAME_LEN, &g), -WIRE_ESHORT);
+	put16(buf + 8, (uint16_t)(len - WIRE_HEADER_LEN));
+	/* fewer analog values than this revision's: an error */
+	buf[501] = 3;
+	assert_int_equal(wire_decode_frame(buf, len, &g), -WIRE_ECOUNT);
+	/* a later revision with 6 values per sensor: the first 4 are read, the rest skipped */
+	memcpy(ext, buf, 504);
+	ext[501] = 6;
+	for (int i = 0; i < WIRE_SENSORS; i++) {
+		uint8_t *e = ext + 504 + 28 * i;
+
+		memcpy(e, buf + 504 + 20 * i, 20);
+		memset(e + 20, 0x7f, 8);
+	}
+	put16(ext + 8, (uint16_t)(504 + 28 * WIRE_SENSORS - WIRE_HEADER_LEN));
+	assert_int_equal(wire_decode_frame(ext, 504 + 28 * WIRE_SENSORS, &g), 0);
+	assert_memory_equal(g.in.buttons, f.in.buttons, sizeof(f.in.buttons));
+	assert_memory_equal(g.in.analog, f.in.analog, sizeof(f.in.analog));
 }
 
 /* the DESCRIBE's layout at the offsets of docs/PROTOCOL.md */
@@ -960,6 +1055,8 @@ int main(void)
 		cmocka_unit_test(test_describe_worst_case_fits),
 		cmocka_unit_test(test_frame_golden_header),
 		cmocka_unit_test(test_describe_golden_layout),
+		cmocka_unit_test(test_inputs_golden_layout),
+		cmocka_unit_test(test_inputs_errors_and_extension),
 		cmocka_unit_test(test_error_short),
 		cmocka_unit_test(test_error_magic),
 		cmocka_unit_test(test_error_version),

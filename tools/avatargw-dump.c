@@ -215,7 +215,7 @@ static const char *dump_state_name(uint8_t state)
 
 static void dump_json_flags(uint16_t flags)
 {
-	static const char *const names[] = { "STALE", "UNREACHED", "HELD", "NEW_SAMPLE" };
+	static const char *const names[] = { "STALE", "UNREACHED", "HELD", "NEW_SAMPLE", "INPUTS" };
 	bool first = true;
 
 	putchar('[');
@@ -279,7 +279,24 @@ static void dump_print_frame(const struct wire_frame *f)
 		dump_json_fv(f->segment[i].q, 4);
 		putchar('}');
 	}
-	fputs("}}\n", stdout);
+	putchar('}');
+	if (h->flags & WIRE_F_INPUTS) {
+		bool first = true;
+
+		/* the sensors with buttons and analog values (a Hydra wand: joystick x, y, trigger) */
+		fputs(",\"inputs\":[", stdout);
+		for (int i = 0; i < WIRE_SENSORS; i++) {
+			if (!(f->in.present & 1u << i))
+				continue;
+			printf("%s{\"sensor\":\"%s\",\"buttons\":%" PRIu32 ",\"analog\":", first ? "" : ",",
+			       wire_sensor_names[i], f->in.buttons[i]);
+			dump_json_fv(f->in.analog[i], WIRE_ANALOG);
+			putchar('}');
+			first = false;
+		}
+		putchar(']');
+	}
+	fputs("}\n", stdout);
 }
 
 static void dump_print_describe(const struct wire_describe *d)

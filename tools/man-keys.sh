@@ -119,6 +119,8 @@ function kind_text(k, w) {
 	if (k == "K_SENSOR") return "SOURCE/SENSOR"
 	if (k == "K_PERSON") return "SOURCE or SOURCE/PREFIX"
 	if (k == "K_LIST") return "list of avatar names, or all"
+	if (k == "K_MOUNT") return "x y z, optionally followed by qw qx qy qz"
+	if (k == "K_NAMES") return "sensor names separated by spaces, - for none"
 	return ""
 }
 BEGIN {

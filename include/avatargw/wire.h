@@ -41,6 +41,7 @@ enum wire_flag {
 	WIRE_F_UNREACHED = 1u << 1, /* an arm's target was out of reach or invalid: closest posture */
 	WIRE_F_HELD = 1u << 2,      /* no valid head: the previous frame's posture, repeated */
 	WIRE_F_NEW_SAMPLE = 1u << 3, /* a sensor sample arrived since the previous frame */
+	WIRE_F_INPUTS = 1u << 4,    /* the FRAME ends with an input block (buttons, analog values) */
 };
 
 /* per-sensor state in a FRAME */
@@ -110,12 +111,34 @@ struct wire_arm_result {
 	float pos_err;     /* hand position residual, metres */
 };
 
+#define WIRE_ANALOG 4       /* analog values per sensor in an input block */
+#define WIRE_FRAME_LEN 500   /* a FRAME without input block */
+#define WIRE_INPUTS_LEN 64   /* the input block that follows it when WIRE_F_INPUTS is set */
+
+/*
+ * Buttons and analog values of the sensors that have them (a Razer Hydra
+ * wand: buttons, joystick x and y, trigger; see docs/TRACKERS.md for each
+ * driver's meaning of the bits and values). Sent after the FRAME's other
+ * fields when the header's flags have WIRE_F_INPUTS.
+ */
+struct wire_inputs {
+	uint8_t present;                 /* bit i: sensor i's buttons and analog values are current */
+	uint32_t buttons[WIRE_SENSORS];  /* bit k: button k pressed */
+	float analog[WIRE_SENSORS][WIRE_ANALOG]; /* -1..1 (axes), 0..1 (triggers), 0 when unused */
+};
+
 struct wire_frame {
 	struct wire_header h;
 	struct wire_sensor_sample sensor[WIRE_SENSORS];
 	struct wire_arm_result arm[WIRE_ARMS];
 	float joint[WIRE_JOINTS];               /* radians, NaN = unknown */
 	struct wire_pose segment[WIRE_SEGMENTS]; /* world */
+	/*
+	 * Encoded only when h.flags has WIRE_F_INPUTS; the decoder fills it
+	 * from the message, or zeroes it and clears the flag when the message
+	 * has no input block.
+	 */
+	struct wire_inputs in;
 };
 
 struct wire_joint_desc {
@@ -158,7 +181,9 @@ const char *wire_strerror(int err);
 
 /*
  * Encoders: write into buf (at least WIRE_MAX_MSG bytes), fill in the
- * header's lengths, counts and type, and return the message length.
+ * header's lengths, counts and type, and return the message length. A
+ * FRAME is WIRE_FRAME_LEN bytes, WIRE_FRAME_LEN + WIRE_INPUTS_LEN with an
+ * input block (h.flags & WIRE_F_INPUTS).
  */
 size_t wire_encode_frame(const struct wire_frame *f, uint8_t *buf);
 size_t wire_encode_describe(const struct wire_describe *d, uint8_t *buf);

@@ -49,6 +49,8 @@ enum kind {
 	K_SENSOR,  /* SOURCE/SENSOR */
 	K_PERSON,  /* SOURCE[/PREFIX]: head, left_hand, right_hand at once */
 	K_LIST,    /* avatar names, or all */
+	K_MOUNT,   /* mount_SENSOR: x y z [qw qx qy qz], one key per sensor */
+	K_NAMES,   /* sensor names separated by spaces, "-" for none */
 };
 
 static const char *const e_mode[] = { "deadline", "events", NULL };
@@ -62,6 +64,7 @@ static const char *const e_regfmt[] = { "int16", "uint16", "int32", "uint32", "f
 static const char *const e_ori[] = { "rotvec", "quat_wxyz", "quat_xyzw", "rpy", "none", NULL };
 static const char *const e_quat[] = { "wxyz", "xyzw", NULL };
 static const char *const e_interp[] = { "none", "linear", "catmull-rom", "natural", NULL };
+static const char *const e_model[] = { "auto", "liberty", "liberty_hs", "patriot", "patriot_hs", NULL };
 
 struct key_def {
 	int sect;
@@ -120,7 +123,7 @@ static const struct key_def keys[] = {
 	  "keep at most this many samples per second of each sensor (the paper's low-rate storage), 0 = every sample" },
 
 	{ S_SOURCE, "type", K_STR, 0, 0, 0, 0, NULL, NULL, NULL, NULL,
-	  "the driver: sim, replay, modbus or can" },
+	  "the driver: sim, replay, hydra (Razer Hydra), polhemus (Liberty, Liberty HS, Patriot), modbus or can" },
 	{ S_SOURCE, "origin", K_VEC3, SRC(origin), 0, -1e4, 1e4, "0 0 0", "m", NULL, NULL,
 	  "position of the tracker's frame in the world (x y z)" },
 	{ S_SOURCE, "yaw", K_DEG, SRC(yaw), 0, -360, 360, "0", "deg", NULL, NULL,
@@ -136,10 +139,10 @@ static const struct key_def keys[] = {
 	{ S_SOURCE, "file", K_PATH, SRC(file), 0, 0, 0, NULL, NULL, NULL, "replay",
 	  "a recording of avatargw (record_dir) or a sensor CSV (columns t, head_x..head_qz, lhand_*, rhand_*), "
 	  "relative to this file's directory; builtin:NAME for a clip compiled into the daemon" },
-	{ S_SOURCE, "speed", K_DOUBLE, SRC(speed), 0, 0.01, 100, "1", NULL, NULL, "replay",
-	  "playback speed, 1 = real time" },
-	{ S_SOURCE, "loop", K_BOOL, SRC(loop), 0, 0, 0, "yes", NULL, NULL, "replay",
-	  "start again at the end; otherwise the sensors go STALE" },
+	{ S_SOURCE, "speed", K_DOUBLE, SRC(speed), 0, 0.01, 100, "1", NULL, NULL, "replay hydra polhemus",
+	  "playback speed of the recording or capture, 1 = real time" },
+	{ S_SOURCE, "loop", K_BOOL, SRC(loop), 0, 0, 0, "yes", NULL, NULL, "replay hydra polhemus",
+	  "start the recording or capture again at its end; otherwise the source ENDS and its sensors go STALE" },
 	{ S_SOURCE, "start", K_DOUBLE, SRC(start), 0, 0, 1e6, "0", "s", NULL, "replay",
 	  "begin this far into the recording" },
 	{ S_SOURCE, "address", K_STR, SRC(address), 0, 0, 0, NULL, NULL, NULL, "modbus",
@@ -191,6 +194,28 @@ static const struct key_def keys[] = {
 	{ S_SOURCE, "interpolate", K_ENUM, SRC(interpolate), 0, 0, 0, "none", NULL, e_interp, "replay",
 	  "treat the samples as keyframes and rebuild sample_rate samples per second between them: "
 	  "linear (and slerp), catmull-rom or natural (cubic splines, and squad)" },
+	{ S_SOURCE, "device", K_STR, SRC(device), 0, 0, 0, "auto", NULL, NULL, "hydra polhemus",
+	  "which device: auto (the first found); hydra: a hidraw node of its motion interface (/dev/hidraw3, "
+	  "or a udev symlink); polhemus: the USB port BUS-PORT[.PORT...] as avatargw --list-devices shows it" },
+	{ S_SOURCE, "capture", K_PATH, SRC(capture), 0, 0, 0, "", NULL, NULL, "hydra polhemus",
+	  "play this capture of raw reports (hex, one report per line) instead of reading the device; "
+	  "relative to this file's directory; empty = the device" },
+	{ S_SOURCE, "record", K_PATH, SRC(record), 0, 0, 0, "", NULL, NULL, "hydra polhemus",
+	  "write every raw report read from the device to this capture file, with timestamps (for a bug report "
+	  "or a test; avatargw-decode reads it); relative to this file's directory; empty = none" },
+	{ S_SOURCE, "interface", K_INT, SRC(hid_interface), 0, 0, 255, "0", NULL, NULL, "hydra",
+	  "USB interface number of the 52-byte motion reports" },
+	{ S_SOURCE, "control_interface", K_INT, SRC(control_interface), 0, 0, 255, "1", NULL, NULL, "hydra",
+	  "USB interface number that takes the feature report switching between gamepad and motion mode" },
+	{ S_SOURCE, "model", K_ENUM, SRC(model), 0, 0, 0, "auto", NULL, e_model, "polhemus",
+	  "which Polhemus product to open: auto (any of them) or one; it sets the expected record header and rate" },
+	{ S_SOURCE, "sensors", K_NAMES, SRC(stations), 0, 1, CFG_MAX_STATIONS, "head left_hand right_hand", NULL,
+	  NULL, "polhemus", "sensor names of stations 1, 2, 3, ... in order (- skips a station)" },
+	{ S_SOURCE, "hemisphere", K_VEC3, SRC(hemisphere), 0, -1, 1, "1 0 0", NULL, NULL, "polhemus",
+	  "the hemisphere the sensors stay in, a vector in the Polhemus source's frame (its H command)" },
+	{ S_SOURCE, "mount_SENSOR", K_MOUNT, 0, 0, -10, 10, "0 0 0", "m", NULL, NULL,
+	  "SENSOR's tracked point in the sensor's own frame: x y z, optionally followed by a rotation "
+	  "qw qx qy qz (a head sensor on glasses is not the head's centre); one key per sensor" },
 
 	{ S_AVATAR, "id", K_INT, AV(id), 0, 0, 65535, "auto", NULL, NULL, NULL,
 	  "avatar id on the wire (auto: one more than the previous avatar's)" },
@@ -643,13 +668,78 @@ static const struct key_def *find_key(int sect, const char *name, const char *ty
 	const struct key_def *any = NULL;
 
 	for (size_t i = 0; i < N_KEYS; i++) {
-		if (keys[i].sect != sect || strcmp(keys[i].name, name))
+		if (keys[i].sect != sect)
+			continue;
+		/* mount_SENSOR: the key's name ends in a sensor's name */
+		if (strcmp(keys[i].name, name) &&
+		    !(keys[i].kind == K_MOUNT && !strncmp(name, "mount_", 6) && name[6]))
 			continue;
 		if (!keys[i].only || (type && word_in(type, keys[i].only)))
 			return &keys[i];
 		any = any ? any : &keys[i];
 	}
 	return any;
+}
+
+/* mount_SENSOR = x y z [qw qx qy qz] */
+static int set_mount(struct section_ctx *s, const struct key_def *k, const char *key, const char *value,
+		     struct cfg_where w)
+{
+	struct cfg_source *src = s->obj;
+	struct cfg_mount *m;
+	double v[7] = { 0, 0, 0, 1, 0, 0, 0 }, n;
+	const char *sensor = key + 6;
+
+	if (strlen(sensor) >= sizeof(m->sensor))
+		return failf(s->p, w, "[%s] %s: sensor name too long", s->full, key);
+	if (!parse_nums(value, v, 3) && !parse_nums(value, v, 7))
+		return failf(s->p, w, "[%s] %s: '%s' is not x y z or x y z qw qx qy qz", s->full, key, value);
+	for (int i = 0; i < 3; i++)
+		if (v[i] < k->min || v[i] > k->max)
+			return failf(s->p, w, "[%s] %s: %g is out of range [%g, %g] m", s->full, key, v[i], k->min,
+				     k->max);
+	n = sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
+	if (n < 1e-6)
+		return failf(s->p, w, "[%s] %s: the rotation qw qx qy qz is zero", s->full, key);
+	for (int i = 0; i < src->n_mounts; i++)
+		if (!strcmp(src->mount[i].sensor, sensor)) {
+			m = &src->mount[i];
+			goto store;
+		}
+	if (src->n_mounts == CFG_MAX_MOUNTS)
+		return failf(s->p, w, "[%s] %s: more than %d mount_ keys", s->full, key, CFG_MAX_MOUNTS);
+	m = &src->mount[src->n_mounts++];
+store:
+	snprintf(m->sensor, sizeof(m->sensor), "%s", sensor);
+	for (int i = 0; i < 3; i++)
+		m->p[i] = v[i];
+	for (int i = 0; i < 4; i++)
+		m->q[i] = v[3 + i] / n;
+	m->where = w;
+	return 0;
+}
+
+/* every mount_SENSOR names a sensor of the source */
+static int check_mounts(struct parse *p, const char *full, const struct cfg_source *src)
+{
+	for (int i = 0; i < src->n_mounts; i++) {
+		const struct cfg_mount *m = &src->mount[i];
+		const struct tracker_driver *d = trackers_table[src->driver];
+		int cnt = d->sensor_count(src);
+		char names[256], nm[CFG_NAME_MAX * 2];
+		size_t n = 0;
+
+		if (tracker_sensor_lookup(src, m->sensor) >= 0)
+			continue;
+		names[0] = '\0';
+		for (int j = 0; j < cnt && j < 6 && n < sizeof(names); j++) {
+			d->sensor_name(src, j, nm, sizeof(nm));
+			n += (size_t)snprintf(names + n, sizeof(names) - n, "%s%s", j ? ", " : "", nm);
+		}
+		return failf(p, m->where, "[%s] mount_%s: the source has no sensor '%s' (it has: %s%s)", full,
+			     m->sensor, m->sensor, names, cnt > 6 ? ", ..." : "");
+	}
+	return 0;
 }
 
 static void list_keys(int sect, const char *type, char *buf, size_t len)
@@ -750,6 +840,32 @@ static int set_value(struct section_ctx *s, const struct key_def *k, const char 
 			((double *)(obj + k->off))[i] = v[i];
 		}
 		return 0;
+	case K_NAMES: {
+		char buf[CFG_PATH_MAX], *save, *tok, *seen[CFG_MAX_STATIONS];
+		int n = 0, named = 0;
+
+		if (strlen(value) >= CFG_PATH_MAX)
+			return failf(p, w, "[%s] %s: longer than %d characters", s->full, k->name, CFG_PATH_MAX - 1);
+		snprintf(buf, sizeof(buf), "%s", value);
+		for (tok = strtok_r(buf, " \t,", &save); tok; tok = strtok_r(NULL, " \t,", &save)) {
+			if (n == (int)k->max)
+				return failf(p, w, "[%s] %s: more than %d names", s->full, k->name, (int)k->max);
+			if (strcmp(tok, "-")) {
+				if (!valid_name(tok))
+					return failf(p, w, "[%s] %s: '%s' is not a valid sensor name (1-%d of A-Z a-z 0-9 _ - .)",
+						     s->full, k->name, tok, CFG_NAME_MAX - 1);
+				for (int i = 0; i < named; i++)
+					if (!strcmp(seen[i], tok))
+						return failf(p, w, "[%s] %s: '%s' named twice", s->full, k->name, tok);
+				seen[named++] = tok;
+			}
+			n++;
+		}
+		if (!named)
+			return failf(p, w, "[%s] %s: no sensor named", s->full, k->name);
+		snprintf(obj + k->off, CFG_PATH_MAX, "%s", value);
+		return 0;
+	}
 	case K_RANGE:
 		if (!parse_nums(value, v, 2))
 			return failf(p, w, "[%s] %s: '%s' is not two numbers (lo hi, degrees)", s->full, k->name,
@@ -786,7 +902,7 @@ static int apply_section(struct section_ctx *s)
 
 		if (k->sect != s->sect || !k->def || (k->only && !word_in(s->type, k->only)))
 			continue;
-		if (k->kind == K_SENSOR || k->kind == K_PERSON || !strcmp(k->name, "count") ||
+		if (k->kind == K_SENSOR || k->kind == K_PERSON || k->kind == K_MOUNT || !strcmp(k->name, "count") ||
 		    (s->sect == S_SOURCE && !strcmp(k->name, "type")))
 			continue;
 		if (s->sect == S_AVATAR && !strcmp(k->name, "id"))
@@ -809,6 +925,11 @@ static int apply_section(struct section_ctx *s)
 		if (k->kind == K_SENSOR || k->kind == K_PERSON || (s->sect == S_AVATAR && !strcmp(k->name, "id")) ||
 		    !strcmp(k->name, "count") || (s->sect == S_SOURCE && !strcmp(k->name, "type")))
 			continue;
+		if (k->kind == K_MOUNT) {
+			if (set_mount(s, k, e->key, e->value, e->where))
+				return -1;
+			continue;
+		}
 		if (set_value(s, k, e->value, e->where))
 			return -1;
 	}
@@ -1117,7 +1238,8 @@ static int build(struct parse *p)
 					return failf(p, e->where, "[%s]: more than %d sources", e->section,
 						     CFG_MAX_SOURCES);
 				if (!t)
-					return failf(p, e->where, "[%s] type: missing (sim or replay)", e->section);
+					return failf(p, e->where, "[%s] type: missing (sim, replay, modbus, can, hydra or polhemus)",
+						     e->section);
 				src = &c->source[c->n_sources];
 				memset(src, 0, sizeof(*src));
 				snprintf(src->name, sizeof(src->name), "%s", name);
@@ -1138,7 +1260,7 @@ static int build(struct parse *p)
 					if (!strcmp(c->source[j].name, name))
 						return failf(p, e->where, "[%s]: source name used twice", e->section);
 				s = (struct section_ctx){ p, S_SOURCE, name, e->section, src, t->value, e->where };
-				if (apply_section(&s))
+				if (apply_section(&s) || check_mounts(p, e->section, src))
 					return -1;
 				if (trackers_table[src->driver] == &replay_driver && !src->file[0])
 					return failf(p, t->where, "[%s] file: missing (the recording to replay)",
@@ -1148,6 +1270,9 @@ static int build(struct parse *p)
 
 					if (trackers_table[src->driver]->check(src, why, sizeof(why))) {
 						const struct cfg_entry *fe = entry_of(c, e->section, "file");
+
+						if (!fe)
+							fe = entry_of(c, e->section, "capture");
 
 						return failf(p, fe ? fe->where : t->where, "[%s] %s", e->section, why);
 					}
@@ -1329,6 +1454,7 @@ static void print_value(FILE *out, const struct key_def *k, const void *obj)
 	case K_STR:
 	case K_PATH:
 	case K_LIST:
+	case K_NAMES:
 		fputs(o + k->off, out);
 		break;
 	case K_VEC3: {
@@ -1373,6 +1499,19 @@ static void print_section(FILE *out, const struct config *c, int sect, const cha
 		if (k->kind == K_SENSOR || k->kind == K_PERSON || !strcmp(k->name, "count") || !strcmp(k->name, "id") ||
 		    (sect == S_SOURCE && !strcmp(k->name, "type")))
 			continue;
+		if (k->kind == K_MOUNT) {
+			const struct cfg_source *src = obj;
+			char w[CFG_PATH_MAX + 16];
+
+			for (int m = 0; m < src->n_mounts; m++) {
+				const struct cfg_mount *mt = &src->mount[m];
+
+				fprintf(out, "mount_%s = %.10g %.10g %.10g %.10g %.10g %.10g %.10g    ; %s\n", mt->sensor,
+					mt->p[0], mt->p[1], mt->p[2], mt->q[0], mt->q[1], mt->q[2], mt->q[3],
+					config_where(c, mt->where, w, sizeof(w)));
+			}
+			continue;
+		}
 		fprintf(out, "%s = ", k->name);
 		print_value(out, k, obj);
 		print_origin(out, c, from, k->name);

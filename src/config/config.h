@@ -24,6 +24,8 @@
 #define CFG_MAX_OUTPUTS 16
 #define CFG_MAX_AVATARS 4096
 #define CFG_MAX_FILES 64
+#define CFG_MAX_MOUNTS 32
+#define CFG_MAX_STATIONS 16 /* Polhemus stations (sensor ports) at most */
 
 /* where a value came from: files[file] line, or file < 0 for a default */
 struct cfg_where {
@@ -56,6 +58,16 @@ struct cfg_daemon {
 	int record_buffer;             /* KiB */
 	double record_keyframe_rate;   /* Hz, 0: every sample */
 };
+
+/* mount_SENSOR = x y z [qw qx qy qz]: the tracked point in the sensor's frame */
+struct cfg_mount {
+	char sensor[CFG_NAME_MAX * 2];
+	double p[3];            /* m */
+	double q[4];            /* w x y z, unit */
+	struct cfg_where where;
+};
+
+enum cfg_polhemus_model { CFG_PH_AUTO, CFG_PH_LIBERTY, CFG_PH_LIBERTY_HS, CFG_PH_PATRIOT, CFG_PH_PATRIOT_HS };
 
 struct cfg_source {
 	char name[CFG_NAME_MAX];
@@ -100,6 +112,18 @@ struct cfg_source {
 	bool extended_ids;      /* 29-bit identifiers */
 	bool step;              /* advance on avatargw-ctl step only */
 	int interpolate;        /* 0 none, else 1 + enum kf_interp */
+	/* hydra, polhemus */
+	char device[CFG_PATH_MAX];  /* auto, or which one: hidraw node (hydra), USB port (polhemus) */
+	char capture[CFG_PATH_MAX]; /* a capture of raw reports to play instead of the device; "" = none */
+	char record[CFG_PATH_MAX];  /* write the raw reports read from the device to this capture; "" = none */
+	int hid_interface;          /* hydra: USB interface of the motion reports */
+	int control_interface;      /* hydra: USB interface that takes the mode feature report */
+	int model;                  /* polhemus: enum cfg_polhemus_model */
+	char stations[CFG_PATH_MAX]; /* polhemus: sensor names of stations 1, 2, ...; "-" = unused */
+	double hemisphere[3];       /* polhemus: the H command's vector, Polhemus frame */
+	/* every tracker */
+	int n_mounts;
+	struct cfg_mount mount[CFG_MAX_MOUNTS];
 };
 
 /* how 32-bit values lie in two 16-bit registers (A = most significant byte) */

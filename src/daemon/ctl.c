@@ -129,6 +129,21 @@ static double us(uint64_t ns)
 	return (double)ns / 1000.0;
 }
 
+/* a JSON string's content: quotes, backslashes and control characters escaped */
+static void json_text(FILE *out, const char *s)
+{
+	for (; *s; s++) {
+		unsigned char c = (unsigned char)*s;
+
+		if (c == '"' || c == '\\')
+			fprintf(out, "\\%c", c);
+		else if (c < 0x20)
+			fprintf(out, "\\u%04x", c);
+		else
+			fputc(c, out);
+	}
+}
+
 void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 {
 	struct gateway *g = info->g;
@@ -162,11 +177,21 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 			struct tracker *t = &g->trk[i];
 
 			fprintf(out, "%s{\"name\":\"%s\",\"driver\":\"%s\",\"state\":\"%s\",\"sensors\":%d,"
-				"\"samples\":%llu,\"rate_hz\":%.2f,\"malformed\":%llu,\"faults\":%llu",
+				"\"samples\":%llu,\"rate_hz\":%.2f,\"malformed\":%llu,\"faults\":%llu,\"lost\":%llu,"
+				"\"reconnects\":%llu",
 				i ? "," : "", t->name, t->drv->name,
 				tracker_states[atomic_load_explicit(&t->st.state, memory_order_relaxed) & 3], t->n_sensors,
 				(unsigned long long)stat_get(&t->st.samples), r && i < r->n_trackers ? r->trk_rate[i] : 0.0,
-				(unsigned long long)stat_get(&t->st.malformed), (unsigned long long)stat_get(&t->st.faults));
+				(unsigned long long)stat_get(&t->st.malformed), (unsigned long long)stat_get(&t->st.faults),
+				(unsigned long long)stat_get(&t->st.lost), (unsigned long long)stat_get(&t->st.reconnects));
+			if (t->drv->status) {
+				char dev[256];
+
+				t->drv->status(t, dev, sizeof(dev));
+				fputs(",\"device\":\"", out);
+				json_text(out, dev);
+				fputc('"', out);
+			}
 			if (t->drv->report)
 				t->drv->report(t, out, true);
 			fputc('}', out);
@@ -235,15 +260,22 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 		(unsigned long long)stat_get(&g->st.cycles), (unsigned long long)stat_get(&g->st.overruns),
 		us(hist_percentile(wk, 0.5)), us(hist_percentile(wk, 0.99)), us(stat_get(&wk->max_ns)),
 		us(hist_percentile(wa, 0.99)), us(stat_get(&wa->max_ns)));
-	fprintf(out, "\n%-16s %-8s %-7s %8s %10s %9s %7s\n", "SOURCE", "DRIVER", "STATE", "RATE/s", "SAMPLES",
-		"MALFORMED", "FAULTS");
+	fprintf(out, "\n%-16s %-8s %-7s %8s %10s %9s %7s %7s %6s\n", "SOURCE", "DRIVER", "STATE", "RATE/s", "SAMPLES",
+		"MALFORMED", "FAULTS", "LOST", "RECONN");
 	for (int i = 0; i < g->n_trackers; i++) {
 		struct tracker *t = &g->trk[i];
 
-		fprintf(out, "%-16s %-8s %-7s %8.1f %10llu %9llu %7llu\n", t->name, t->drv->name,
+		fprintf(out, "%-16s %-8s %-7s %8.1f %10llu %9llu %7llu %7llu %6llu\n", t->name, t->drv->name,
 			tracker_states[atomic_load_explicit(&t->st.state, memory_order_relaxed) & 3],
 			r && i < r->n_trackers ? r->trk_rate[i] : 0.0, (unsigned long long)stat_get(&t->st.samples),
-			(unsigned long long)stat_get(&t->st.malformed), (unsigned long long)stat_get(&t->st.faults));
+			(unsigned long long)stat_get(&t->st.malformed), (unsigned long long)stat_get(&t->st.faults),
+			(unsigned long long)stat_get(&t->st.lost), (unsigned long long)stat_get(&t->st.reconnects));
+		if (t->drv->status) {
+			char dev[256];
+
+			t->drv->status(t, dev, sizeof(dev));
+			fprintf(out, "  device: %s\n", dev);
+		}
 	}
 	fprintf(out, "\n%-16s %5s %-6s %8s %9s %7s %6s %8s %9s %5s %26s\n", "AVATAR", "ID", "STATE", "RATE/s", "FRAMES",
 		"STALE", "HELD", "IK_IT/ARM", "UNREACHED", "NAN", "LATENCY us p50/p99/max");

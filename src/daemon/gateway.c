@@ -107,13 +107,14 @@ static void touch(void *p, size_t n)
 		c[n - 1] = c[n - 1];
 }
 
-/* the bytes of an encoded FRAME, rounded up to a cache line: the arena's stride */
+/* the bytes of the longest FRAME (with its input block), rounded up to a cache line: the arena's stride */
 static size_t frame_slot(void)
 {
 	static uint8_t buf[WIRE_MAX_MSG];
 	struct wire_frame f;
 
 	memset(&f, 0, sizeof(f));
+	f.h.flags = WIRE_F_INPUTS;
 	return (wire_encode_frame(&f, buf) + 63) & ~(size_t)63;
 }
 
@@ -311,6 +312,7 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		}
 		memset(&wf.h, 0, sizeof(wf.h));
 		encode_frame(&in, &wf);
+		frame_inputs(pf, &wf); /* buttons and analog values: an input block after the FRAME */
 		if (in.pose && !encode_frame_finite(&wf)) {
 			/* never publish a NaN posture: count, and forget it as a seed */
 			stat_add(&a->st.nan_blocked, 1);

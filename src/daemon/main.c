@@ -45,12 +45,14 @@ static void usage(FILE *out)
 {
 	fprintf(out,
 		"usage: avatargw [-c FILE | --demo] [--set SECTION.KEY=VALUE]... [--check-config]\n"
+		"       avatargw --list-devices | --keys\n"
 		"\n"
 		"  -c, --config FILE   configuration (default " DEFAULT_CONFIG "), plus FILE's conf.d/*.conf\n"
 		"      --demo          the configuration compiled in (config/demo.conf): a replayed clip, no hardware\n"
 		"  -s, --set S.K=V     override one key, e.g. --set 'output local.port=7771'\n"
 		"      --check-config  check the configuration, print it with every default, exit (78 if wrong)\n"
 		"      --keys          every configuration key with default, unit and meaning\n"
+		"      --list-devices  the supported trackers plugged in, each with the configuration lines to use it\n"
 		"  -V, --version\n"
 		"  -h, --help\n"
 		"\n"
@@ -110,10 +112,38 @@ static void seen_reset(struct seen *s, struct gateway *g)
 	s->faults = calloc((size_t)s->n_trk + 1, sizeof(uint64_t));
 }
 
+/* what the trackers' device threads left for the log */
+static void drain_notes(struct gateway *g)
+{
+	for (int i = 0; i < g->n_trackers; i++) {
+		struct tracker *t = &g->trk[i];
+		char text[600]; /* a device note: DEVICE_NOTE_LEN */
+		int level;
+
+		while (t->drv->note && t->drv->note(t, &level, text, sizeof(text)))
+			log_msg(level, "%s", text);
+	}
+}
+
+static int list_devices(void)
+{
+	int n = 0;
+
+	for (int i = 0; i < trackers_count; i++)
+		if (trackers_table[i]->list_devices)
+			n += trackers_table[i]->list_devices(stdout);
+	if (!n)
+		printf("no supported tracker found: Razer Hydra (1532:0300), Polhemus Liberty, Liberty HS, Patriot "
+		       "(0f44:ff12, ff20, ef12, ef20; ff11, ff21, ef11, ef21 before their firmware).\n"
+		       "Is it plugged in (lsusb)? README.md, \"Setting up a tracker\", goes through it step by step.\n");
+	return 0;
+}
+
 static void report(struct seen *s, struct gateway *g)
 {
 	uint64_t v;
 
+	drain_notes(g);
 	if (!s->dropped || !s->errors || !s->nan || !s->malformed || !s->faults)
 		return;
 	if ((v = stat_get(&g->st.overruns)) != s->overruns) {
@@ -151,7 +181,12 @@ static void report(struct seen *s, struct gateway *g)
 			s->malformed[i] = v;
 		}
 		if ((v = stat_get(&t->st.faults)) != s->faults[i]) {
-			pr_err("source %s: FAULTY (%llu faults in all)", t->name, (unsigned long long)v);
+			char why[256] = "";
+
+			if (t->drv->status)
+				t->drv->status(t, why, sizeof(why));
+			pr_err("source %s: FAULTY (%llu faults in all)%s%s", t->name, (unsigned long long)v,
+			       why[0] ? ": " : "", why);
 			s->faults[i] = v;
 		}
 	}
@@ -199,7 +234,8 @@ int main(int argc, char **argv)
 		{ "config", required_argument, NULL, 'c' }, { "demo", no_argument, NULL, 'D' },
 		{ "set", required_argument, NULL, 's' },    { "check-config", no_argument, NULL, 'C' },
 		{ "keys", no_argument, NULL, 'K' },         { "version", no_argument, NULL, 'V' },
-		{ "help", no_argument, NULL, 'h' },         { NULL, 0, NULL, 0 },
+		{ "help", no_argument, NULL, 'h' },         { "list-devices", no_argument, NULL, 'L' },
+		{ NULL, 0, NULL, 0 },
 	};
 	static struct gateway gws[2];
 	const char *path = DEFAULT_CONFIG;
@@ -242,6 +278,8 @@ int main(int argc, char **argv)
 		case 'K':
 			config_print_reference(stdout);
 			return 0;
+		case 'L':
+			return list_devices();
 		case 'V':
 			printf("avatargw %s\n", AVATARGW_VERSION);
 			return 0;
@@ -364,6 +402,7 @@ int main(int argc, char **argv)
 					if (recorder_apply(&rec, &gws[nxt], err, sizeof(err)))
 						pr_err("%s: the daemon runs without recording", err);
 					loop_resume(loop, &gws[nxt]);
+					drain_notes(&gws[cur]);
 					gw_close(&gws[cur]);
 					cur = nxt;
 					info.g = &gws[cur];
@@ -401,6 +440,7 @@ int main(int argc, char **argv)
 	ctl_close(lfd, ctl_path);
 	loop_stop(loop);
 	recorder_close(rec);
+	drain_notes(&gws[cur]);
 	gw_close(&gws[cur]);
 	ctl_rates_free(&rates);
 	seen_reset(&seen, &gws[cur]);

@@ -11,6 +11,7 @@ void frame_gather(struct frame_source *src, uint64_t now_mono, uint64_t stale_ns
 	out->t_ns = 0;
 	out->arrival_ns = 0;
 	out->new_sample = false;
+	out->inputs = 0;
 	for (int i = 0; i < FRAME_SENSORS; i++) {
 		const struct tracker *t = src->trk[i];
 		const struct sensor_slot *s = &t->slot[src->sensor[i]];
@@ -25,6 +26,8 @@ void frame_gather(struct frame_source *src, uint64_t now_mono, uint64_t stale_ns
 			continue;
 		}
 		out->sensor[i] = s->pose;
+		if (s->inputs)
+			out->inputs |= (uint8_t)(1u << i);
 		out->buttons[i] = s->buttons;
 		for (int k = 0; k < SENSOR_ANALOG_MAX; k++)
 			out->analog[i][k] = s->analog[k];
@@ -38,5 +41,19 @@ void frame_gather(struct frame_source *src, uint64_t now_mono, uint64_t stale_ns
 		}
 		if (s->t_ns > out->t_ns)
 			out->t_ns = s->t_ns;
+	}
+}
+
+void frame_inputs(const struct pose_frame *pf, struct wire_frame *wf)
+{
+	_Static_assert(WIRE_ANALOG == SENSOR_ANALOG_MAX, "the input block carries every analog value of a slot");
+	if (!pf->inputs)
+		return;
+	wf->h.flags |= WIRE_F_INPUTS;
+	wf->in.present = pf->inputs;
+	for (int i = 0; i < FRAME_SENSORS; i++) {
+		wf->in.buttons[i] = pf->buttons[i];
+		for (int k = 0; k < WIRE_ANALOG; k++)
+			wf->in.analog[i][k] = pf->analog[i][k];
 	}
 }

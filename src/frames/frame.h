@@ -16,6 +16,7 @@ struct pose_frame {
 	uint8_t state[FRAME_SENSORS];    /* enum wire_sensor_state */
 	uint32_t buttons[FRAME_SENSORS]; /* the sensor's buttons (bit i: button i), 0 when it has none */
 	float analog[FRAME_SENSORS][SENSOR_ANALOG_MAX]; /* its analog values, 0 when absent */
+	uint8_t inputs;                  /* bit i: sensor i has buttons and analog values, and they are current */
 	uint64_t age_ns[FRAME_SENSORS];  /* now - arrival */
 	uint64_t t_ns;                   /* newest tracker sample time, CLOCK_REALTIME */
 	uint64_t arrival_ns;             /* CLOCK_MONOTONIC arrival of the newest sample */
@@ -30,5 +31,9 @@ struct frame_source {
 
 /* Gathers the latest samples; stale_ns: age beyond which a sample is STALE. */
 void frame_gather(struct frame_source *src, uint64_t now_mono, uint64_t stale_ns, struct pose_frame *out);
+
+struct wire_frame;
+/* The frame's buttons and analog values into a FRAME's input block (and its flag), if it has any. */
+void frame_inputs(const struct pose_frame *pf, struct wire_frame *wf);
 
 #endif /* AGW_FRAME_H */

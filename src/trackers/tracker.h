@@ -38,6 +38,7 @@ struct sensor_slot {
 	uint64_t arrival_ns; /* CLOCK_MONOTONIC when the daemon took it in */
 	uint32_t count;      /* samples taken in */
 	bool seen;
+	bool inputs;         /* buttons and analog are the device's (published), not just absent */
 };
 
 struct tracker_clock {
@@ -66,12 +67,26 @@ struct tracker_driver {
 	 * be NULL.
 	 */
 	void (*report)(struct tracker *t, FILE *out, bool json);
+	/*
+	 * Optional, hardware drivers. Control thread only (never the loop):
+	 * status() writes one line on the device's condition ("Razer Hydra on
+	 * /dev/hidraw3, motion mode"); note() takes the oldest message the
+	 * driver left for the log (1 and the text, or 0 when none is left);
+	 * list_devices() prints the devices of this family that are plugged
+	 * in, each with the configuration lines that use it, and returns how
+	 * many it found.
+	 */
+	void (*status)(struct tracker *t, char *buf, size_t len);
+	int (*note)(struct tracker *t, int *level, char *buf, size_t len);
+	int (*list_devices)(FILE *out);
 };
 
 struct tracker_stats {
 	_Atomic uint64_t samples;
 	_Atomic uint64_t malformed;
 	_Atomic uint64_t faults;
+	_Atomic uint64_t lost;       /* samples the device numbered but never delivered (sequence gaps) */
+	_Atomic uint64_t reconnects; /* the device came back (or restarted its stream) after a fault */
 	_Atomic uint32_t state;
 };
 
@@ -83,6 +98,8 @@ struct tracker {
 	struct sensor_slot *slot;
 	struct dq world;          /* tracker frame -> world */
 	bool world_identity;      /* the tracker's frame is the world's: no product per sample */
+	struct dq *mount;         /* per sensor: the tracked point in the sensor's frame (mount_SENSOR) */
+	bool *mounted;            /* per sensor: mount is not the identity */
 	struct tracker_stats st;
 	void *priv;               /* the driver's state */
 	struct recorder *rec;     /* records every sample when not NULL (record/recorder.h) */
@@ -97,11 +114,7 @@ int trackers_find(const char *name);
 /* start-up: allocates the slots and calls the driver's open() */
 int tracker_open(struct tracker *t, const struct cfg_source *cfg, char *err, size_t errlen);
 void tracker_close(struct tracker *t);
-/*
- * a sample in the tracker's frame, stored in world coordinates (and
- * recorded, with the slot's buttons and analog values: a driver sets those
- * before it puts the sample)
- */
+/* a sample in the tracker's frame, stored in world coordinates (through the sensor's mount, if any) */
 void tracker_put(struct tracker *t, int sensor, const struct dq *local, uint64_t t_ns, uint64_t arrival_ns);
 int tracker_sensor_lookup(const struct cfg_source *cfg, const char *name);
 
@@ -120,5 +133,7 @@ extern const struct tracker_driver sim_driver;
 extern const struct tracker_driver replay_driver;
 extern const struct tracker_driver modbus_driver;
 extern const struct tracker_driver can_driver;
+extern const struct tracker_driver hydra_driver;
+extern const struct tracker_driver polhemus_driver;
 
 #endif /* AGW_TRACKER_H */

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 /*
  * trackers.c - the table of tracker drivers (config name -> driver) and
- * what every tracker shares: its sensor slots and its world transform.
+ * what every tracker shares: its sensor slots, its world transform and its
+ * sensors' mounting offsets.
  */
 #include "trackers/tracker.h"
 
@@ -17,6 +18,8 @@ const struct tracker_driver *const trackers_table[] = {
 	&replay_driver,
 	&modbus_driver,
 	&can_driver,
+	&hydra_driver,
+	&polhemus_driver,
 };
 
 const int trackers_count = (int)(sizeof(trackers_table) / sizeof(trackers_table[0]));
@@ -57,15 +60,38 @@ int tracker_open(struct tracker *t, const struct cfg_source *cfg, char *err, siz
 	t->world_identity = cfg->yaw == 0 && o.x == 0 && o.y == 0 && o.z == 0;
 	t->n_sensors = t->drv->sensor_count(cfg);
 	t->slot = calloc((size_t)t->n_sensors, sizeof(*t->slot));
-	if (!t->slot) {
+	t->mount = calloc((size_t)t->n_sensors, sizeof(*t->mount));
+	t->mounted = calloc((size_t)t->n_sensors, sizeof(*t->mounted));
+	if (!t->slot || !t->mount || !t->mounted) {
 		snprintf(err, errlen, "[source %s]: out of memory", cfg->name);
-		return -ENOMEM;
+		rc = -ENOMEM;
+		goto fail;
+	}
+	for (int i = 0; i < cfg->n_mounts; i++) {
+		const struct cfg_mount *m = &cfg->mount[i];
+		int s = tracker_sensor_lookup(cfg, m->sensor);
+		struct quat q = { m->q[0], m->q[1], m->q[2], m->q[3] };
+		struct vec3 p = { m->p[0], m->p[1], m->p[2] };
+
+		if (s < 0) {
+			/* config.c checks the names: only a driver that changed its mind gets here */
+			snprintf(err, errlen, "[source %s] mount_%s: no such sensor", cfg->name, m->sensor);
+			rc = -EINVAL;
+			goto fail;
+		}
+		dq_from_rt(&q, &p, &t->mount[s]);
+		t->mounted[s] = true;
 	}
 	rc = t->drv->open(t, err, errlen);
-	if (rc) {
-		free(t->slot);
-		t->slot = NULL;
-	}
+	if (!rc)
+		return 0;
+fail:
+	free(t->slot);
+	free(t->mount);
+	free(t->mounted);
+	t->slot = NULL;
+	t->mount = NULL;
+	t->mounted = NULL;
 	return rc;
 }
 
@@ -74,14 +100,24 @@ void tracker_close(struct tracker *t)
 	if (t->drv && t->slot)
 		t->drv->close(t);
 	free(t->slot);
+	free(t->mount);
+	free(t->mounted);
 	t->slot = NULL;
+	t->mount = NULL;
+	t->mounted = NULL;
 	t->drv = NULL;
 }
 
 void tracker_put(struct tracker *t, int sensor, const struct dq *local, uint64_t t_ns, uint64_t arrival_ns)
 {
 	struct sensor_slot *s = &t->slot[sensor];
+	struct dq at;
 
+	/* the tracked point is the mount offset away from the sensor, in the sensor's frame */
+	if (t->mounted[sensor]) {
+		dq_mul(local, &t->mount[sensor], &at);
+		local = &at;
+	}
 	if (t->world_identity)
 		s->pose = *local;
 	else

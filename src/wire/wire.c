@@ -275,6 +275,17 @@ size_t wire_encode_frame(const struct wire_frame *f, uint8_t *buf)
 		put_f32(&w, f->joint[i]);
 	for (int i = 0; i < WIRE_SEGMENTS; i++)
 		put_pose(&w, &f->segment[i]);
+	if (f->h.flags & WIRE_F_INPUTS) {
+		/* a compatible addition: after the last field of the first FRAME layout */
+		put_u8(&w, f->in.present);
+		put_u8(&w, WIRE_ANALOG);
+		put_u16(&w, 0);
+		for (int i = 0; i < WIRE_SENSORS; i++) {
+			put_u32(&w, f->in.buttons[i]);
+			for (int k = 0; k < WIRE_ANALOG; k++)
+				put_f32(&w, f->in.analog[i][k]);
+		}
+	}
 	return finish(&w);
 }
 
@@ -304,6 +315,28 @@ int wire_decode_frame(const uint8_t *buf, size_t len, struct wire_frame *f)
 		f->joint[i] = get_f32(&r);
 	for (int i = 0; i < WIRE_SEGMENTS; i++)
 		get_pose(&r, &f->segment[i]);
+	memset(&f->in, 0, sizeof(f->in));
+	if (!r.err && (f->h.flags & WIRE_F_INPUTS)) {
+		uint8_t n_analog;
+
+		f->in.present = get_u8(&r);
+		n_analog = get_u8(&r);
+		(void)get_u16(&r);
+		for (int i = 0; i < WIRE_SENSORS; i++) {
+			f->in.buttons[i] = get_u32(&r);
+			/* a later revision may send more values per sensor: read ours, skip the rest */
+			for (int k = 0; k < n_analog; k++) {
+				float v = get_f32(&r);
+
+				if (k < WIRE_ANALOG)
+					f->in.analog[i][k] = v;
+			}
+		}
+		if (n_analog < WIRE_ANALOG && !r.err)
+			r.err = WIRE_ECOUNT;
+	} else if (!r.err) {
+		f->h.flags &= (uint16_t)~WIRE_F_INPUTS;
+	}
 	return r.err ? -r.err : 0;
 }
 
