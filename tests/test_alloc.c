@@ -76,7 +76,8 @@ void __wrap_free(void *p)
 	__real_free(p);
 }
 
-static const char conf[] =
+/* the ports are chosen at run time (free ones): printf with udp port, tcp port */
+static const char conf_fmt[] =
 	"[daemon]\n"
 	"rate = 480\n"
 	"control_socket =\n"
@@ -102,15 +103,17 @@ static const char conf[] =
 	"[output udp]\n"
 	"type = udp\n"
 	"address = 127.0.0.1\n"
-	"port = 17770\n"
+	"port = %d\n"
 	"[output tcp]\n"
 	"type = tcp\n"
 	"address = 127.0.0.1\n"
-	"port = 17771\n"
+	"port = %d\n"
 	"client_buffer = 4096\n"
 	"[output unix]\n"
 	"type = unix\n"
 	"path = /tmp/avatargw-test-alloc.sock\n";
+
+static int free_tcp_port(void);
 
 static void sleep_ms(int ms)
 {
@@ -128,8 +131,10 @@ static void test_loop_allocates_nothing(void **state)
 	struct loop *l = NULL;
 	struct recorder *rec = NULL;
 	uint64_t rec_before;
-	struct sockaddr_in sin = { .sin_family = AF_INET, .sin_port = htons(17771),
+	int tport = free_tcp_port();
+	struct sockaddr_in sin = { .sin_family = AF_INET, .sin_port = htons((uint16_t)tport),
 				   .sin_addr.s_addr = htonl(INADDR_LOOPBACK) };
+	char conf[4096];
 	struct sockaddr_un sun = { .sun_family = AF_UNIX, .sun_path = "/tmp/avatargw-test-alloc.sock" };
 	struct mallinfo2 before, after;
 	int tcp, ux, rx;
@@ -138,6 +143,8 @@ static void test_loop_allocates_nothing(void **state)
 	uint64_t frames = 0;
 
 	(void)state;
+	/* the UDP port: any; nobody needs to listen */
+	snprintf(conf, sizeof(conf), conf_fmt, free_tcp_port(), tport);
 	assert_int_equal(config_load_text(&c, "alloc.conf", conf, err, sizeof(err)), 0);
 	assert_int_equal(gw_open(&g, &c, NULL, 42, err, sizeof(err)), 0);
 	assert_int_equal(recorder_apply(&rec, &g, err, sizeof(err)), 0);
