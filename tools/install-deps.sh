@@ -35,6 +35,7 @@ libc6-dev-arm64-cross
 qemu-user
 qemu-system-arm
 can-utils
+iproute2
 zlib1g-dev
 "
 

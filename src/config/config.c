@@ -196,7 +196,8 @@ static const struct key_def keys[] = {
 	  "linear (and slerp), catmull-rom or natural (cubic splines, and squad)" },
 	{ S_SOURCE, "device", K_STR, SRC(device), 0, 0, 0, "auto", NULL, NULL, "hydra polhemus",
 	  "which device: auto (the first found); hydra: a hidraw node of its motion interface (/dev/hidraw3, "
-	  "or a udev symlink); polhemus: the USB port BUS-PORT[.PORT...] as avatargw --list-devices shows it" },
+	  "or a udev symlink) or its USB port; polhemus: its USB port; a USB port is BUS-PORT[.PORT...] as "
+	  "avatargw --list-devices shows it" },
 	{ S_SOURCE, "capture", K_PATH, SRC(capture), 0, 0, 0, "", NULL, NULL, "hydra polhemus",
 	  "play this capture of raw reports (hex, one report per line) instead of reading the device; "
 	  "relative to this file's directory; empty = the device" },

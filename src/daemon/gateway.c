@@ -366,8 +366,12 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 
 		g->out[o].ops->service(&g->out[o]);
 		g->out[o].ops->send(&g->out[o], g->msgs, n);
-		/* a new stream subscriber gets every DESCRIBE now, not a second later */
-		if (stat_get(&g->out[o].st.accepted) != acc)
+		/*
+		 * A new subscriber of a stream, the viewer or VRPN gets every
+		 * DESCRIBE now, not a second later. Not for a Modbus client: an HMI
+		 * that connects for every poll would flood every other output.
+		 */
+		if (stat_get(&g->out[o].st.accepted) != acc && g->out[o].cfg->type != CFG_OUT_MODBUS)
 			describe_soon(g, now->mono_ns);
 	}
 	sent_ns = gw_mono_ns();

@@ -9,12 +9,14 @@
  * rather than being a data race.
  *
  *	writer:  seqlock_write(&seq, words, src, n)
- *	reader:  seqlock_read(&seq, words, dst, n)   (returns the sequence read)
+ *	reader:  seqlock_read(&seq, words, dst, n)   (returns the sequence read; may wait)
+ *	loop:    seqlock_try_read(&seq, words, dst, n, &s)   (never waits)
  */
 #ifndef AGW_SEQLOCK_H
 #define AGW_SEQLOCK_H
 
 #include <sched.h>
+#include <stdbool.h>
 #include <stdatomic.h>
 #include <stdint.h>
 
@@ -46,6 +48,29 @@ static inline uint32_t seqlock_read(_Atomic uint32_t *seq, _Atomic uint32_t *wor
 		if (tries > 16)
 			sched_yield();
 	}
+}
+
+/*
+ * One attempt, for a reader that must never wait (the loop thread): true
+ * with a consistent copy and its sequence number, false while the writer
+ * is inside (keep the previous data and try at the next cycle). A SCHED_FIFO
+ * loop spinning on a normal-priority writer pinned to its CPU would never
+ * let the writer finish.
+ */
+static inline bool seqlock_try_read(_Atomic uint32_t *seq, _Atomic uint32_t *words, uint32_t *dst, int n,
+				    uint32_t *seq_out)
+{
+	uint32_t s1 = atomic_load_explicit(seq, memory_order_acquire);
+
+	if (s1 & 1)
+		return false;
+	for (int i = 0; i < n; i++)
+		dst[i] = atomic_load_explicit(&words[i], memory_order_relaxed);
+	atomic_thread_fence(memory_order_acquire);
+	if (atomic_load_explicit(seq, memory_order_relaxed) != s1)
+		return false;
+	*seq_out = s1;
+	return true;
 }
 
 /* the sequence number only (has anything been written since?) */

@@ -509,7 +509,9 @@ static int modbus_in_poll(struct tracker *t, const struct tracker_clock *now)
 
 		if (seqlock_peek(&m->slot[k].seq) == m->seen[k])
 			continue;
-		seq = seqlock_read(&m->slot[k].seq, m->slot[k].w, w, MODBUS_IN_WORDS);
+		/* the device thread is writing this very slot: take it at the next cycle */
+		if (!seqlock_try_read(&m->slot[k].seq, m->slot[k].w, w, MODBUS_IN_WORDS, &seq))
+			continue;
 		m->seen[k] = seq;
 		memcpy(&p, w, sizeof(p));
 		q = (struct quat){ p.q[0], p.q[1], p.q[2], p.q[3] };

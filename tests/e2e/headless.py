@@ -36,7 +36,7 @@ class Chromium:
             os.dup2(a2, 3)
             os.dup2(b2, 4)
 
-        args = [exe, "--headless=new", "--no-sandbox", "--disable-gpu", "--no-first-run",
+        args = [exe, "--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run",
                 "--no-default-browser-check", "--disable-extensions", "--remote-debugging-pipe",
                 "--user-data-dir=" + profile_dir, "--window-size=%d,%d" % (width, height), "about:blank"]
         self.proc = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,

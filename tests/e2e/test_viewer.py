@@ -237,10 +237,6 @@ rate = 20
         self.assertEqual(avatar_pixels(shot), 0, "a stale avatar is drawn in colour")
 
 
-if __name__ == "__main__":
-    unittest.main()
-
-
 class ViewerReloadTest(unittest.TestCase):
     """a reload keeps the port and the browsers, and serves the new configuration"""
 
@@ -298,3 +294,7 @@ port = {vport}
                 if ws:
                     ws.close()
                 self.assertEqual(d.stop(), 0)
+
+
+if __name__ == "__main__":
+    unittest.main()
