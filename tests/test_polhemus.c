@@ -375,6 +375,19 @@ static void test_product_headers(void **state)
 		codec_open(&k, CFG_PH_LIBERTY_HS, "head");
 		assert_float_equal(polhemus_codec.period(k.st), 1.0 / 240, 1e-12);
 		free(k.st);
+		/* model = auto: the records tell, a Patriot's (PA) at 60 Hz, a Liberty's at 240 */
+		codec_open(&k, CFG_PH_AUTO, "head");
+		{
+			struct got g = { 0 };
+
+			record(b, "PA", 1, ' ', p, q, 1);
+			assert_int_equal(feed(&k, b, 41, &g), 1);
+			assert_float_equal(polhemus_codec.period(k.st), 1.0 / 60, 1e-12);
+			record(b, "LY", 1, ' ', p, q, 2);
+			assert_int_equal(feed(&k, b, 41, &g), 1);
+			assert_float_equal(polhemus_codec.period(k.st), 1.0 / 240, 1e-12);
+		}
+		free(k.st);
 	}
 	assert_non_null(polhemus_product(0xff20));
 	assert_true(polhemus_product(0xff21)->needs_firmware);

@@ -355,24 +355,28 @@ void device_set_status(struct device *d, const char *fmt, ...)
 
 void device_play(struct device *d, const struct capture *cap, double speed, bool loop)
 {
-	double period = d->codec->period(d->codec_st);
-
 	device_set_link(d, DEVICE_UP);
 	do {
 		uint64_t t0 = device_mono_ns();
+		/*
+		 * An untimed capture is paced at the codec's period, which the
+		 * codec may learn from the records themselves (a Polhemus record
+		 * names its product, and with it the rate): asked after each one.
+		 */
+		double at = 0, period = d->codec->period(d->codec_st);
 
 		d->codec->reset(d->codec_st);
 		for (int i = 0; i < cap->n; i++) {
 			const struct capture_report *r = &cap->rep[i];
-			double at = (cap->timed ? r->t : i * period) / speed;
 
-			if (!sleep_until(d, t0 + (uint64_t)(at * 1e9)))
+			if (!sleep_until(d, t0 + (uint64_t)((cap->timed ? r->t : at) / speed * 1e9)))
 				return;
 			device_feed_quiet(d, cap->bytes + r->off, r->len);
+			period = d->codec->period(d->codec_st);
+			at += period;
 		}
 		/* one period after the last report: the next pass starts on the beat */
-		if (!sleep_until(d, t0 + (uint64_t)((cap->timed ? cap->rep[cap->n - 1].t + period : cap->n * period) /
-						   speed * 1e9)))
+		if (!sleep_until(d, t0 + (uint64_t)((cap->timed ? cap->rep[cap->n - 1].t + period : at) / speed * 1e9)))
 			return;
 	} while (loop);
 	device_set_link(d, DEVICE_ENDED);

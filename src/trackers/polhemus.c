@@ -293,6 +293,8 @@ static int polhemus_feed(void *st, const uint8_t *in, size_t n, device_emit_fn *
 		}
 		pos += POLHEMUS_RECORD;
 		p->in_sync = true;
+		/* the header names the product: Patriots (PA) stream at 60 Hz, Liberties (LY, LU) at 240 */
+		p->period = r[0] == 'P' ? 1.0 / 60 : 1.0 / 240;
 		if (r[4] != ' ') {
 			p->error_records++;
 			p->last_error = r[4];
