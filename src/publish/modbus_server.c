@@ -29,6 +29,7 @@
  * silent client holds a slot for a bounded time and never holds the thread.
  */
 #include "publish/output.h"
+#include "publish/listen.h"
 
 #include "avatargw/wire.h"
 #include "daemon/log.h"
@@ -408,35 +409,7 @@ static void describe_addr(const struct cfg_output *cfg, char *buf, size_t len)
 
 static int listen_on(const struct cfg_output *cfg, char *err, size_t errlen)
 {
-	struct addrinfo hints = { .ai_socktype = SOCK_STREAM, .ai_flags = AI_NUMERICSERV | AI_PASSIVE }, *ai;
-	char port[8];
-	int fd, one = 1, rc;
-
-	snprintf(port, sizeof(port), "%d", cfg->port);
-	rc = getaddrinfo(cfg->address[0] ? cfg->address : NULL, port, &hints, &ai);
-	if (rc) {
-		snprintf(err, errlen, "[output %s] address: %s: %s", cfg->name, cfg->address, gai_strerror(rc));
-		return -EINVAL;
-	}
-	fd = socket(ai->ai_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-	/*
-	 * SO_REUSEPORT: a reload that changes this output's settings opens the
-	 * new server before the old one closes, on the same port.
-	 */
-	if (fd < 0 || setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one)) ||
-	    setsockopt(fd, SOL_SOCKET, SO_REUSEPORT, &one, sizeof(one)) || bind(fd, ai->ai_addr, ai->ai_addrlen) ||
-	    listen(fd, 16)) {
-		rc = -errno;
-		snprintf(err, errlen, "[output %s]: Modbus server on %s port %d: %s%s", cfg->name, cfg->address,
-			 cfg->port, strerror(errno),
-			 errno == EACCES && cfg->port < 1024 ? " (ports below 1024 need CAP_NET_BIND_SERVICE)" : "");
-		if (fd >= 0)
-			close(fd);
-		freeaddrinfo(ai);
-		return rc;
-	}
-	freeaddrinfo(ai);
-	return fd;
+	return out_listen_tcp(cfg, "Modbus server", true, err, errlen);
 }
 
 static void free_server(struct mb_server *s)

@@ -12,6 +12,7 @@
  * the subscribers are handed to the new configuration (adopt()).
  */
 #include "publish/output.h"
+#include "publish/listen.h"
 
 #include "avatargw/wire.h"
 
@@ -53,29 +54,7 @@ static void describe_addr(const struct cfg_output *cfg, char *buf, size_t len)
 
 static int listen_tcp(const struct cfg_output *cfg, char *err, size_t errlen)
 {
-	struct addrinfo hints = { .ai_socktype = SOCK_STREAM, .ai_flags = AI_NUMERICSERV | AI_PASSIVE }, *ai;
-	char port[8];
-	int fd, one = 1, rc;
-
-	snprintf(port, sizeof(port), "%d", cfg->port);
-	rc = getaddrinfo(cfg->address[0] ? cfg->address : NULL, port, &hints, &ai);
-	if (rc) {
-		snprintf(err, errlen, "[output %s] address: %s: %s", cfg->name, cfg->address, gai_strerror(rc));
-		return -EINVAL;
-	}
-	fd = socket(ai->ai_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-	if (fd < 0 || setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one)) ||
-	    bind(fd, ai->ai_addr, ai->ai_addrlen) || listen(fd, 16)) {
-		rc = -errno;
-		snprintf(err, errlen, "[output %s]: listen on %s port %d: %s", cfg->name, cfg->address, cfg->port,
-			 strerror(errno));
-		if (fd >= 0)
-			close(fd);
-		freeaddrinfo(ai);
-		return rc;
-	}
-	freeaddrinfo(ai);
-	return fd;
+	return out_listen_tcp(cfg, "listen", false, err, errlen);
 }
 
 static int listen_unix(const struct cfg_output *cfg, char *err, size_t errlen)

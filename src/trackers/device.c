@@ -117,6 +117,30 @@ int device_start(struct device *d, device_run_fn *run, void *drv, const char *na
 	return 0;
 }
 
+int device_begin(struct device *d, struct capture *cap, bool *use_capture, device_run_fn *run, void *drv,
+		 const char *name, char *err, size_t errlen)
+{
+	const struct cfg_source *cfg = d->t->cfg;
+	int rc;
+
+	if (cfg->capture[0]) {
+		if (capture_load(cap, cfg->capture, err, errlen)) {
+			device_close(d);
+			return -EINVAL;
+		}
+		*use_capture = true;
+	} else if (cfg->record[0] && (rc = device_record(d, cfg->record, err, errlen))) {
+		device_close(d);
+		return rc;
+	}
+	rc = device_start(d, run, drv, name, err, errlen);
+	if (rc) {
+		device_close(d);
+		capture_free(cap);
+	}
+	return rc;
+}
+
 int device_record(struct device *d, const char *path, char *err, size_t errlen)
 {
 	d->rec = fopen(path, "we");

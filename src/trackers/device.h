@@ -136,6 +136,14 @@ int device_init(struct device *d, struct tracker *t, const struct device_codec *
 int device_record(struct device *d, const char *path, char *err, size_t errlen);
 /* starts the device thread on run (named name, at most 15 characters); 0 or a negative errno */
 int device_start(struct device *d, device_run_fn *run, void *drv, const char *name, char *err, size_t errlen);
+/*
+ * The common rest of a hardware driver's open(), after device_init(): the
+ * source's capture to play instead of the device (*use_capture set) or the
+ * capture to record, then the device thread. On failure it undoes what
+ * device_init() and it made (the driver frees its own state); 0 or -errno.
+ */
+int device_begin(struct device *d, struct capture *cap, bool *use_capture, device_run_fn *run, void *drv,
+		 const char *name, char *err, size_t errlen);
 /* asks the thread to stop and joins it (its reads time out within 100 ms), then frees */
 void device_close(struct device *d);
 

@@ -717,23 +717,9 @@ static int hydra_open(struct tracker *t, char *err, size_t errlen)
 		free(h);
 		return rc;
 	}
-	if (t->cfg->capture[0]) {
-		if (capture_load(&h->cap, t->cfg->capture, err, errlen)) {
-			device_close(&h->dev);
-			free(h);
-			return -EINVAL;
-		}
-		h->use_capture = true;
-	} else if (t->cfg->record[0] && (rc = device_record(&h->dev, t->cfg->record, err, errlen))) {
-		device_close(&h->dev);
-		free(h);
-		return rc;
-	}
 	t->priv = h;
-	rc = device_start(&h->dev, hydra_run, h, "agw-hydra", err, errlen);
+	rc = device_begin(&h->dev, &h->cap, &h->use_capture, hydra_run, h, "agw-hydra", err, errlen);
 	if (rc) {
-		device_close(&h->dev);
-		capture_free(&h->cap);
 		free(h);
 		t->priv = NULL;
 	}

@@ -823,23 +823,9 @@ static int polhemus_open(struct tracker *t, char *err, size_t errlen)
 		free(p);
 		return rc;
 	}
-	if (t->cfg->capture[0]) {
-		if (capture_load(&p->cap, t->cfg->capture, err, errlen)) {
-			device_close(&p->dev);
-			free(p);
-			return -EINVAL;
-		}
-		p->use_capture = true;
-	} else if (t->cfg->record[0] && (rc = device_record(&p->dev, t->cfg->record, err, errlen))) {
-		device_close(&p->dev);
-		free(p);
-		return rc;
-	}
 	t->priv = p;
-	rc = device_start(&p->dev, polhemus_run, p, "agw-polhemus", err, errlen);
+	rc = device_begin(&p->dev, &p->cap, &p->use_capture, polhemus_run, p, "agw-polhemus", err, errlen);
 	if (rc) {
-		device_close(&p->dev);
-		capture_free(&p->cap);
 		free(p);
 		t->priv = NULL;
 	}

@@ -1,0 +1,41 @@
+// SPDX-License-Identifier: MIT
+/*
+ * listen.c - the listening socket the server outputs share.
+ */
+#include "publish/listen.h"
+
+#include <errno.h>
+#include <netdb.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+int out_listen_tcp(const struct cfg_output *cfg, const char *what, bool reuseport, char *err, size_t errlen)
+{
+	struct addrinfo hints = { .ai_socktype = SOCK_STREAM, .ai_flags = AI_NUMERICSERV | AI_PASSIVE }, *ai;
+	char port[8];
+	int fd, one = 1, rc;
+
+	snprintf(port, sizeof(port), "%d", cfg->port);
+	rc = getaddrinfo(cfg->address[0] ? cfg->address : NULL, port, &hints, &ai);
+	if (rc) {
+		snprintf(err, errlen, "[output %s] address: %s: %s", cfg->name, cfg->address, gai_strerror(rc));
+		return -EINVAL;
+	}
+	fd = socket(ai->ai_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+	if (fd < 0 || setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one)) ||
+	    (reuseport && setsockopt(fd, SOL_SOCKET, SO_REUSEPORT, &one, sizeof(one))) ||
+	    bind(fd, ai->ai_addr, ai->ai_addrlen) || listen(fd, 16)) {
+		rc = -errno;
+		snprintf(err, errlen, "[output %s]: %s on %s port %d: %s%s", cfg->name, what, cfg->address, cfg->port,
+			 strerror(errno),
+			 errno == EACCES && cfg->port < 1024 ? " (ports below 1024 need CAP_NET_BIND_SERVICE)" : "");
+		if (fd >= 0)
+			close(fd);
+		freeaddrinfo(ai);
+		return rc;
+	}
+	freeaddrinfo(ai);
+	return fd;
+}
