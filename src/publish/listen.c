@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 /*
- * listen.c - the listening socket the server outputs share.
+ * listen.c - the sockets the server outputs share.
  */
 #include "publish/listen.h"
 
@@ -38,4 +38,24 @@ int out_listen_tcp(const struct cfg_output *cfg, const char *what, bool reusepor
 	}
 	freeaddrinfo(ai);
 	return fd;
+}
+
+int out_send_pending(int fd, const uint8_t *buf, size_t *off, size_t *len)
+{
+	while (*len) {
+		ssize_t n = send(fd, buf + *off, *len, MSG_DONTWAIT | MSG_NOSIGNAL);
+
+		if (n > 0) {
+			*off += (size_t)n;
+			*len -= (size_t)n;
+			continue;
+		}
+		if (n < 0 && errno == EINTR)
+			continue;
+		if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK))
+			return 0;
+		return n < 0 ? -errno : -EPIPE;
+	}
+	*off = 0;
+	return 0;
 }

@@ -154,23 +154,8 @@ static void stream_close(struct output *o)
 
 static void flush_client(struct output *o, struct client *c)
 {
-	while (c->len) {
-		ssize_t n = send(c->fd, c->buf + c->off, c->len, MSG_DONTWAIT | MSG_NOSIGNAL);
-
-		if (n > 0) {
-			c->off += (size_t)n;
-			c->len -= (size_t)n;
-			continue;
-		}
-		if (n < 0 && errno == EINTR)
-			continue;
-		if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK))
-			break;
+	if (out_send_pending(c->fd, c->buf, &c->off, &c->len))
 		drop_client(o, c);
-		return;
-	}
-	if (!c->len)
-		c->off = 0;
 }
 
 static void stream_send(struct output *o, const struct out_msg *m, int n)

@@ -29,6 +29,7 @@
  * go again once there is room, so a client never misses a release.
  */
 #include "publish/output.h"
+#include "publish/listen.h"
 
 #include "avatargw/wire.h"
 
@@ -412,25 +413,12 @@ static uint8_t *vcl_room(struct vrpn *v, struct vcl *c, size_t n)
 
 static void vcl_flush(struct output *o, struct vcl *c)
 {
-	while (c->len) {
-		ssize_t n = send(c->fd, c->out + c->off, c->len, MSG_DONTWAIT | MSG_NOSIGNAL);
-
-		if (n > 0) {
-			c->off += (size_t)n;
-			c->len -= (size_t)n;
-			continue;
-		}
-		if (n < 0 && errno == EINTR)
-			continue;
-		if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK))
-			break;
+	if (out_send_pending(c->fd, c->out, &c->off, &c->len)) {
 		vcl_drop(o, c, false);
 		return;
 	}
-	if (!c->len) {
-		c->off = 0;
+	if (!c->len)
 		c->dropping_ns = 0;
-	}
 }
 
 static void vcl_dropped(struct output *o, struct vcl *c, uint64_t now)
