@@ -598,6 +598,35 @@ static int read_dropins(struct parse *p, const char *main_path)
 
 /* ---- pass 2: values ------------------------------------------------------------------ */
 
+/* "a, b or c" (last: " or ") or "a, b, c" (last: ", "): the names of a table, for messages */
+static void name_list(char *buf, size_t len, const char *(*name)(int i), int n, const char *last)
+{
+	size_t at = 0;
+
+	buf[0] = '\0';
+	for (int i = 0; i < n && at < len; i++)
+		at += (size_t)snprintf(buf + at, len - at, "%s%s", i == 0 ? "" : i == n - 1 ? last : ", ", name(i));
+}
+
+static const char *driver_name(int i)
+{
+	return trackers_table[i]->name;
+}
+
+static const char *output_name(int i)
+{
+	return e_out[i];
+}
+
+static int output_count(void)
+{
+	int n = 0;
+
+	while (e_out[n])
+		n++;
+	return n;
+}
+
 static bool valid_name(const char *s)
 {
 	size_t n = strlen(s);
@@ -1238,22 +1267,21 @@ static int build(struct parse *p)
 				if (c->n_sources == CFG_MAX_SOURCES)
 					return failf(p, e->where, "[%s]: more than %d sources", e->section,
 						     CFG_MAX_SOURCES);
-				if (!t)
-					return failf(p, e->where, "[%s] type: missing (sim, replay, modbus, can, hydra or polhemus)",
-						     e->section);
+				if (!t) {
+					char names[160];
+
+					name_list(names, sizeof(names), driver_name, trackers_count, " or ");
+					return failf(p, e->where, "[%s] type: missing (%s)", e->section, names);
+				}
 				src = &c->source[c->n_sources];
 				memset(src, 0, sizeof(*src));
 				snprintf(src->name, sizeof(src->name), "%s", name);
 				src->where = e->where;
 				src->driver = trackers_find(t->value);
 				if (src->driver < 0) {
-					char names[128];
-					size_t n = 0;
+					char names[160];
 
-					names[0] = '\0';
-					for (int d = 0; d < trackers_count; d++)
-						n += (size_t)snprintf(names + n, sizeof(names) - n, "%s%s", d ? ", " : "",
-								      trackers_table[d]->name);
+					name_list(names, sizeof(names), driver_name, trackers_count, ", ");
 					return failf(p, t->where, "[%s] type: unknown driver '%s' (known: %s)", e->section,
 						     t->value, names);
 				}
@@ -1294,9 +1322,12 @@ static int build(struct parse *p)
 				if (c->n_outputs == CFG_MAX_OUTPUTS)
 					return failf(p, e->where, "[%s]: more than %d outputs", e->section,
 						     CFG_MAX_OUTPUTS);
-				if (!t)
-					return failf(p, e->where, "[%s] type: missing (udp, multicast, tcp, unix, modbus, can, vrpn, vmc, vrchat or websocket)",
-						     e->section);
+				if (!t) {
+					char names[160];
+
+					name_list(names, sizeof(names), output_name, output_count(), " or ");
+					return failf(p, e->where, "[%s] type: missing (%s)", e->section, names);
+				}
 				o = &c->output[c->n_outputs];
 				memset(o, 0, sizeof(*o));
 				snprintf(o->name, sizeof(o->name), "%s", name);
