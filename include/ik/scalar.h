@@ -151,18 +151,29 @@ static inline sc_t sc_sqrt(sc_t a)
  * kinematics take 8 per evaluation; libm's sincos costs more, and results no
  * longer depend on the libm at hand. Larger and non-finite angles: libm.
  */
+#if SC_TYPE == SC_DOUBLE
+/* 1.5 * 2^52: x + this rounds x to an integer k held in the low bits (k mod 4 in the lowest two) */
+#define SC_RND_MAGIC 6755399441055744.0
+typedef uint64_t sc_bits_t;
+#else
+#define SC_RND_MAGIC 12582912.0f /* 1.5 * 2^23 */
+typedef uint32_t sc_bits_t;
+#endif
+
 static inline void sc_sincos(sc_t a, sc_t *s, sc_t *c)
 {
-	sc_t fn, r, z, p, q, ps, pc, hz, w, ts, tc;
-	unsigned n;
+	sc_t y, fn, r, z, p, q, ps, pc, hz, w, ts, tc;
+	sc_bits_t n;
 
 	if (!(a <= SC_C(8) && a >= SC_C(-8))) {
 		*s = sc_builtin_sin(a);
 		*c = sc_builtin_cos(a);
 		return;
 	}
-	fn = (sc_t)(int)(a * SC_C(0.63661977236758134308) + (a < 0 ? SC_C(-0.5) : SC_C(0.5)));
-	n = (unsigned)(int)fn;
+	/* the nearest multiple of pi/2: its count k in y's low bits, and as a value */
+	y = a * SC_C(0.63661977236758134308) + SC_RND_MAGIC;
+	fn = y - SC_RND_MAGIC;
+	__builtin_memcpy(&n, &y, sizeof(n));
 #if SC_TYPE == SC_DOUBLE
 	r = ((a - fn * 1.5707963267341256) - fn * 6.077100506303966e-11) - fn * 2.0222662487959506e-21;
 	z = r * r;
@@ -193,6 +204,93 @@ static inline void sc_sincos(sc_t a, sc_t *s, sc_t *c)
 	tc = n & 1u ? ps : pc;
 	*s = n & 2u ? -ts : ts;
 	*c = (n + 1u) & 2u ? -tc : tc;
+}
+
+#if defined(__GNUC__) && !defined(SC_NO_VECTOR)
+/*
+ * Four sc_sincos at once in GCC's generic vectors (SSE2 and NEON: two doubles
+ * or four floats per instruction; elsewhere the compiler splits them): the
+ * same operations in the same order, the quadrant by bit masks, so every lane
+ * equals sc_sincos bit for bit. Callers check |a| <= 8 first.
+ */
+#define SC_VEC 1
+typedef sc_t sc_v4 __attribute__((vector_size(4 * sizeof(sc_t))));
+#if SC_TYPE == SC_DOUBLE
+typedef int64_t sc_v4i __attribute__((vector_size(4 * sizeof(sc_t))));
+#else
+typedef int32_t sc_v4i __attribute__((vector_size(4 * sizeof(sc_t))));
+#endif
+
+static inline void sc_sincos_v4(const sc_v4 *pa, sc_v4 *s, sc_v4 *c)
+{
+	const int sign = 8 * (int)sizeof(sc_t) - 1;
+	const sc_v4 a = *pa;
+	sc_v4 y, fn, r, z, p, q, ps, pc, hz, w;
+	sc_v4i n, odd, is, ic, ts, tc;
+
+	y = a * SC_C(0.63661977236758134308) + SC_RND_MAGIC;
+	fn = y - SC_RND_MAGIC;
+	__builtin_memcpy(&n, &y, sizeof(n));
+#if SC_TYPE == SC_DOUBLE
+	r = ((a - fn * 1.5707963267341256) - fn * 6.077100506303966e-11) - fn * 2.0222662487959506e-21;
+	z = r * r;
+	p = -2.5050747763608083e-08 + z * 1.589623019695111e-10;
+	p = 2.755731362139104e-06 + z * p;
+	p = -0.00019841269829589555 + z * p;
+	p = 0.008333333333322118 + z * p;
+	p = -0.1666666666666663 + z * p;
+	q = 2.0875700841863214e-09 + z * -1.1358536519516824e-11;
+	q = -2.7557314179295147e-07 + z * q;
+	q = 2.4801587288851694e-05 + z * q;
+	q = -0.0013888888888873056 + z * q;
+	q = 0.041666666666666595 + z * q;
+#else
+	r = ((a - fn * 1.5703125f) - fn * 4.837512969970703e-4f) - fn * 7.549789954891882e-08f;
+	z = r * r;
+	p = 0.008332160762195971f + z * -0.0001951528322646598f;
+	p = -0.16666654609555026f + z * p;
+	q = -0.0013887316254782307f + z * 2.4433157107133406e-05f;
+	q = 0.04166664568298217f + z * q;
+#endif
+	ps = r + r * z * p;
+	hz = SC_C(0.5) * z;
+	w = SC_C(1) - hz;
+	pc = w + (((SC_C(1) - w) - hz) + z * z * q);
+	odd = -(n & 1);
+	__builtin_memcpy(&is, &ps, sizeof(is));
+	__builtin_memcpy(&ic, &pc, sizeof(ic));
+	ts = (is & ~odd) | (ic & odd);
+	tc = (ic & ~odd) | (is & odd);
+	ts ^= (n & 2) << (sign - 1);
+	tc ^= ((n + 1) & 2) << (sign - 1);
+	__builtin_memcpy(s, &ts, sizeof(*s));
+	__builtin_memcpy(c, &tc, sizeof(*c));
+}
+#endif
+
+/* sc_sincos of eight angles (the chain's half angles), four at a time where the compiler vectorises */
+static inline void sc_sincos8(const sc_t a[8], sc_t s[8], sc_t c[8])
+{
+	int i;
+#ifdef SC_VEC
+	bool small = true;
+
+	for (i = 0; i < 8; i++)
+		small &= a[i] <= SC_C(8) && a[i] >= SC_C(-8);
+	if (small) {
+		for (i = 0; i < 8; i += 4) {
+			sc_v4 va, vs, vc;
+
+			__builtin_memcpy(&va, &a[i], sizeof(va));
+			sc_sincos_v4(&va, &vs, &vc);
+			__builtin_memcpy(&s[i], &vs, sizeof(vs));
+			__builtin_memcpy(&c[i], &vc, sizeof(vc));
+		}
+		return;
+	}
+#endif
+	for (i = 0; i < 8; i++)
+		sc_sincos(a[i], &s[i], &c[i]);
 }
 
 /*
@@ -404,6 +502,12 @@ sc_t sc_sqrt(sc_t a);
 sc_t sc_acc_sqrt(sc_acc_t s);
 /* sin and cos of any representable angle, each within 0.6 ulp */
 void sc_sincos(sc_t a, sc_t *s, sc_t *c);
+
+static inline void sc_sincos8(const sc_t a[8], sc_t s[8], sc_t c[8])
+{
+	for (int i = 0; i < 8; i++)
+		sc_sincos(a[i], &s[i], &c[i]);
+}
 /* atan2 in [-pi, pi], within 0.6 ulp; atan2(0, 0) = 0; odd in y */
 sc_t sc_atan2(sc_t y, sc_t x);
 

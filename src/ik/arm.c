@@ -139,15 +139,16 @@ void arm_chain_eval(const struct arm *a, const sc_t q[ARM_DOF], struct arm_chain
 	 */
 	const sc_t sg[ARM_DOF] = { a->axis[0].z, a->axis[1].y, a->axis[2].x, a->axis[3].z,
 				   a->axis[4].x, a->axis[5].y, a->axis[6].x, a->axis[7].z };
-	sc_t s[ARM_DOF], c[ARM_DOF];
+	sc_t h[ARM_DOF], s[ARM_DOF], c[ARM_DOF];
 	struct quat *r = ch->r;
 	struct vec3 *p = ch->p, u1x, u4z, u5y, u8y;
 	int i;
 
-	for (i = 0; i < ARM_DOF; i++) {
-		sc_sincos(sc_mul(q[i], SC_C(0.5)), &s[i], &c[i]);
+	for (i = 0; i < ARM_DOF; i++)
+		h[i] = sc_mul(q[i], SC_C(0.5));
+	sc_sincos8(h, s, c);
+	for (i = 0; i < ARM_DOF; i++)
 		s[i] = sc_mul(sg[i], s[i]);
-	}
 	r[0].w = SC_C(1);
 	r[0].x = r[0].y = r[0].z = 0;
 	p[0].x = p[0].y = p[0].z = 0;
