@@ -215,6 +215,59 @@ static void test_trajectory_warm(void **state)
 	}
 }
 
+/*
+ * ik_solve_pose: the same posture as ik_solve, and segment poses equal, bit
+ * for bit, to arm_fk_pose at it, whichever way the solve ended (tracking,
+ * reset, the matrix backend, an unreachable or invalid target).
+ */
+static void expect_pose_of(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t,
+			   const double *seed, const struct ik_opts *o)
+{
+	struct ik_result r1, r2;
+	struct arm_pose got, want;
+	double q1[ARM_DOF], q2[ARM_DOF];
+
+	memset(&got, 0xa5, sizeof(got));
+	ik_solve(a, kin, t, seed, o, q1, &r1);
+	ik_solve_pose(a, kin, t, seed, o, q2, &r2, &got);
+	assert_memory_equal(q1, q2, sizeof(q1));
+	assert_int_equal(r1.flags, r2.flags);
+	assert_int_equal(r1.iters, r2.iters);
+	arm_fk_pose(a, q2, &want);
+	assert_memory_equal(&got, &want, sizeof(got));
+}
+
+static void test_solve_pose(void **state)
+{
+	static struct row rows[600];
+	size_t n = load("trajectory.csv", rows, 600, 1), i;
+	struct arm a;
+	struct ik_opts o;
+	double prev[ARM_DOF];
+	struct ik_result res;
+	struct ik_target t, bad;
+	struct vec3 far = { 3, 0, 0 };
+	struct quat id = { 1, 0, 0, 0 }, zero = { 0, 0, 0, 0 };
+
+	(void)state;
+	assert_int_equal(n, 600);
+	arm_init(&a, ARM_RIGHT, &bench_dims, NULL);
+	ik_default_opts(&o);
+	for (i = 0; i < n; i++) {
+		target_of(&rows[i], &t);
+		expect_pose_of(&a, &ik_kin_dq, &t, i ? prev : NULL, &o);
+		if (i % 50 == 0)
+			expect_pose_of(&a, &ik_kin_mat, &t, i ? prev : NULL, &o);
+		ik_solve(&a, &ik_kin_dq, &t, i ? prev : NULL, &o, prev, &res);
+	}
+	ik_target_set(&t, &far, &id);
+	expect_pose_of(&a, &ik_kin_dq, &t, prev, &o);
+	ik_target_set(&bad, &far, &zero);
+	assert_false(bad.valid);
+	expect_pose_of(&a, &ik_kin_dq, &bad, prev, &o);
+	expect_pose_of(&a, &ik_kin_dq, &bad, NULL, &o);
+}
+
 /* the left arm solves the mirror image with the same angles */
 static void test_left_arm(void **state)
 {
@@ -512,6 +565,7 @@ int main(void)
 		cmocka_unit_test(test_solve_random_matrix),
 		cmocka_unit_test(test_paper_newton),
 		cmocka_unit_test(test_trajectory_warm),
+		cmocka_unit_test(test_solve_pose),
 		cmocka_unit_test(test_left_arm),
 		cmocka_unit_test(test_unreachable),
 		cmocka_unit_test(test_bad_targets),

@@ -66,6 +66,7 @@ struct avatar_pose {
 	 * large); the hand's say on the elbow fades out as it grows.
 	 */
 	sc_t hand_misfit[2];
+	struct arm_pose seg[2];      /* per arm, the segment poses at q (arm_fk_pose), for publishing */
 };
 
 #define avatar_init SCN(avatar_init)

@@ -99,6 +99,7 @@ struct ik_result {
 #define ik_lsq_step SCN(ik_lsq_step)
 #define ik_newton SCN(ik_newton)
 #define ik_solve SCN(ik_solve)
+#define ik_solve_pose SCN(ik_solve_pose)
 #define ik_rest_posture SCN(ik_rest_posture)
 #define ik_swivel_solve SCN(ik_swivel_solve)
 
@@ -129,6 +130,14 @@ unsigned ik_newton(const struct arm *a, const struct ik_kin *kin, const struct i
  */
 unsigned ik_solve(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t, const sc_t *seed,
 		  const struct ik_opts *o, sc_t q[ARM_DOF], struct ik_result *res);
+/*
+ * ik_solve, and the arm's segment poses at the returned q in pose (what
+ * arm_fk_pose gives): from the solver's own last evaluation, which is at q
+ * whenever it ran Newton steps with the dual-quaternion backend (the common
+ * case), else evaluated here. pose NULL: ik_solve.
+ */
+unsigned ik_solve_pose(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t, const sc_t *seed,
+		       const struct ik_opts *o, sc_t q[ARM_DOF], struct ik_result *res, struct arm_pose *pose);
 /* The rest posture used by a reset: all zero (upper arm down, elbow at 90 deg), clamped to the limits. */
 void ik_rest_posture(const struct arm *a, sc_t q[ARM_DOF]);
 /*

@@ -236,18 +236,23 @@ void arm_fk(const struct arm *a, const sc_t q[ARM_DOF], struct dq *ee)
 	dq_from_rt(&ch.r[ARM_DOF], &ch.p[ARM_DOF], ee);
 }
 
+void arm_chain_pose(const struct arm_chain *ch, struct arm_pose *out)
+{
+	out->shoulder = ch->p[1];
+	out->elbow = ch->p[4];
+	out->wrist = ch->p[5];
+	out->hand = ch->p[8];
+	out->upper_arm = ch->r[4];
+	out->forearm = ch->r[5];
+	out->hand_rot = ch->r[8];
+}
+
 void arm_fk_pose(const struct arm *a, const sc_t q[ARM_DOF], struct arm_pose *out)
 {
 	struct arm_chain ch;
 
 	arm_chain_eval(a, q, &ch, NULL);
-	out->shoulder = ch.p[1];
-	out->elbow = ch.p[4];
-	out->wrist = ch.p[5];
-	out->hand = ch.p[8];
-	out->upper_arm = ch.r[4];
-	out->forearm = ch.r[5];
-	out->hand_rot = ch.r[8];
+	arm_chain_pose(&ch, out);
 }
 
 void arm_jacobian(const struct arm *a, const sc_t q[ARM_DOF], sc_t J[6][ARM_DOF], struct dq *ee)

@@ -515,7 +515,7 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 		else
 			seed = pq;
 	}
-	flags = ik_solve(a, kin, t, seed, o, q, res);
+	flags = ik_solve_pose(a, kin, t, seed, o, q, res, &out->seg[side]);
 	if ((av->body.model & AVATAR_REACH_FIRST) && t->valid && (flags & IK_UNREACHABLE) &&
 	    res->err.pos > o->tol_pos) {
 		/*
@@ -530,6 +530,7 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 			posture_err(a, t, q2, &e2);
 			if (e2.pos < res->err.pos) {
 				q_set(q, q2);
+				arm_fk_pose(a, q, &out->seg[side]);
 				res->err = e2;
 				res->flags &= ~(unsigned)IK_LIMITED;
 				for (int i = 0; i < ARM_DOF; i++)
@@ -559,6 +560,10 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 				out->q[side][i] = prev ? prev->q[side][i] : SC_C(0);
 			if (!prev)
 				ik_rest_posture(&av->arm[side], out->q[side]);
+			if (prev)
+				out->seg[side] = prev->seg[side];
+			else
+				arm_fk_pose(&av->arm[side], out->q[side], &out->seg[side]);
 			out->res[side] = (struct ik_result){ IK_BAD_TARGET, 0, 0, { 0, 0 } };
 			out->hand_misfit[side] = prev ? prev->hand_misfit[side] : SC_C(0);
 		}

@@ -77,20 +77,20 @@ void ik_rest_posture(const struct arm *a, sc_t q[ARM_DOF])
  * With check, J and V are skipped once the errors are within tolerance.
  */
 static bool kin_dq(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_target *t, bool check, sc_t tol_pos,
-		   sc_t tol_rot, sc_t J[6][ARM_DOF], sc_t V[6], struct ik_err *err)
+		   sc_t tol_rot, sc_t J[6][ARM_DOF], sc_t V[6], struct ik_err *err, struct arm_chain *chain)
 {
-	struct arm_chain ch;
+	struct arm_chain own, *chp = chain ? chain : &own;
 	struct quat rc, re;
 	struct vec3 rp, te, dp;
 	struct twist tw;
 	sc_t half;
 
-	arm_chain_eval(a, q, &ch, NULL);
-	quat_conj(&ch.r[ARM_DOF], &rc);
+	arm_chain_eval(a, q, chp, NULL);
+	quat_conj(&chp->r[ARM_DOF], &rc);
 	quat_mul(&t->r, &rc, &re);
-	dp.x = t->p.x - ch.p[ARM_DOF].x;
-	dp.y = t->p.y - ch.p[ARM_DOF].y;
-	dp.z = t->p.z - ch.p[ARM_DOF].z;
+	dp.x = t->p.x - chp->p[ARM_DOF].x;
+	dp.y = t->p.y - chp->p[ARM_DOF].y;
+	dp.z = t->p.z - chp->p[ARM_DOF].z;
 	err->pos = v3_norm(&dp);
 	if (check && err->pos < tol_pos) {
 		/* the rotation error alone, as the logarithm would compute it */
@@ -101,7 +101,7 @@ static bool kin_dq(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_t
 		if (err->rot < tol_rot)
 			return true;
 	}
-	quat_rotate(&re, &ch.p[ARM_DOF], &rp);
+	quat_rotate(&re, &chp->p[ARM_DOF], &rp);
 	te.x = t->p.x - rp.x;
 	te.y = t->p.y - rp.y;
 	te.z = t->p.z - rp.z;
@@ -113,20 +113,20 @@ static bool kin_dq(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_t
 	V[4] = tw.v.y;
 	V[5] = tw.v.z;
 	err->rot = 2 * half;
-	arm_chain_jacobian(a, &ch, J);
+	arm_chain_jacobian(a, chp, J);
 	return check && err->pos < tol_pos && err->rot < tol_rot;
 }
 
 static void kin_dq_eval(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_target *t, sc_t J[6][ARM_DOF],
 			sc_t V[6], struct ik_err *err)
 {
-	kin_dq(a, q, t, false, 0, 0, J, V, err);
+	kin_dq(a, q, t, false, 0, 0, J, V, err, NULL);
 }
 
 static bool kin_dq_eval_tol(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_target *t, sc_t tol_pos,
 			    sc_t tol_rot, sc_t J[6][ARM_DOF], sc_t V[6], struct ik_err *err)
 {
-	return kin_dq(a, q, t, true, tol_pos, tol_rot, J, V, err);
+	return kin_dq(a, q, t, true, tol_pos, tol_rot, J, V, err, NULL);
 }
 
 const struct ik_kin ik_kin_dq = {
@@ -509,10 +509,20 @@ static bool err_ok(const struct ik_err *e, const struct ik_opts *o)
 	return e->pos < o->tol_pos && e->rot < o->tol_rot;
 }
 
-/* the errors at q and, unless they are within tolerance (returns true), J and V */
+/*
+ * The errors at q and, unless they are within tolerance (returns true), J and
+ * V. With ch (not NULL) the dual-quaternion backend also leaves its chain
+ * there and *ch_at sets to whether ch now holds the chain at q.
+ */
 static bool kin_eval(const struct ik_kin *kin, const struct arm *a, const sc_t q[ARM_DOF], const struct ik_target *t,
-		     const struct ik_opts *o, sc_t J[6][ARM_DOF], sc_t V[6], struct ik_err *err)
+		     const struct ik_opts *o, sc_t J[6][ARM_DOF], sc_t V[6], struct ik_err *err,
+		     struct arm_chain *ch, bool *ch_at)
 {
+	if (ch) {
+		*ch_at = kin == &ik_kin_dq;
+		if (*ch_at)
+			return kin_dq(a, q, t, true, o->tol_pos, o->tol_rot, J, V, err, ch);
+	}
 	if (kin->eval_tol)
 		return kin->eval_tol(a, q, t, o->tol_pos, o->tol_rot, J, V, err);
 	kin->eval(a, q, t, J, V, err);
@@ -561,7 +571,7 @@ unsigned ik_newton(const struct arm *a, const struct ik_kin *kin, const struct i
 		return res->flags;
 	}
 	for (it = 0;; it++) {
-		if (kin_eval(kin, a, q, t, o, J, V, &res->err)) {
+		if (kin_eval(kin, a, q, t, o, J, V, &res->err, NULL, NULL)) {
 			res->flags |= IK_REACHED;
 			break;
 		}
@@ -588,7 +598,8 @@ unsigned ik_newton(const struct arm *a, const struct ik_kin *kin, const struct i
  * so that tracking does not wander into a corner of the limits.
  */
 static void newton_limited(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t,
-			   const struct ik_opts *o, sc_t center, sc_t q[ARM_DOF], struct ik_result *res)
+			   const struct ik_opts *o, sc_t center, sc_t q[ARM_DOF], struct ik_result *res,
+			   struct arm_chain *ch, bool *ch_at)
 {
 	sc_t J[6][ARM_DOF], V[6], W[6], x[ARM_DOF], z[ARM_DOF];
 	bool free[ARM_DOF];
@@ -598,7 +609,8 @@ static void newton_limited(const struct arm *a, const struct ik_kin *kin, const 
 		/* the first step moves the redundancy toward mid-range, the others only reach */
 		bool centre = it == 0 && center != 0;
 
-		if (kin_eval(kin, a, q, t, o, J, V, &res->err) || it >= o->max_iter)
+		/* every way out follows an evaluation at the final q */
+		if (kin_eval(kin, a, q, t, o, J, V, &res->err, ch, ch_at) || it >= o->max_iter)
 			break;
 		for (i = 0; i < ARM_DOF; i++)
 			free[i] = true;
@@ -647,10 +659,12 @@ static void newton_limited(const struct arm *a, const struct ik_kin *kin, const 
 	}
 }
 
-unsigned ik_solve(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t, const sc_t *seed,
-		  const struct ik_opts *o, sc_t q[ARM_DOF], struct ik_result *res)
+unsigned ik_solve_pose(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t, const sc_t *seed,
+		       const struct ik_opts *o, sc_t q[ARM_DOF], struct ik_result *res, struct arm_pose *pose)
 {
 	sc_t pref[ARM_DOF];
+	struct arm_chain ch, *chp = pose ? &ch : NULL;
+	bool ch_at = false;
 	int i;
 
 	res->flags = 0;
@@ -670,7 +684,7 @@ unsigned ik_solve(const struct arm *a, const struct ik_kin *kin, const struct ik
 		for (i = 0; i < ARM_DOF; i++)
 			q[i] = pref[i];
 		res->flags |= IK_BAD_TARGET;
-		return res->flags;
+		goto out;
 	}
 	if (seed && !(res->flags & IK_BAD_TARGET) && o->warm_iter > 0) {
 		/* tracking: a few limited Newton steps from the previous posture move the arm least */
@@ -679,14 +693,14 @@ unsigned ik_solve(const struct arm *a, const struct ik_kin *kin, const struct ik
 		wo.max_iter = o->warm_iter;
 		for (i = 0; i < ARM_DOF; i++)
 			q[i] = pref[i];
-		newton_limited(a, kin, t, &wo, o->center_gain, q, res);
+		newton_limited(a, kin, t, &wo, o->center_gain, q, res, chp, &ch_at);
 		if (err_ok(&res->err, o))
 			goto done;
 	}
 	if (ik_swivel_solve(a, t, pref, o, q, &res->evals))
 		res->flags |= IK_ANALYTIC;
 	arm_clamp(a, q);
-	newton_limited(a, kin, t, o, 0, q, res);
+	newton_limited(a, kin, t, o, 0, q, res, chp, &ch_at);
 done:
 	if (err_ok(&res->err, o))
 		res->flags |= IK_REACHED;
@@ -695,5 +709,19 @@ done:
 	for (i = 0; i < ARM_DOF; i++)
 		if (q[i] <= a->lim.lo[i] || q[i] >= a->lim.hi[i])
 			res->flags |= IK_LIMITED;
+out:
+	if (pose) {
+		/* the solver's last evaluation was at q (newton_limited ends with one): its chain, unless another backend made it */
+		if (ch_at)
+			arm_chain_pose(&ch, pose);
+		else
+			arm_fk_pose(a, q, pose);
+	}
 	return res->flags;
+}
+
+unsigned ik_solve(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t, const sc_t *seed,
+		  const struct ik_opts *o, sc_t q[ARM_DOF], struct ik_result *res)
+{
+	return ik_solve_pose(a, kin, t, seed, o, q, res, NULL);
 }

@@ -81,6 +81,9 @@ struct arm_chain {
  * if J is not NULL, the spatial Jacobian of arm_jacobian.
  */
 void arm_chain_eval(const struct arm *a, const sc_t q[ARM_DOF], struct arm_chain *c, sc_t J[6][ARM_DOF]);
+#define arm_chain_pose SCN(arm_chain_pose)
+/* the segment poses of a chain (what arm_fk_pose gives) */
+void arm_chain_pose(const struct arm_chain *c, struct arm_pose *out);
 /* the Jacobian of a chain arm_chain_eval computed (with J NULL) */
 void arm_chain_jacobian(const struct arm *a, const struct arm_chain *c, sc_t J[6][ARM_DOF]);
 /*

@@ -7,7 +7,9 @@
  * k[4] with k[5]'s rotation (the forearm), the wrist at k[7] with k[8]'s
  * rotation (the hand), the hand at k[8] (the end effector, which tracks the
  * hand sensor). arm_fk_pose() gives exactly these, as positions and
- * rotations in the chest frame; each is taken to the world with one
+ * rotations in the chest frame, and the avatar keeps them with its posture
+ * (avatar_pose.seg, from the solver's last evaluation: no kinematics are
+ * evaluated again here); each is taken to the world with one
  * rotation and one quaternion product (no dual-quaternion products here:
  * this runs for every avatar at every cycle).
  */
@@ -100,7 +102,7 @@ void encode_frame(const struct encode_in *in, struct wire_frame *out)
 		put_pose(&pf->sensor[WIRE_S_HEAD], &out->segment[WIRE_SEG_HEAD]);
 	for (int side = 0; side < 2; side++) {
 		const struct ik_result *r = &pose->res[side];
-		struct arm_pose ap;
+		const struct arm_pose *ap;
 		struct wire_pose *seg = &out->segment[seg0[side]];
 
 		out->arm[side].ik_flags = (uint16_t)r->flags;
@@ -110,11 +112,11 @@ void encode_frame(const struct encode_in *in, struct wire_frame *out)
 			flags |= WIRE_F_UNREACHED;
 		for (int j = 0; j < ARM_DOF; j++)
 			out->joint[1 + side * ARM_DOF + j] = (float)pose->q[side][j];
-		arm_fk_pose(&in->av->arm[side], pose->q[side], &ap);
-		put_pose_chest(&pose->chest.r, &cp, &ap.shoulder, &ap.upper_arm, &seg[0]);
-		put_pose_chest(&pose->chest.r, &cp, &ap.elbow, &ap.forearm, &seg[1]);
-		put_pose_chest(&pose->chest.r, &cp, &ap.wrist, &ap.hand_rot, &seg[2]);
-		put_pose_chest(&pose->chest.r, &cp, &ap.hand, &ap.hand_rot, &seg[3]);
+		ap = &pose->seg[side];
+		put_pose_chest(&pose->chest.r, &cp, &ap->shoulder, &ap->upper_arm, &seg[0]);
+		put_pose_chest(&pose->chest.r, &cp, &ap->elbow, &ap->forearm, &seg[1]);
+		put_pose_chest(&pose->chest.r, &cp, &ap->wrist, &ap->hand_rot, &seg[2]);
+		put_pose_chest(&pose->chest.r, &cp, &ap->hand, &ap->hand_rot, &seg[3]);
 	}
 	out->h.flags = flags;
 }
