@@ -10,7 +10,8 @@
  * rotations in the chest frame, and the avatar keeps them with its posture
  * (avatar_pose.seg, from the solver's last evaluation: no kinematics are
  * evaluated again here); each is taken to the world with one
- * rotation and one quaternion product (no dual-quaternion products here:
+ * matrix product (the chest's rotation as a matrix, once) and a rotation with
+ * one quaternion product (no dual-quaternion products here:
  * this runs for every avatar at every cycle).
  */
 #include "publish/encode.h"
@@ -33,18 +34,20 @@ static void put_pose(const struct dq *d, struct wire_pose *p)
 	p->q[3] = (float)d->r.z;
 }
 
-/* a segment of the chest frame (position p, rotation r) in the world */
-static void put_pose_chest(const struct quat *cr, const struct vec3 *cp, const struct vec3 *p, const struct quat *r,
-			   struct wire_pose *out)
+/* the chest's rotation as a matrix (cm) and its position (cp): a point in the chest frame to the world */
+static void put_point_chest(const sc_t cm[3][3], const struct vec3 *cp, const struct vec3 *p, struct wire_pose *out)
 {
-	struct vec3 w;
+	out->p[0] = (float)(cp->x + cm[0][0] * p->x + cm[0][1] * p->y + cm[0][2] * p->z);
+	out->p[1] = (float)(cp->y + cm[1][0] * p->x + cm[1][1] * p->y + cm[1][2] * p->z);
+	out->p[2] = (float)(cp->z + cm[2][0] * p->x + cm[2][1] * p->y + cm[2][2] * p->z);
+}
+
+/* a rotation in the chest frame (r) to the world (cr r) */
+static void put_rot_chest(const struct quat *cr, const struct quat *r, struct wire_pose *out)
+{
 	struct quat q;
 
-	quat_rotate(cr, p, &w);
 	quat_mul(cr, r, &q);
-	out->p[0] = (float)(cp->x + w.x);
-	out->p[1] = (float)(cp->y + w.y);
-	out->p[2] = (float)(cp->z + w.z);
 	out->q[0] = (float)q.w;
 	out->q[1] = (float)q.x;
 	out->q[2] = (float)q.y;
@@ -66,6 +69,7 @@ void encode_frame(const struct encode_in *in, struct wire_frame *out)
 	static const int seg0[2] = { WIRE_SEG_R_SHOULDER, WIRE_SEG_L_SHOULDER };
 	uint16_t flags = 0;
 	struct vec3 cp;
+	sc_t cm[3][3];
 
 	for (int i = 0; i < WIRE_SENSORS; i++) {
 		struct wire_sensor_sample *s = &out->sensor[i];
@@ -94,6 +98,7 @@ void encode_frame(const struct encode_in *in, struct wire_frame *out)
 		return;
 	}
 	dq_translation(&pose->chest, &cp);
+	quat_to_mat3(&pose->chest.r, cm);
 	out->joint[0] = (float)pose->head_yaw;
 	put_pose(&pose->chest, &out->segment[WIRE_SEG_CHEST]);
 	if (pf->state[WIRE_S_HEAD] == WIRE_SENSOR_MISSING)
@@ -113,34 +118,45 @@ void encode_frame(const struct encode_in *in, struct wire_frame *out)
 		for (int j = 0; j < ARM_DOF; j++)
 			out->joint[1 + side * ARM_DOF + j] = (float)pose->q[side][j];
 		ap = &pose->seg[side];
-		put_pose_chest(&pose->chest.r, &cp, &ap->shoulder, &ap->upper_arm, &seg[0]);
-		put_pose_chest(&pose->chest.r, &cp, &ap->elbow, &ap->forearm, &seg[1]);
-		put_pose_chest(&pose->chest.r, &cp, &ap->wrist, &ap->hand_rot, &seg[2]);
-		put_pose_chest(&pose->chest.r, &cp, &ap->hand, &ap->hand_rot, &seg[3]);
+		put_point_chest((const sc_t(*)[3])cm, &cp, &ap->shoulder, &seg[0]);
+		put_point_chest((const sc_t(*)[3])cm, &cp, &ap->elbow, &seg[1]);
+		put_point_chest((const sc_t(*)[3])cm, &cp, &ap->wrist, &seg[2]);
+		put_point_chest((const sc_t(*)[3])cm, &cp, &ap->hand, &seg[3]);
+		put_rot_chest(&pose->chest.r, &ap->upper_arm, &seg[0]);
+		put_rot_chest(&pose->chest.r, &ap->forearm, &seg[1]);
+		put_rot_chest(&pose->chest.r, &ap->hand_rot, &seg[2]);
+		memcpy(seg[3].q, seg[2].q, sizeof(seg[3].q)); /* the wrist and the hand turn together */
 	}
 	out->h.flags = flags;
 }
 
-static bool pose_finite(const struct wire_pose *p)
+/*
+ * All finite: a float is NaN or infinite exactly when its exponent bits are
+ * all ones, so the largest magnitude pattern of a run says it for the run
+ * (no branch per value: this runs for every FRAME).
+ */
+static uint32_t worst_bits(const void *src, size_t n)
 {
-	for (int i = 0; i < 3; i++)
-		if (!isfinite(p->p[i]))
-			return false;
-	for (int i = 0; i < 4; i++)
-		if (!isfinite(p->q[i]))
-			return false;
-	return true;
+	const uint8_t *b = src;
+	uint32_t m = 0;
+
+	for (size_t i = 0; i < n; i++) {
+		uint32_t v;
+
+		memcpy(&v, b + i * sizeof(v), sizeof(v));
+		v &= 0x7fffffffu;
+		m = v > m ? v : m;
+	}
+	return m;
 }
 
 bool encode_frame_finite(const struct wire_frame *f)
 {
-	for (int i = 0; i < WIRE_JOINTS; i++)
-		if (!isfinite(f->joint[i]))
-			return false;
-	for (int i = 0; i < WIRE_SEGMENTS; i++)
-		if (i != WIRE_SEG_HEAD && !pose_finite(&f->segment[i]))
-			return false;
-	return true;
+	_Static_assert(sizeof(float) == sizeof(uint32_t) && sizeof(struct wire_pose) == 7 * sizeof(float),
+		       "IEEE single floats; a wire_pose is 7 of them");
+	/* the head segment is the head sensor's own pose: NaN while the sensor is missing */
+	return worst_bits(f->joint, WIRE_JOINTS) < 0x7f800000u && worst_bits(f->segment, WIRE_SEG_HEAD * 7) < 0x7f800000u &&
+	       worst_bits(&f->segment[WIRE_SEG_HEAD + 1], (WIRE_SEGMENTS - WIRE_SEG_HEAD - 1) * 7) < 0x7f800000u;
 }
 
 void encode_describe(const struct avatar *av, const char *name, double rate_hz, struct wire_describe *out)

@@ -101,6 +101,29 @@ static void put_str(struct wbuf *w, const char *s, size_t max)
 	w->n += len;
 }
 
+/*
+ * n floats stored back to back (an array, or structs of floats only): one copy
+ * where the host's floats already are the wire's (little-endian IEEE 754).
+ */
+static inline void put_f32s(struct wbuf *w, const void *src, size_t n)
+{
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__ && defined(__STDC_IEC_559__)
+	memcpy(w->p + w->n, src, n * sizeof(float));
+	w->n += n * sizeof(float);
+#else
+	const uint8_t *b = src;
+
+	for (size_t i = 0; i < n; i++) {
+		float f;
+
+		memcpy(&f, b + i * sizeof(float), sizeof(f));
+		put_f32(w, f);
+	}
+#endif
+}
+
+_Static_assert(sizeof(struct wire_pose) == 7 * sizeof(float), "a wire_pose is 7 floats, no padding");
+
 static inline void put_pose(struct wbuf *w, const struct wire_pose *p)
 {
 	for (int i = 0; i < 3; i++)
@@ -271,10 +294,8 @@ size_t wire_encode_frame(const struct wire_frame *f, uint8_t *buf)
 		put_u8(&w, 0);
 		put_f32(&w, f->arm[i].pos_err);
 	}
-	for (int i = 0; i < WIRE_JOINTS; i++)
-		put_f32(&w, f->joint[i]);
-	for (int i = 0; i < WIRE_SEGMENTS; i++)
-		put_pose(&w, &f->segment[i]);
+	put_f32s(&w, f->joint, WIRE_JOINTS);
+	put_f32s(&w, f->segment, 7 * WIRE_SEGMENTS);
 	if (f->h.flags & WIRE_F_INPUTS) {
 		/* a compatible addition: after the last field of the first FRAME layout */
 		put_u8(&w, f->in.present);
