@@ -449,5 +449,33 @@ class MulticastTest(unittest.TestCase):
                 self.assertEqual(d.stop(), 0)
 
 
+class CoalescedTest(unittest.TestCase):
+    def test_runs_of_frames_split_back(self):
+        """40 avatars: the daemon sends runs of FRAMEs as one segmented buffer, avatargw-dump takes
+        them coalesced (UDP_GRO) and splits them: every frame once, in order, exactly --count"""
+        port = free_port()
+        conf = ("[source s]\ntype = sim\npeople = 40\n[avatar a]\nperson = s/p0\ncount = 40\n"
+                "[output u]\ntype = udp\naddress = 127.0.0.1\nport = %d\n" % port)
+        with tempfile.TemporaryDirectory() as tmp:
+            d = Daemon(tmp, conf)
+            try:
+                fr = [m for _, m in dump(["--udp", "127.0.0.1:%d" % port], 2000)]
+                self.assertEqual(len(fr), 2000)
+                by = {}
+                for m in fr:
+                    by.setdefault(m["avatar"], []).append(m["seq"])
+                self.assertEqual(len(by), 40)
+                for k, seqs in by.items():
+                    self.assertEqual(seqs, list(range(seqs[0], seqs[0] + len(seqs))), "avatar %d" % k)
+                st = [m for _, m in dump(["--udp", "127.0.0.1:%d" % port, "--stats"], 4000)]
+                final = [m for m in st if m.get("final")]
+                self.assertEqual(len(final), 40)
+                self.assertGreater(final[0]["coalesced"], 40, final[0])
+                self.assertEqual(final[0]["malformed"], 0)
+                self.assertEqual(d.status()["outputs"][0].get("gso_off", 0), 0)
+            finally:
+                self.assertEqual(d.stop(), 0)
+
+
 if __name__ == "__main__":
     unittest.main()
