@@ -38,6 +38,7 @@ struct gw_avatar_stats {
  */
 struct gw_avatar {
 	const struct cfg_avatar *cfg;
+	uint16_t id;                /* cfg->id, without a trip to the configuration every cycle */
 	const struct avatar *av;
 	const struct ik_kin *kin;
 	struct ik_opts opts;
