@@ -268,6 +268,39 @@ static void test_solve_pose(void **state)
 	expect_pose_of(&a, &ik_kin_dq, &bad, NULL, &o);
 }
 
+/* the eight-at-a-time sines and cosines are sc_sincos's, bit for bit, in range and out of it */
+static void test_sincos8_same_bits(void **state)
+{
+	double a[8], s[8], c[8];
+	int k;
+
+	(void)state;
+	for (k = 0; k < 20000; k++) {
+		for (int i = 0; i < 8; i++) {
+			/* spread over [-8, 8], with exact multiples of pi/4 and tiny values among them */
+			uint32_t h = (uint32_t)(k * 8 + i) * 2654435761u;
+
+			a[i] = (i == 3) ? (double)(int)(h % 41 - 20) * (M_PI / 4) : ((double)h / 4294967295.0 - 0.5) * 16;
+			if (i == 5)
+				a[i] *= 1e-9;
+		}
+		if (k % 1000 == 999)
+			a[k / 1000 % 8] = (k & 1000) ? 1e3 : NAN; /* one lane out of range: every lane the scalar way */
+		sc_sincos8(a, s, c);
+		for (int i = 0; i < 8; i++) {
+			double es, ec;
+
+			sc_sincos(a[i], &es, &ec);
+			assert_memory_equal(&s[i], &es, sizeof(es));
+			assert_memory_equal(&c[i], &ec, sizeof(ec));
+			if (isfinite(a[i])) {
+				assert_true(fabs(es - sin(a[i])) < 4e-16);
+				assert_true(fabs(ec - cos(a[i])) < 4e-16);
+			}
+		}
+	}
+}
+
 /* the left arm solves the mirror image with the same angles */
 static void test_left_arm(void **state)
 {
@@ -566,6 +599,7 @@ int main(void)
 		cmocka_unit_test(test_paper_newton),
 		cmocka_unit_test(test_trajectory_warm),
 		cmocka_unit_test(test_solve_pose),
+		cmocka_unit_test(test_sincos8_same_bits),
 		cmocka_unit_test(test_left_arm),
 		cmocka_unit_test(test_unreachable),
 		cmocka_unit_test(test_bad_targets),

@@ -160,6 +160,54 @@ typedef uint64_t sc_bits_t;
 typedef uint32_t sc_bits_t;
 #endif
 
+/*
+ * The reduction and the polynomials of sc_sincos, written once for the
+ * scalar and the vector form (the same operations in the same order: the
+ * same bits): the nearest multiple of pi/2, its count k in y's low bits (n)
+ * and as a value (fn); then sin and cos of the remainder r in ps and pc.
+ */
+#if SC_TYPE == SC_DOUBLE
+#define SC_SINCOS_POLY(a, y, fn, n, r, z, p, q, ps, pc, hz, w)                                                   \
+	do {                                                                                                     \
+		y = a * SC_C(0.63661977236758134308) + SC_RND_MAGIC;                                             \
+		fn = y - SC_RND_MAGIC;                                                                           \
+		__builtin_memcpy(&n, &y, sizeof(n));                                                             \
+		r = ((a - fn * 1.5707963267341256) - fn * 6.077100506303966e-11) - fn * 2.0222662487959506e-21; \
+		z = r * r;                                                                                       \
+		p = -2.5050747763608083e-08 + z * 1.589623019695111e-10;                                         \
+		p = 2.755731362139104e-06 + z * p;                                                               \
+		p = -0.00019841269829589555 + z * p;                                                             \
+		p = 0.008333333333322118 + z * p;                                                                \
+		p = -0.1666666666666663 + z * p;                                                                 \
+		q = 2.0875700841863214e-09 + z * -1.1358536519516824e-11;                                        \
+		q = -2.7557314179295147e-07 + z * q;                                                             \
+		q = 2.4801587288851694e-05 + z * q;                                                              \
+		q = -0.0013888888888873056 + z * q;                                                              \
+		q = 0.041666666666666595 + z * q;                                                                \
+		ps = r + r * z * p;                                                                              \
+		hz = SC_C(0.5) * z;                                                                              \
+		w = SC_C(1) - hz;                                                                                \
+		pc = w + (((SC_C(1) - w) - hz) + z * z * q);                                                     \
+	} while (0)
+#else
+#define SC_SINCOS_POLY(a, y, fn, n, r, z, p, q, ps, pc, hz, w)                                                   \
+	do {                                                                                                     \
+		y = a * SC_C(0.63661977236758134308) + SC_RND_MAGIC;                                             \
+		fn = y - SC_RND_MAGIC;                                                                           \
+		__builtin_memcpy(&n, &y, sizeof(n));                                                             \
+		r = ((a - fn * 1.5703125f) - fn * 4.837512969970703e-4f) - fn * 7.549789954891882e-08f;          \
+		z = r * r;                                                                                       \
+		p = 0.008332160762195971f + z * -0.0001951528322646598f;                                         \
+		p = -0.16666654609555026f + z * p;                                                               \
+		q = -0.0013887316254782307f + z * 2.4433157107133406e-05f;                                       \
+		q = 0.04166664568298217f + z * q;                                                                \
+		ps = r + r * z * p;                                                                              \
+		hz = SC_C(0.5) * z;                                                                              \
+		w = SC_C(1) - hz;                                                                                \
+		pc = w + (((SC_C(1) - w) - hz) + z * z * q);                                                     \
+	} while (0)
+#endif
+
 static inline void sc_sincos(sc_t a, sc_t *s, sc_t *c)
 {
 	sc_t y, fn, r, z, p, q, ps, pc, hz, w, ts, tc;
@@ -170,35 +218,7 @@ static inline void sc_sincos(sc_t a, sc_t *s, sc_t *c)
 		*c = sc_builtin_cos(a);
 		return;
 	}
-	/* the nearest multiple of pi/2: its count k in y's low bits, and as a value */
-	y = a * SC_C(0.63661977236758134308) + SC_RND_MAGIC;
-	fn = y - SC_RND_MAGIC;
-	__builtin_memcpy(&n, &y, sizeof(n));
-#if SC_TYPE == SC_DOUBLE
-	r = ((a - fn * 1.5707963267341256) - fn * 6.077100506303966e-11) - fn * 2.0222662487959506e-21;
-	z = r * r;
-	p = -2.5050747763608083e-08 + z * 1.589623019695111e-10;
-	p = 2.755731362139104e-06 + z * p;
-	p = -0.00019841269829589555 + z * p;
-	p = 0.008333333333322118 + z * p;
-	p = -0.1666666666666663 + z * p;
-	q = 2.0875700841863214e-09 + z * -1.1358536519516824e-11;
-	q = -2.7557314179295147e-07 + z * q;
-	q = 2.4801587288851694e-05 + z * q;
-	q = -0.0013888888888873056 + z * q;
-	q = 0.041666666666666595 + z * q;
-#else
-	r = ((a - fn * 1.5703125f) - fn * 4.837512969970703e-4f) - fn * 7.549789954891882e-08f;
-	z = r * r;
-	p = 0.008332160762195971f + z * -0.0001951528322646598f;
-	p = -0.16666654609555026f + z * p;
-	q = -0.0013887316254782307f + z * 2.4433157107133406e-05f;
-	q = 0.04166664568298217f + z * q;
-#endif
-	ps = r + r * z * p;
-	hz = SC_C(0.5) * z;
-	w = SC_C(1) - hz;
-	pc = w + (((SC_C(1) - w) - hz) + z * z * q);
+	SC_SINCOS_POLY(a, y, fn, n, r, z, p, q, ps, pc, hz, w);
 	/* quadrant n: (s, c) = (ps, pc), (pc, -ps), (-ps, -pc), (-pc, ps) */
 	ts = n & 1u ? pc : ps;
 	tc = n & 1u ? ps : pc;
@@ -228,34 +248,7 @@ static inline void sc_sincos_v4(const sc_v4 *pa, sc_v4 *s, sc_v4 *c)
 	sc_v4 y, fn, r, z, p, q, ps, pc, hz, w;
 	sc_v4i n, odd, is, ic, ts, tc;
 
-	y = a * SC_C(0.63661977236758134308) + SC_RND_MAGIC;
-	fn = y - SC_RND_MAGIC;
-	__builtin_memcpy(&n, &y, sizeof(n));
-#if SC_TYPE == SC_DOUBLE
-	r = ((a - fn * 1.5707963267341256) - fn * 6.077100506303966e-11) - fn * 2.0222662487959506e-21;
-	z = r * r;
-	p = -2.5050747763608083e-08 + z * 1.589623019695111e-10;
-	p = 2.755731362139104e-06 + z * p;
-	p = -0.00019841269829589555 + z * p;
-	p = 0.008333333333322118 + z * p;
-	p = -0.1666666666666663 + z * p;
-	q = 2.0875700841863214e-09 + z * -1.1358536519516824e-11;
-	q = -2.7557314179295147e-07 + z * q;
-	q = 2.4801587288851694e-05 + z * q;
-	q = -0.0013888888888873056 + z * q;
-	q = 0.041666666666666595 + z * q;
-#else
-	r = ((a - fn * 1.5703125f) - fn * 4.837512969970703e-4f) - fn * 7.549789954891882e-08f;
-	z = r * r;
-	p = 0.008332160762195971f + z * -0.0001951528322646598f;
-	p = -0.16666654609555026f + z * p;
-	q = -0.0013887316254782307f + z * 2.4433157107133406e-05f;
-	q = 0.04166664568298217f + z * q;
-#endif
-	ps = r + r * z * p;
-	hz = SC_C(0.5) * z;
-	w = SC_C(1) - hz;
-	pc = w + (((SC_C(1) - w) - hz) + z * z * q);
+	SC_SINCOS_POLY(a, y, fn, n, r, z, p, q, ps, pc, hz, w);
 	odd = -(n & 1);
 	__builtin_memcpy(&is, &ps, sizeof(is));
 	__builtin_memcpy(&ic, &pc, sizeof(ic));
