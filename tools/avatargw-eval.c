@@ -436,7 +436,7 @@ static int parse_model(const char *s)
 		const char *name;
 		unsigned bit;
 	} names[] = { { "hand-elbow", AVATAR_HAND_ELBOW }, { "reach-first", AVATAR_REACH_FIRST },
-		      { "yaw-hands", AVATAR_YAW_HANDS } };
+		      { "yaw-hands", AVATAR_YAW_HANDS }, { "reach-chest", AVATAR_REACH_CHEST } };
 	unsigned m = 0;
 
 	if (!strcmp(s, "paper"))

@@ -39,7 +39,8 @@ extern "C" {
 #define AVATAR_HAND_ELBOW 0x1
 #define AVATAR_REACH_FIRST 0x2
 #define AVATAR_YAW_HANDS 0x4
-#define AVATAR_MODEL_DEFAULT (AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS)
+#define AVATAR_REACH_CHEST 0x8
+#define AVATAR_MODEL_DEFAULT (AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST)
 
 struct avatar_body {
 	struct arm_dims dims;     /* the right arm (and the left one unless avatar_set_left_arm() says otherwise) */
