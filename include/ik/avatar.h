@@ -17,7 +17,7 @@
  *    orientation then asks for is most plausible: little deviation (J7),
  *    flexion or extension (J8) within a wide range, the forearm a little
  *    pronated (J6), with a pull toward the elbow's natural place (down,
- *    turned out) and toward the previous frame's. The hand frame: y along
+ *    turned out). The hand frame: y along
  *    the hand, z toward the thumb. The IK starts from that posture instead
  *    of the previous frame's.
  *  - AVATAR_REACH_FIRST: when no posture inside the joint limits gives the
@@ -28,10 +28,9 @@
  *  - AVATAR_YAW_HANDS: the chest's yaw is the head's, pulled toward the
  *    heading of the line from the left to the right hand when the two
  *    agree (the head turns more often than the chest).
- *  - AVATAR_REACH_CHEST: a hand still off its sensor moves the chest
- *    toward it, at most 8 cm (the trunk leans, the shoulder girdle
- *    protracts), and the arms are solved again; kept if no hand ends
- *    farther from its sensor.
+ *  - AVATAR_REACH_CHEST: a hand sensor beyond the straight arm's reach
+ *    moves the chest toward it, at most 8 cm (the trunk leans, the
+ *    shoulder girdle protracts), before the arms are solved.
  */
 #ifndef IK_AVATAR_H
 #define IK_AVATAR_H
