@@ -196,8 +196,8 @@ static void test_lost_hand(void **state)
 	avatar_solve(&av, &ik_kin_dq, &o, &head, &lh, &rh, NULL, &p0);
 	assert_true(p0.res[ARM_LEFT].flags & IK_REACHED);
 	assert_true(p0.res[ARM_RIGHT].flags & IK_REACHED);
-	for (int i = 0; i < ARM_DOF; i++)
-		assert_true(fabs(p0.q[ARM_LEFT][i]) < 1e-6 && fabs(p0.q[ARM_RIGHT][i]) < 1e-6);
+	assert_true(arm_in_limits(&av.arm[ARM_LEFT], p0.q[ARM_LEFT]));
+	assert_true(arm_in_limits(&av.arm[ARM_RIGHT], p0.q[ARM_RIGHT]));
 	rh.r.x = NAN;
 	avatar_solve(&av, &ik_kin_dq, &o, &head, &lh, &rh, &p0, &p1);
 	assert_true(p1.res[ARM_RIGHT].flags & IK_BAD_TARGET);
@@ -219,19 +219,57 @@ static double rnd01(unsigned *s)
 	return (double)((*s >> 8) & 0xffffff) / 16777216.0;
 }
 
+static double dist3(const struct vec3 *a, const struct vec3 *b)
+{
+	return sqrt((a->x - b->x) * (a->x - b->x) + (a->y - b->y) * (a->y - b->y) + (a->z - b->z) * (a->z - b->z));
+}
+
 /*
- * AVATAR_HAND_ELBOW: with a straight wrist the hand's axis is the forearm's,
- * so from a reset the avatar finds the elbow that made the hand pose; the
- * paper's avatar (the rest posture's elbow plane) mostly does not.
+ * The elbow a straight wrist would mean (the model before the wrist's
+ * cost): on the circle of elbows about the shoulder-wrist line, the one
+ * nearest the point F behind the wrist along the hand's y axis.
+ */
+static void straight_wrist_elbow(const struct arm *a, const struct arm_pose *want, const struct dq *hand,
+				 struct vec3 *e)
+{
+	double A = a->dims.arm, F = a->dims.forearm, ax[3], L, x, r, v[3], k, n;
+	struct vec3 y, s = want->shoulder, w = want->wrist;
+	double p[3];
+
+	quat_rotate(&hand->r, &(struct vec3){ 0, 1, 0 }, &y);
+	ax[0] = w.x - s.x, ax[1] = w.y - s.y, ax[2] = w.z - s.z;
+	L = sqrt(ax[0] * ax[0] + ax[1] * ax[1] + ax[2] * ax[2]);
+	for (int i = 0; i < 3; i++)
+		ax[i] /= L;
+	x = (A * A - F * F + L * L) / (2 * L);
+	r = sqrt(A * A - x * x);
+	p[0] = w.x - F * y.x - s.x, p[1] = w.y - F * y.y - s.y, p[2] = w.z - F * y.z - s.z;
+	k = p[0] * ax[0] + p[1] * ax[1] + p[2] * ax[2];
+	for (int i = 0; i < 3; i++)
+		v[i] = p[i] - k * ax[i];
+	n = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+	*e = (struct vec3){ s.x + x * ax[0] + r * v[0] / n, s.y + x * ax[1] + r * v[1] / n,
+			    s.z + x * ax[2] + r * v[2] / n };
+}
+
+/*
+ * AVATAR_HAND_ELBOW: the elbow from the hand's orientation through the
+ * wrist's cost. Arms in random postures with the wrist as people hold it
+ * (the forearm about 30 degrees pronated, little deviation, flexed or
+ * extended up to 60 degrees: a wave, a pointing hand): from a reset the
+ * avatar puts the elbow near the true one. Taking the forearm along the hand
+ * (a straight wrist) misses it whenever the wrist is bent; the paper's
+ * avatar (the rest posture's elbow plane) misses it mostly.
  */
 static void test_hand_elbow(void **state)
 {
 	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.08 };
 	const struct vec3 off = { 0, 0, 0.25 };
+	const double near = 0.03, deg = M_PI / 180;
 	struct avatar av;
 	struct ik_opts o;
 	unsigned seed = 5;
-	int found[2] = { 0, 0 }, n = 200;
+	int found[2] = { 0, 0 }, straight = 0, n = 200;
 
 	(void)state;
 	avatar_init(&av, &dims, &off, NULL);
@@ -241,41 +279,46 @@ static void test_hand_elbow(void **state)
 		struct dq head, hand[2], ee;
 		struct arm_pose want;
 		struct avatar_pose p;
+		struct vec3 se;
 
 		for (int j = 1; j <= 4; j++)
 			q[j] = av.arm[ARM_RIGHT].lim.lo[j] +
 			       (av.arm[ARM_RIGHT].lim.hi[j] - av.arm[ARM_RIGHT].lim.lo[j]) * (0.1 + 0.8 * rnd01(&seed));
+		q[5] = (-30 + 40 * (rnd01(&seed) - 0.5)) * deg;
+		q[6] = 20 * (rnd01(&seed) - 0.5) * deg;
+		q[7] = 120 * (rnd01(&seed) - 0.5) * deg;
 		arm_fk(&av.arm[ARM_RIGHT], q, &ee);
 		arm_fk_pose(&av.arm[ARM_RIGHT], q, &want);
 		hand[ARM_RIGHT] = ee;
 		arm_mirror_dq(&ee, &hand[ARM_LEFT]);
 		origin_head(&av, &head);
+		straight_wrist_elbow(&av.arm[ARM_RIGHT], &want, &ee, &se);
+		straight += dist3(&se, &want.elbow) < near;
 		for (int m = 0; m < 2; m++) {
 			struct arm_pose got;
-			double e;
 
 			av.body.model = m ? AVATAR_MODEL_DEFAULT : AVATAR_PAPER;
 			avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
 			assert_true(p.res[ARM_RIGHT].flags & IK_REACHED);
 			assert_true(arm_in_limits(&av.arm[ARM_RIGHT], p.q[ARM_RIGHT]));
 			arm_fk_pose(&av.arm[ARM_RIGHT], p.q[ARM_RIGHT], &got);
-			e = sqrt((got.elbow.x - want.elbow.x) * (got.elbow.x - want.elbow.x) +
-				 (got.elbow.y - want.elbow.y) * (got.elbow.y - want.elbow.y) +
-				 (got.elbow.z - want.elbow.z) * (got.elbow.z - want.elbow.z));
-			found[m] += e < 1e-3;
+			found[m] += dist3(&got.elbow, &want.elbow) < near;
 			/* the left arm is the mirror image */
 			for (int j = 0; j < ARM_DOF; j++)
 				assert_true(fabs(p.q[ARM_LEFT][j] - p.q[ARM_RIGHT][j]) < 1e-6);
 		}
 	}
-	print_message("elbow found within 1 mm: paper %d, hand elbow %d of %d\n", found[0], found[1], n);
-	assert_true(found[1] >= n * 97 / 100);
+	print_message("elbow found within 3 cm: paper %d, straight wrist %d, wrist cost %d of %d\n", found[0],
+		      straight, found[1], n);
+	/* random shoulders include unnatural elbows, where the pull toward a natural one misleads */
+	assert_true(found[1] >= n / 2);
+	assert_true(straight < found[1] / 3);
 	assert_true(found[0] < n / 2);
 }
 
 /*
  * AVATAR_REACH_FIRST: a hand the arm can reach but turned beyond the
- * wrist's deviation limit. The solver alone trades position for
+ * wrist's deviation limit (J7). The solver alone trades position for
  * orientation; the avatar puts the hand on its sensor.
  */
 static void test_reach_first(void **state)
@@ -299,7 +342,7 @@ static void test_reach_first(void **state)
 		for (int j = 1; j < ARM_DOF; j++)
 			q[j] = av.arm[ARM_RIGHT].lim.lo[j] +
 			       (av.arm[ARM_RIGHT].lim.hi[j] - av.arm[ARM_RIGHT].lim.lo[j]) * (0.15 + 0.7 * rnd01(&seed));
-		q[7] = 1.05 + 0.4 * rnd01(&seed); /* wrist deviation 60 to 83 degrees: its limit is 30 */
+		q[6] = 1.05 + 0.4 * rnd01(&seed); /* wrist deviation 60 to 83 degrees: its limit is 30 */
 		arm_fk(&av.arm[ARM_RIGHT], q, &ee);
 		arm_mirror_dq(&ee, &lee);
 		dq_translation(&ee, &want);

@@ -759,7 +759,7 @@ static void test_defaults(void **state)
 	const struct cfg_source *s = &c->source[0], *r = &c->source[1];
 	const struct cfg_avatar *a = &c->avatar[0];
 	static const double lim[8][2] = { { -30, 30 }, { -120, 30 }, { -60, 120 }, { -90, 90 },
-					  { -90, 60 }, { -90, 90 }, { -70, 70 }, { -30, 30 } };
+					  { -90, 60 }, { -90, 90 }, { -30, 30 }, { -80, 80 } };
 
 	assert_near(c->daemon.rate, 240, 0);
 	assert_int_equal(c->daemon.mode, CFG_LOOP_DEADLINE);

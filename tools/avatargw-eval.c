@@ -32,7 +32,7 @@
  *   {r,l}sh_*, {r,l}el_*, {r,l}wr_*, {r,l}hd_*  shoulder, elbow, wrist
  *                      centre and hand (end effector) positions, world, m
  *   {r,l}res           |hand - hand sensor|, m
- *   {r,l}misfit        AVATAR_HAND_ELBOW: running misfit of the hand's axis, degrees
+ *   {r,l}misfit        AVATAR_HAND_ELBOW: running mean of the least swivel cost (1: one natural range)
  *   {r,l}q1..q8        joint angles, degrees
  *   head_*, lhand_*, rhand_*  the sensor poses the avatar was given
  */
@@ -388,7 +388,7 @@ static void print_frame(size_t i, const struct row *r, const struct avatar *av, 
 		dq_translation(&hand[s], &hs);
 		printf(",%.7f,%.3f", sqrt((w[3].x - hs.x) * (w[3].x - hs.x) + (w[3].y - hs.y) * (w[3].y - hs.y) +
 					 (w[3].z - hs.z) * (w[3].z - hs.z)),
-		       p->hand_misfit[s] * RAD2DEG);
+		       (double)p->hand_misfit[s]);
 		for (int j = 0; j < ARM_DOF; j++)
 			printf(",%.4f", p->q[s][j] * RAD2DEG);
 	}
@@ -436,7 +436,7 @@ static int parse_model(const char *s)
 		const char *name;
 		unsigned bit;
 	} names[] = { { "hand-elbow", AVATAR_HAND_ELBOW }, { "reach-first", AVATAR_REACH_FIRST },
-		      { "yaw-hands", AVATAR_YAW_HANDS } };
+		      { "yaw-hands", AVATAR_YAW_HANDS }, { "reach-chest", AVATAR_REACH_CHEST } };
 	unsigned m = 0;
 
 	if (!strcmp(s, "paper"))

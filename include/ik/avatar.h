@@ -13,9 +13,13 @@
  * What avatargw adds to the paper (struct avatar_body.model, each measured
  * on motion capture in docs/FIDELITY.md):
  *  - AVATAR_HAND_ELBOW: the arm's redundancy (the elbow's swivel about the
- *    shoulder-wrist line) is resolved toward the elbow the hand sensor
- *    points at: a straight wrist puts the forearm along the hand's y axis.
- *    The IK starts from that posture instead of the previous frame's.
+ *    shoulder-wrist line) is resolved where the wrist the hand sensor's
+ *    orientation then asks for is most plausible: little deviation (J7),
+ *    flexion or extension (J8) within a wide range, the forearm a little
+ *    pronated (J6), with a pull toward the elbow's natural place (down,
+ *    turned out). The hand frame: y along
+ *    the hand, z toward the thumb. The IK starts from that posture instead
+ *    of the previous frame's.
  *  - AVATAR_REACH_FIRST: when no posture inside the joint limits gives the
  *    hand both the sensor's position and its orientation, the hand still
  *    goes to the sensor's position and the wrist turns as far toward the
@@ -24,6 +28,9 @@
  *  - AVATAR_YAW_HANDS: the chest's yaw is the head's, pulled toward the
  *    heading of the line from the left to the right hand when the two
  *    agree (the head turns more often than the chest).
+ *  - AVATAR_REACH_CHEST: a hand sensor beyond the straight arm's reach
+ *    moves the chest toward it, at most 8 cm (the trunk leans, the
+ *    shoulder girdle protracts), before the arms are solved.
  */
 #ifndef IK_AVATAR_H
 #define IK_AVATAR_H
@@ -39,7 +46,8 @@ extern "C" {
 #define AVATAR_HAND_ELBOW 0x1
 #define AVATAR_REACH_FIRST 0x2
 #define AVATAR_YAW_HANDS 0x4
-#define AVATAR_MODEL_DEFAULT (AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS)
+#define AVATAR_REACH_CHEST 0x8
+#define AVATAR_MODEL_DEFAULT (AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST)
 
 struct avatar_body {
 	struct arm_dims dims;     /* the right arm (and the left one unless avatar_set_left_arm() says otherwise) */
@@ -60,10 +68,9 @@ struct avatar_pose {
 	sc_t q[2][ARM_DOF];          /* joint angles per arm */
 	struct ik_result res[2];     /* per arm */
 	/*
-	 * AVATAR_HAND_ELBOW, per arm: running mean of how far (radians) the
-	 * hand's y axis is from every direction the forearm could have (a
-	 * bent wrist, or a sensor frame that is not the hand's, makes it
-	 * large); the hand's say on the elbow fades out as it grows.
+	 * AVATAR_HAND_ELBOW, per arm: running mean of the least cost of the
+	 * elbow's placement (the wrist's cost and the pulls; 1 is about one
+	 * natural range of one wrist joint). A diagnostic only.
 	 */
 	sc_t hand_misfit[2];
 	struct arm_pose seg[2];      /* per arm, the segment poses at q (arm_fk_pose), for publishing */
@@ -83,8 +90,11 @@ struct avatar_pose {
  * The avatar's default joint limits: the benchmark's (arm_default_limits)
  * but J2 from -120 degrees, so that an arm raised sideways above the
  * shoulder (a wave overhead, a thrust up) stays reachable: -90 cut the
- * motion-capture clips' overhead frames (docs/FIDELITY.md). The daemon's
- * j1..j8 defaults are these.
+ * motion-capture clips' overhead frames (docs/FIDELITY.md); and J7 -30..30,
+ * J8 -80..80: with the hand's z toward the thumb, J7 (about x, across the
+ * palm) is the wrist's deviation and J8 (about z) its flexion and extension
+ * (the benchmark's -70..70 and -30..30 fit a hand frame whose z is the
+ * palm's normal). The daemon's j1..j8 defaults are these.
  */
 void avatar_default_limits(struct arm_limits *out);
 /* lim NULL: avatar_default_limits(); model = AVATAR_MODEL_DEFAULT (change it after, if wanted) */

@@ -10,6 +10,12 @@ void avatar_default_limits(struct arm_limits *out)
 {
 	arm_default_limits(out);
 	out->lo[1] = SC_C(-2.0943951023931957); /* -120 degrees */
+	/* J7 turns the hand about its x axis, across the palm: deviation, -30..30 degrees */
+	out->lo[6] = SC_C(-0.5235987755982988);
+	out->hi[6] = SC_C(0.5235987755982988);
+	/* J8 about its z axis, the thumb's: flexion (+) and extension (-), -80..80 degrees */
+	out->lo[7] = SC_C(-1.3962634015954636);
+	out->hi[7] = SC_C(1.3962634015954636);
 }
 
 void avatar_init(struct avatar *av, const struct arm_dims *dims, const struct vec3 *head_offset,
@@ -238,14 +244,123 @@ static bool goal_init(const struct arm *a, const struct ik_target *t, sc_t q1, s
 	return true;
 }
 
-/* the swivel at which the point F behind the wrist along the hand's y axis lies */
-static sc_t goal_hand_phi(const struct arm *a, const struct arm_goal *g)
-{
-	struct vec3 v = { g->w.x - g->s.x, g->w.y - g->s.y, g->w.z - g->s.z };
-	struct vec3 hy = { g->R[0][1], g->R[1][1], g->R[2][1] };
+/*
+ * The wrist's cost of a swivel. With the elbow at swivel phi the forearm
+ * frame (y along the forearm, x the elbow's axis) is fixed, and the hand's
+ * orientation relative to it is J6..J8: pronation about the forearm (J6),
+ * then about the hand's x axis, across the palm (J7: radial or ulnar
+ * deviation, a narrow range), then about its z axis, the thumb's
+ * (J8: flexion or extension, a wide one). A real wrist bends far in flexion
+ * and extension (waving, pointing with the hand up) and little sideways,
+ * and the forearm rests half pronated. The cost
+ *
+ *   W6 (1 - cos(J6 - MU6) cos J7) + W7 sin^2 J7 + W8 (1 - cos J7 cos J8)
+ *
+ * is, for small angles, (J6 - MU6)^2 / SIG6^2 + J7^2 / SIG7^2 + J8^2 / SIG8^2
+ * (the weights below), and grows more slowly than that for large ones (a
+ * hand frame that is not the hand's does not drag the elbow all the way).
+ * Every term is a dot product of the hand's axes with vectors that are
+ * linear in (cos phi, sin phi):
+ *
+ *   forearm f = (K ax - r v) / F, v = cos phi d0 + sin phi d1 (K = L - x)
+ *   elbow axis x5 = sin phi d0 - cos phi d1,  x5 x f = -(K v + r ax) / F
+ *   sin J7 = -f.Z, cos J7 cos J8 = f.Y,
+ *   cos J7 (cos J6, sin J6) = ((x5 x f).Z, x5.Z)
+ *
+ * so the cost is k0 + k1 cos phi + k2 sin phi + k3 cos 2phi + k4 sin 2phi,
+ * without one angle computed.
+ */
+#define W6 SC_C(3.2422778766)  /* 2 / SIG6^2, SIG6 = 45 degrees about MU6 */
+#define W7 SC_C(2.7194094061)  /* 1 / SIG7^2 - W6 / 2 - W8 / 2, SIG7 = 25 degrees */
+#define W8 SC_C(1.8237813055)  /* 2 / SIG8^2, SIG8 = 60 degrees */
+#define COS_MU6 SC_C(0.8660254037844387) /* MU6 = -30 degrees: the forearm at rest, a little pronated */
+#define SIN_MU6 SC_C(-0.5)
 
-	v3_axpy(-a->dims.forearm, &hy, &v);
-	return sc_atan2(v3_dot(&v, &g->d1), v3_dot(&v, &g->d0));
+struct trig2 {
+	sc_t k[5]; /* k0 + k1 cos + k2 sin + k3 cos 2 + k4 sin 2 */
+};
+
+/* c += w (a0 + a1 cos + a2 sin)^2 */
+static void trig2_add_sq(struct trig2 *c, sc_t w, sc_t a0, sc_t a1, sc_t a2)
+{
+	sc_t h1 = sc_mul(SC_C(0.5), sc_mul(a1, a1)), h2 = sc_mul(SC_C(0.5), sc_mul(a2, a2));
+
+	c->k[0] += sc_mul(w, sc_mul(a0, a0) + h1 + h2);
+	c->k[1] += sc_mul(w, 2 * sc_mul(a0, a1));
+	c->k[2] += sc_mul(w, 2 * sc_mul(a0, a2));
+	c->k[3] += sc_mul(w, h1 - h2);
+	c->k[4] += sc_mul(w, sc_mul(a1, a2));
+}
+
+/* c += w (1 - cos(phi - phi0)), phi0 given by its cosine and sine */
+static void trig2_add_pull(struct trig2 *c, sc_t w, sc_t c0, sc_t s0)
+{
+	c->k[0] += w;
+	c->k[1] -= sc_mul(w, c0);
+	c->k[2] -= sc_mul(w, s0);
+}
+
+static void goal_wrist_cost(const struct arm *a, const struct arm_goal *g, struct trig2 *c)
+{
+	const sc_t F = a->dims.forearm, r = g->r;
+	struct vec3 Y = { g->R[0][1], g->R[1][1], g->R[2][1] }, Z = { g->R[0][2], g->R[1][2], g->R[2][2] };
+	sc_t K = sc_sqrt(sc_max(sc_mul(F, F) - sc_mul(r, r), SC_C(0)));
+	sc_t iF = sc_div(SC_C(1), F), Ki = sc_mul(K, iF), ri = sc_mul(r, iF);
+	sc_t aZ = v3_dot(&g->ax, &Z), d0Z = v3_dot(&g->d0, &Z), d1Z = v3_dot(&g->d1, &Z);
+	/* f.Z = z0 + z1 cos + z2 sin, f.Y = y0 + y1 cos + y2 sin, cos J7 cos(J6 - MU6) = p0 + p1 cos + p2 sin */
+	sc_t z0 = sc_mul(Ki, aZ), z1 = -sc_mul(ri, d0Z), z2 = -sc_mul(ri, d1Z);
+	sc_t y0 = sc_mul(Ki, v3_dot(&g->ax, &Y)), y1 = -sc_mul(ri, v3_dot(&g->d0, &Y));
+	sc_t y2 = -sc_mul(ri, v3_dot(&g->d1, &Y));
+	sc_t p0 = -sc_mul(COS_MU6, sc_mul(ri, aZ));
+	sc_t p1 = -sc_mul(COS_MU6, sc_mul(Ki, d0Z)) - sc_mul(SIN_MU6, d1Z);
+	sc_t p2 = -sc_mul(COS_MU6, sc_mul(Ki, d1Z)) + sc_mul(SIN_MU6, d0Z);
+
+	c->k[0] = sc_mul(W6, SC_C(1) - p0) + sc_mul(W8, SC_C(1) - y0);
+	c->k[1] = -sc_mul(W6, p1) - sc_mul(W8, y1);
+	c->k[2] = -sc_mul(W6, p2) - sc_mul(W8, y2);
+	c->k[3] = c->k[4] = 0;
+	trig2_add_sq(c, W7, z0, z1, z2);
+}
+
+static sc_t trig2_at(const struct trig2 *c, sc_t cp, sc_t sp)
+{
+	sc_t c2 = sc_mul(cp, cp) - sc_mul(sp, sp), s2 = 2 * sc_mul(sp, cp);
+
+	return c->k[0] + sc_mul(c->k[1], cp) + sc_mul(c->k[2], sp) + sc_mul(c->k[3], c2) + sc_mul(c->k[4], s2);
+}
+
+#define SWIVEL_STEPS 24
+#define COS15 SC_C(0.9659258262890683)
+#define SIN15 SC_C(0.25881904510252074)
+#define STEP15 SC_C(0.2617993877991494)
+
+/*
+ * The least of a trig2 over the circle: 24 samples 15 degrees apart (their
+ * cosines and sines by rotation), then the parabola through the best and
+ * its neighbours. Writes the angle; returns the least value.
+ */
+static sc_t trig2_min(const struct trig2 *c, sc_t *phi)
+{
+	sc_t v[SWIVEL_STEPS], cp = SC_C(1), sp = 0, best = 0, d, den;
+	int k, kb = 0;
+
+	for (k = 0; k < SWIVEL_STEPS; k++) {
+		sc_t nc = sc_mul(cp, COS15) - sc_mul(sp, SIN15);
+
+		v[k] = trig2_at(c, cp, sp);
+		if (k == 0 || v[k] < best)
+			best = v[k], kb = k;
+		sp = sc_mul(sp, COS15) + sc_mul(cp, SIN15);
+		cp = nc;
+	}
+	{
+		sc_t vm = v[(kb + SWIVEL_STEPS - 1) % SWIVEL_STEPS], vp = v[(kb + 1) % SWIVEL_STEPS];
+
+		den = vm - 2 * best + vp;
+		d = den > SC_EPS ? sc_clamp(sc_div(vm - vp, 2 * den), SC_C(-0.5), SC_C(0.5)) : SC_C(0);
+		*phi = sc_wrap_pi(sc_mul(sc_from_int(kb) + d, STEP15));
+		return best - sc_mul(sc_mul(SC_C(0.25), vm - vp), d);
+	}
 }
 
 /*
@@ -326,31 +441,14 @@ static bool goal_posture(const struct arm *a, const struct arm_goal *g, sc_t phi
 }
 
 /*
- * How far the hand's y axis is from the cone of directions the forearm can
- * have: a forearm from any elbow of the circle to the wrist makes the angle
- * gamma with the shoulder-wrist line. Radians.
+ * Where on the goal's circle the elbow of posture q lies, as the cosine
+ * and sine of its swivel: the right arm's elbow is Rz(q1) [(S, 0, 0) +
+ * Ry(q2) Rx(q3) (0, 0, -A)] (J4 turns about the upper arm); the left
+ * arm's, mirrored, is the same numbers. false on the axis.
  */
-static sc_t goal_hand_misfit(const struct arm *a, const struct arm_goal *g)
+static bool goal_swivel_of(const struct arm *a, const struct arm_goal *g, const sc_t q[ARM_DOF], sc_t *cp, sc_t *sp)
 {
-	struct vec3 hy = { g->R[0][1], g->R[1][1], g->R[2][1] };
-	sc_t along, gamma, ang;
-
-	/* the forearm's part along the axis: (L - x) / F, L - x = sqrt(F^2 - r^2) */
-	along = sc_div(sc_sqrt(sc_max(sc_mul(a->dims.forearm, a->dims.forearm) - sc_mul(g->r, g->r), SC_C(0))),
-		       a->dims.forearm);
-	gamma = sc_acos(along);
-	ang = sc_acos(v3_dot(&hy, &g->ax));
-	return sc_abs(ang - gamma);
-}
-
-/*
- * The swivel on the goal's circle of the elbow of posture q: the right
- * arm's elbow is Rz(q1) [(S, 0, 0) + Ry(q2) Rx(q3) (0, 0, -A)] (J4 turns
- * about the upper arm); the left arm's, mirrored, is the same numbers.
- */
-static sc_t goal_phi_of(const struct arm *a, const struct arm_goal *g, const sc_t q[ARM_DOF])
-{
-	sc_t s1, c1, s2, c2, s3, c3, A = a->dims.arm;
+	sc_t s1, c1, s2, c2, s3, c3, A = a->dims.arm, x, y, n;
 	struct vec3 u, e, v;
 
 	sc_sincos(q[0], &s1, &c1);
@@ -361,50 +459,69 @@ static sc_t goal_phi_of(const struct arm *a, const struct arm_goal *g, const sc_
 	u.x += a->dims.shoulder;
 	e = (struct vec3){ sc_mul(c1, u.x) - sc_mul(s1, u.y), sc_mul(s1, u.x) + sc_mul(c1, u.y), u.z };
 	v = (struct vec3){ e.x - g->s.x, e.y - g->s.y, e.z - g->s.z };
-	return sc_atan2(v3_dot(&v, &g->d1), v3_dot(&v, &g->d0));
+	x = v3_dot(&v, &g->d0);
+	y = v3_dot(&v, &g->d1);
+	n = sc_sqrt(sc_mul(x, x) + sc_mul(y, y));
+	if (!(n > SC_C(1e-4)))
+		return false;
+	*cp = sc_div(x, n);
+	*sp = sc_div(y, n);
+	return true;
 }
 
-/* misfit below this: the hand leads the elbow fully; above MISFIT_NONE: not at all */
-#define MISFIT_FULL SC_C(0.14)  /* 8 degrees */
-#define MISFIT_NONE SC_C(0.44)  /* 25 degrees */
 #define MISFIT_RATE SC_C(0.02)  /* of the running mean per frame */
+/*
+ * Besides the wrist: a pull of the elbow toward its natural place, down and
+ * turned 30 degrees out (the least effort against gravity; where people's
+ * elbows are when nothing else says), and optionally toward where it was
+ * the frame before. Each costs as much at 90 degrees off as one SIG of the
+ * wrist.
+ */
+#define W_NATURAL SC_C(1)
+#define W_TRACK SC_C(0) /* 1 changed the clips' medians by under 0.1 cm and cost 3 sines and cosines: off */
+#define COS_NATURAL SC_C(0.8660254037844387) /* -30 degrees: d1 = ax x d0 points inward for a forward reach */
+#define SIN_NATURAL SC_C(-0.5)
 
 /*
- * The posture to start the IK from: the elbow where the hand's y axis says
- * (the forearm along the hand, a straight wrist) as far as the hand is
- * trusted, else where the previous frame had it (base: the previous
- * posture, or at a reset the solver's own choice), J1 at 0; J6..J8 what
- * the orientation then asks. Updates the running misfit. false when
- * the wrist centre is too close to the shoulder (the solver then starts
- * from base).
+ * The least cost swivel of a goal: the wrist's, the natural place's and,
+ * with prev, the previous posture's. Returns the least cost.
+ */
+static sc_t goal_swivel(const struct arm *a, const struct arm_goal *g, const sc_t *prev, sc_t *phi)
+{
+	struct trig2 c;
+	sc_t cp, sp;
+
+	goal_wrist_cost(a, g, &c);
+	trig2_add_pull(&c, W_NATURAL, COS_NATURAL, SIN_NATURAL);
+	if (W_TRACK > 0 && prev && goal_swivel_of(a, g, prev, &cp, &sp))
+		trig2_add_pull(&c, W_TRACK, cp, sp);
+	return trig2_min(&c, phi);
+}
+
+/*
+ * The posture to start the IK from: the elbow at the swivel of the least
+ * cost (goal_swivel), J1 at 0; J6..J8 what the orientation then asks.
+ * Updates the running mean of the least cost. false when the wrist centre
+ * is too close to the shoulder (the solver then starts from the previous
+ * posture).
  */
 static bool hand_elbow_posture(const struct arm *a, const struct ik_target *t, const sc_t *prev, bool first,
 			       sc_t prev_misfit, sc_t *misfit, sc_t pref[ARM_DOF])
 {
 	struct arm_goal g;
-	sc_t va, vw, m, trust, phi, base;
+	sc_t va, vw, m, phi;
 
 	/* J1 at mid-range: what the shoulders do beyond the chest's yaw is the solver's to find */
 	if (!goal_init(a, t, SC_C(0), &g))
 		return false;
-	m = goal_hand_misfit(a, &g);
+	m = goal_swivel(a, &g, first ? NULL : prev, &phi);
 	if (!first && sc_isfinite(prev_misfit))
 		m = prev_misfit + sc_mul(MISFIT_RATE, m - prev_misfit);
 	*misfit = m;
-	trust = sc_clamp(sc_div(MISFIT_NONE - m, MISFIT_NONE - MISFIT_FULL), SC_C(0), SC_C(1));
-	if (trust <= 0)
-		return false; /* the previous posture as it was */
-	phi = goal_hand_phi(a, &g);
-	if (trust < SC_C(1)) {
-		base = goal_phi_of(a, &g, prev);
-		phi = base + sc_mul(trust, sc_wrap_pi(phi - base));
-	}
 	return goal_posture(a, &g, phi, pref, &va, &vw);
 }
 
 /* ---- the hand to its sensor first ---------------------------------------------------------- */
-
-#define STEP15 SC_C(0.2617993877991494)
 
 static void q_set(sc_t dst[ARM_DOF], const sc_t src[ARM_DOF])
 {
@@ -431,7 +548,7 @@ static bool reach_first(const struct arm *a, const struct ik_target *t, const sc
 
 		if (!goal_init(a, t, q1s[i], &g) || !g.in_reach)
 			continue;
-		phi0 = goal_hand_phi(a, &g);
+		goal_swivel(a, &g, NULL, &phi0);
 		for (k = 0; k < 24; k++) {
 			/* 0, +1, -1, +2, ... steps from the hand's swivel */
 			sc_t phi = phi0 + sc_mul(SC_C((k + 1) / 2 * (k & 1 ? 1 : -1)), STEP15);
@@ -543,11 +660,77 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 	return flags;
 }
 
+/*
+ * AVATAR_REACH_CHEST: a hand left off its sensor (out of reach from the
+ * chest the head places, or reachable only past a limit) moves the chest
+ * toward it, by the hands' misses summed, at most REACH_SHIFT: the trunk
+ * leans and the shoulder girdle protracts that much (the head sensor is
+ * then that far from its offset: the neck bends). The arms are solved again
+ * from the new chest.
+ */
+#define REACH_SHIFT SC_C(0.08)
+
+/*
+ * AVATAR_REACH_CHEST: a hand sensor beyond the straight arm's reach from
+ * the chest the head places (for J1 at mid-range and at both limits) moves
+ * the chest toward it by what is missing, both arms' summed, at most
+ * REACH_SHIFT: the trunk leans and the shoulder girdle protracts that much
+ * (the head sensor is then that far from its offset: the neck bends).
+ * Before the solve, so a hand that becomes reachable costs one ordinary
+ * solve. Rewrites the targets; returns whether the chest moved.
+ */
+#define REACH_SHIFT SC_C(0.08)
+
+static bool reach_chest(const struct avatar *av, const struct dq *const hand[2], struct dq *chest,
+			struct ik_target t[2])
+{
+	struct vec3 d = { 0, 0, 0 }, dw, c;
+	struct quat r;
+	sc_t n;
+	int side;
+
+	for (side = 0; side < 2; side++) {
+		const struct arm *a = &av->arm[side];
+		struct arm_goal g;
+		sc_t excess;
+
+		if (!t[side].valid || !goal_init(a, &t[side], SC_C(0), &g) || g.in_reach)
+			continue;
+		excess = v3_norm(&(struct vec3){ g.w.x - g.s.x, g.w.y - g.s.y, g.w.z - g.s.z }) -
+			 (a->dims.arm + a->dims.forearm) + SC_C(0.001);
+		if ((goal_init(a, &t[side], a->lim.lo[0], &g) && g.in_reach) ||
+		    (goal_init(a, &t[side], a->lim.hi[0], &g) && g.in_reach))
+			continue;
+		goal_init(a, &t[side], SC_C(0), &g);
+		/* the right arm's frame; the left arm's mirrored back */
+		d.x += sc_mul(excess, side == ARM_LEFT ? -g.ax.x : g.ax.x);
+		d.y += sc_mul(excess, g.ax.y);
+		d.z += sc_mul(excess, g.ax.z);
+	}
+	n = v3_norm(&d);
+	if (!(n > 0))
+		return false;
+	if (n > REACH_SHIFT) {
+		sc_t k = sc_div(REACH_SHIFT, n);
+
+		d = (struct vec3){ sc_mul(d.x, k), sc_mul(d.y, k), sc_mul(d.z, k) };
+	}
+	r = chest->r;
+	quat_rotate(&r, &d, &dw);
+	dq_translation(chest, &c);
+	c = (struct vec3){ c.x + dw.x, c.y + dw.y, c.z + dw.z };
+	dq_from_rt(&r, &c, chest);
+	for (side = 0; side < 2; side++)
+		avatar_arm_target(chest, hand[side], &t[side]);
+	return true;
+}
+
 unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const struct ik_opts *o,
 		      const struct dq *head, const struct dq *lhand, const struct dq *rhand,
 		      const struct avatar_pose *prev, struct avatar_pose *out)
 {
 	const struct dq *hand[2] = { rhand, lhand };
+	struct ik_target t[2];
 	unsigned flags = 0;
 	int side;
 
@@ -571,11 +754,11 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 			out->chest = prev->chest;
 		return IK_BAD_TARGET;
 	}
-	for (side = 0; side < 2; side++) {
-		struct ik_target t;
-
-		avatar_arm_target(&out->chest, hand[side], &t);
-		flags |= avatar_arm_solve(av, side, kin, o, &t, prev, out);
-	}
+	for (side = 0; side < 2; side++)
+		avatar_arm_target(&out->chest, hand[side], &t[side]);
+	if (av->body.model & AVATAR_REACH_CHEST)
+		reach_chest(av, hand, &out->chest, t);
+	for (side = 0; side < 2; side++)
+		flags |= avatar_arm_solve(av, side, kin, o, &t[side], prev, out);
 	return flags;
 }

@@ -90,5 +90,51 @@ class EvalTest(unittest.TestCase):
         self.assertEqual(bad.returncode, 2)
 
 
+BENT = "bandai_dataset-1_bye_feminine_001"  # a goodbye wave: the hands bent back 45 to 65 degrees
+SWING = "cmu_16_11"  # a walk: the right arm swings back straight, just beyond reach from the head's chest
+
+
+class WristTest(unittest.TestCase):
+    """the elbow from the wrist's cost, and the chest toward an unreached hand, on the clips that need them"""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmpd = tempfile.TemporaryDirectory()
+        out = os.path.join(cls.tmpd.name, "eval.json")
+        clips = [c for c in (BENT, SWING) if os.path.exists(os.path.join(MOCAP, c + ".csv"))]
+        if SWING not in clips:
+            raise AssertionError("%s not found: the shared mocap clips are needed (SHARED=...)" % MOCAP)
+        p = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "eval.py"), "--build", BUILD, "--mocap", MOCAP,
+                            "--clips", ",".join(clips), "--trials", "0", "--no-plots", "--no-keyframes", "--out", "",
+                            "--json", out], capture_output=True, text=True, timeout=300)
+        if p.returncode != 0:
+            raise AssertionError("eval.py failed: " + p.stderr)
+        cls.res = json.load(open(out))["clips"]
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.tmpd.cleanup()
+
+    def test_bent_wrist(self):
+        # the straight-wrist elbow was 17 and 4 cm off here, its swivel leaning +47 / -38 degrees (bias)
+        if BENT not in self.res:
+            self.skipTest(BENT + " is not in the shared mocap set")
+        for side in ("right", "left"):
+            a = self.res[BENT]["arms"][side]
+            self.assertLess(a["elbow"]["median"], 5.0, side)
+            self.assertLess(a["swivel"]["median"], 20.0, side)
+            self.assertLess(abs(a["swivel_bias"]), 25.0, side)
+            self.assertEqual(a["resid_over_1mm"], 0, side)
+
+    def test_unreached_hand_moves_the_chest(self):
+        # 106 frames of the right hand were off their sensor from the chest the head places
+        for side in ("right", "left"):
+            a = self.res[SWING]["arms"][side]
+            self.assertEqual(a["resid_over_1mm"], 0, side)
+            self.assertEqual(a["resid_reachable"], 0, side)
+            self.assertLess(a["elbow"]["median"], 3.0, side)
+            self.assertLessEqual(a["elbow"]["median"], a["best_swivel"]["median"] + 1.0, side)
+
+
 if __name__ == "__main__":
     unittest.main()
