@@ -287,21 +287,28 @@ static inline void sc_sincos8(const sc_t a[8], sc_t s[8], sc_t c[8])
 }
 
 /*
- * atan on [-1, 1]: one reduction by pi/6 brings |t| below tan(pi/12), where
- * the odd series to t^19 is accurate to 1e-12 (libm's atan2 costs several
- * times more, and the closed-form IK calls it in its inner loop).
+ * atan2 with one division: of |y| and |x| the smaller over the larger is
+ * t in [0, 1]; beyond tan(pi/12) the argument is taken down by pi/6 in the
+ * same quotient, (sqrt3 lo - hi) / (sqrt3 hi + lo) = tan(atan t - pi/6),
+ * so |t| <= tan(pi/12) where the odd series to t^19 is accurate to 1e-13
+ * (libm's atan2 costs several times more, and the IK's closed-form search
+ * and the avatar's posture call it in their inner loops). The octant is
+ * put back without branches on the value. atan2 in (-pi, pi];
+ * atan2(0, 0) = 0.
  */
-static inline sc_t sc_atan_unit(sc_t t)
+static inline sc_t sc_atan2(sc_t y, sc_t x)
 {
-	sc_t off = 0, t2, p;
-	bool neg = t < 0;
+	sc_t ax = sc_builtin_fabs(x), ay = sc_builtin_fabs(y), lo, hi, t, t2, p, a;
+	bool steep = ay > ax, far;
 
-	if (neg)
-		t = -t;
-	if (t > SC_C(0.26794919243112270)) {
-		t = (SC_C(1.7320508075688772) * t - SC_C(1)) / (SC_C(1.7320508075688772) + t);
-		off = SC_C(0.52359877559829887);
-	}
+	if (ax == 0 && ay == 0)
+		return 0;
+	if (!(ax < SC_C(1e300)) || !(ay < SC_C(1e300)))
+		return sc_builtin_atan2(y, x); /* inf and NaN: the library's rules */
+	lo = steep ? ax : ay;
+	hi = steep ? ay : ax;
+	far = lo > SC_C(0.26794919243112270) * hi;
+	t = far ? (SC_C(1.7320508075688772) * lo - hi) / (SC_C(1.7320508075688772) * hi + lo) : lo / hi;
 	t2 = t * t;
 	/* atan t = t - t^3 (1/3 - t^2 (1/5 - t^2 (1/7 - ...))) */
 	p = SC_C(1.0 / 19);
@@ -313,25 +320,9 @@ static inline sc_t sc_atan_unit(sc_t t)
 	p = SC_C(1.0 / 7) - t2 * p;
 	p = SC_C(1.0 / 5) - t2 * p;
 	p = SC_C(1.0 / 3) - t2 * p;
-	p = off + t - t * t2 * p;
-	return neg ? -p : p;
-}
-
-/* atan2 in (-pi, pi]; atan2(0, 0) = 0 */
-static inline sc_t sc_atan2(sc_t y, sc_t x)
-{
-	sc_t ax = sc_builtin_fabs(x), ay = sc_builtin_fabs(y), a;
-
-	if (ax == 0 && ay == 0)
-		return 0;
-	if (!(ax < SC_C(1e300)) || !(ay < SC_C(1e300)))
-		return sc_builtin_atan2(y, x); /* inf and NaN: the library's rules */
-	if (ay <= ax)
-		a = sc_atan_unit(ay / ax);
-	else
-		a = SC_HALF_PI - sc_atan_unit(ax / ay);
-	if (x < 0)
-		a = SC_PI - a;
+	a = (far ? SC_C(0.52359877559829887) : SC_C(0)) + (t - t * t2 * p);
+	a = steep ? SC_HALF_PI - a : a;
+	a = x < 0 ? SC_PI - a : a;
 	return y < 0 ? -a : a;
 }
 

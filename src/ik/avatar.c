@@ -661,16 +661,6 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 }
 
 /*
- * AVATAR_REACH_CHEST: a hand left off its sensor (out of reach from the
- * chest the head places, or reachable only past a limit) moves the chest
- * toward it, by the hands' misses summed, at most REACH_SHIFT: the trunk
- * leans and the shoulder girdle protracts that much (the head sensor is
- * then that far from its offset: the neck bends). The arms are solved again
- * from the new chest.
- */
-#define REACH_SHIFT SC_C(0.08)
-
-/*
  * AVATAR_REACH_CHEST: a hand sensor beyond the straight arm's reach from
  * the chest the head places (for J1 at mid-range and at both limits) moves
  * the chest toward it by what is missing, both arms' summed, at most
@@ -680,6 +670,26 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
  * solve. Rewrites the targets; returns whether the chest moved.
  */
 #define REACH_SHIFT SC_C(0.08)
+
+/*
+ * goal_init(q1 = 0)'s in_reach, for the common case, from the hand's y axis
+ * alone (the second column of its rotation): the wrist centre no farther
+ * from the shoulder than the arm is long. Mirroring the left arm's target
+ * would only flip x on both points, which no distance sees.
+ */
+static bool wrist_in_reach(const struct arm *a, const struct ik_target *t)
+{
+	const struct arm_dims *dm = &a->dims;
+	const struct quat *r = &t->r;
+	sc_t sx = a->side == ARM_LEFT ? -dm->shoulder : dm->shoulder, reach = dm->arm + dm->forearm;
+	struct vec3 hy = { 2 * (sc_mul(r->x, r->y) - sc_mul(r->w, r->z)), SC_C(1) - 2 * (sc_mul(r->x, r->x) + sc_mul(r->z, r->z)),
+			   2 * (sc_mul(r->y, r->z) + sc_mul(r->w, r->x)) };
+	struct vec3 d = { t->p.x - sc_mul(dm->hand, hy.x) - sx, t->p.y - sc_mul(dm->hand, hy.y),
+			  t->p.z - sc_mul(dm->hand, hy.z) };
+
+	/* a margin of a millimetre: near the edge the exact test decides */
+	return v3_norm(&d) < reach - SC_C(0.001);
+}
 
 static bool reach_chest(const struct avatar *av, const struct dq *const hand[2], struct dq *chest,
 			struct ik_target t[2])
@@ -694,7 +704,7 @@ static bool reach_chest(const struct avatar *av, const struct dq *const hand[2],
 		struct arm_goal g;
 		sc_t excess;
 
-		if (!t[side].valid || !goal_init(a, &t[side], SC_C(0), &g) || g.in_reach)
+		if (!t[side].valid || wrist_in_reach(a, &t[side]) || !goal_init(a, &t[side], SC_C(0), &g) || g.in_reach)
 			continue;
 		excess = v3_norm(&(struct vec3){ g.w.x - g.s.x, g.w.y - g.s.y, g.w.z - g.s.z }) -
 			 (a->dims.arm + a->dims.forearm) + SC_C(0.001);
