@@ -322,37 +322,47 @@ static void goal_wrist_cost(const struct arm *a, const struct arm_goal *g, struc
 	trig2_add_sq(c, W7, z0, z1, z2);
 }
 
-static sc_t trig2_at(const struct trig2 *c, sc_t cp, sc_t sp)
-{
-	sc_t c2 = sc_mul(cp, cp) - sc_mul(sp, sp), s2 = 2 * sc_mul(sp, cp);
-
-	return c->k[0] + sc_mul(c->k[1], cp) + sc_mul(c->k[2], sp) + sc_mul(c->k[3], c2) + sc_mul(c->k[4], s2);
-}
-
 #define SWIVEL_STEPS 24
-#define COS15 SC_C(0.9659258262890683)
-#define SIN15 SC_C(0.25881904510252074)
 #define STEP15 SC_C(0.2617993877991494)
+
+/* cos and sin of k 15 degrees, k = 0..23 (cos 2phi and sin 2phi are entries 2k mod 24) */
+static const sc_t cos15k[SWIVEL_STEPS] = {
+	SC_C(1), SC_C(0.96592582628906828675), SC_C(0.86602540378443864676), SC_C(0.70710678118654752440),
+	SC_C(0.5), SC_C(0.25881904510252076235), SC_C(0), SC_C(-0.25881904510252076235),
+	SC_C(-0.5), SC_C(-0.70710678118654752440), SC_C(-0.86602540378443864676), SC_C(-0.96592582628906828675),
+	SC_C(-1), SC_C(-0.96592582628906828675), SC_C(-0.86602540378443864676), SC_C(-0.70710678118654752440),
+	SC_C(-0.5), SC_C(-0.25881904510252076235), SC_C(0), SC_C(0.25881904510252076235),
+	SC_C(0.5), SC_C(0.70710678118654752440), SC_C(0.86602540378443864676), SC_C(0.96592582628906828675)
+};
+static const sc_t sin15k[SWIVEL_STEPS] = {
+	SC_C(0), SC_C(0.25881904510252076235), SC_C(0.5), SC_C(0.70710678118654752440),
+	SC_C(0.86602540378443864676), SC_C(0.96592582628906828675), SC_C(1), SC_C(0.96592582628906828675),
+	SC_C(0.86602540378443864676), SC_C(0.70710678118654752440), SC_C(0.5), SC_C(0.25881904510252076235),
+	SC_C(0), SC_C(-0.25881904510252076235), SC_C(-0.5), SC_C(-0.70710678118654752440),
+	SC_C(-0.86602540378443864676), SC_C(-0.96592582628906828675), SC_C(-1), SC_C(-0.96592582628906828675),
+	SC_C(-0.86602540378443864676), SC_C(-0.70710678118654752440), SC_C(-0.5), SC_C(-0.25881904510252076235)
+};
 
 /*
  * The least of a trig2 over the circle: 24 samples 15 degrees apart (their
- * cosines and sines by rotation), then the parabola through the best and
- * its neighbours. Writes the angle; returns the least value.
+ * cosines and sines from the tables), then the parabola through the best
+ * and its neighbours. Writes the angle; returns the least value.
  */
 static sc_t trig2_min(const struct trig2 *c, sc_t *phi)
 {
-	sc_t v[SWIVEL_STEPS], cp = SC_C(1), sp = 0, best = 0, d, den;
+	sc_t v[SWIVEL_STEPS], best, d, den;
 	int k, kb = 0;
 
 	for (k = 0; k < SWIVEL_STEPS; k++) {
-		sc_t nc = sc_mul(cp, COS15) - sc_mul(sp, SIN15);
+		int k2 = (2 * k) % SWIVEL_STEPS;
 
-		v[k] = trig2_at(c, cp, sp);
-		if (k == 0 || v[k] < best)
-			best = v[k], kb = k;
-		sp = sc_mul(sp, COS15) + sc_mul(cp, SIN15);
-		cp = nc;
+		v[k] = c->k[0] + sc_mul(c->k[1], cos15k[k]) + sc_mul(c->k[2], sin15k[k]) + sc_mul(c->k[3], cos15k[k2]) +
+		       sc_mul(c->k[4], sin15k[k2]);
 	}
+	best = v[0];
+	for (k = 1; k < SWIVEL_STEPS; k++)
+		if (v[k] < best)
+			best = v[k], kb = k;
 	{
 		sc_t vm = v[(kb + SWIVEL_STEPS - 1) % SWIVEL_STEPS], vp = v[(kb + 1) % SWIVEL_STEPS];
 
