@@ -84,6 +84,7 @@ struct replay {
 	_Atomic uint64_t steps_req; /* stepped: added by the control thread */
 	uint64_t steps_done;
 	int tfd;
+	bool tfd_used; /* an event-mode loop waits on tfd (replay_fd was asked) */
 };
 
 static const char *const roles[CSV_ROLES] = { "head", "left_hand", "right_hand" };
@@ -841,11 +842,12 @@ static int replay_poll(struct tracker *t, const struct tracker_clock *now)
 {
 	struct replay *rp = t->priv;
 
-	if (rp->tfd >= 0) {
+	if (rp->tfd_used) {
+		/* one read takes every expiration since the last; a periodic loop never waits on it */
 		uint64_t exp;
+		ssize_t rd = read(rp->tfd, &exp, sizeof(exp));
 
-		while (read(rp->tfd, &exp, sizeof(exp)) > 0)
-			;
+		(void)rd;
 	}
 	if (!rp->t0_ns)
 		rp->t0_ns = now->mono_ns;
@@ -858,7 +860,10 @@ static int replay_poll(struct tracker *t, const struct tracker_clock *now)
 
 static int replay_fd(struct tracker *t)
 {
-	return ((struct replay *)t->priv)->tfd;
+	struct replay *rp = t->priv;
+
+	rp->tfd_used = rp->tfd >= 0;
+	return rp->tfd;
 }
 
 /* ---- the control thread's side ------------------------------------------------------------------------ */

@@ -477,5 +477,33 @@ class CoalescedTest(unittest.TestCase):
                 self.assertEqual(d.stop(), 0)
 
 
+class EventModeTest(unittest.TestCase):
+    def test_sources_wake_the_loop(self):
+        """mode = events: the loop sleeps until a source has samples (sim at 100 Hz, replay at 50 Hz
+        here), a cycle per wake-up, no busy loop, the frames at the sources' rates"""
+        port = free_port()
+        conf = ("[daemon]\nmode = events\n"
+                "[source s]\ntype = sim\nsample_rate = 100\n"
+                "[source r]\ntype = replay\nfile = builtin:cmu_141_16.csv\nsample_rate = 50\n"
+                "[avatar a]\nperson = s/p0\n[avatar b]\nid = 1\nperson = r\n"
+                "[output u]\ntype = udp\naddress = 127.0.0.1\nport = %d\n" % port)
+        with tempfile.TemporaryDirectory() as tmp:
+            d = Daemon(tmp, conf)
+            try:
+                st0 = d.status()
+                fr = [m for _, m in dump(["--udp", "127.0.0.1:%d" % port], 600)]
+                st1 = d.status()
+                dt = st1["uptime_s"] - st0["uptime_s"]
+                cycles = st1["loop"]["cycles"] - st0["loop"]["cycles"]
+                self.assertGreater(dt, 1.0)
+                # a cycle per wake-up of either source (some wake-ups coincide), never a busy loop
+                self.assertLess(cycles, (100 + 50) * dt * 1.3 + 20, "%d cycles in %.2f s" % (cycles, dt))
+                self.assertGreater(cycles, 100 * dt * 0.7, "%d cycles in %.2f s" % (cycles, dt))
+                # every cycle publishes both avatars, and the cycles come at the sources' rates
+                self.assertEqual(len([m for m in fr if m["avatar"] == 0]), 300)
+            finally:
+                self.assertEqual(d.stop(), 0)
+
+
 if __name__ == "__main__":
     unittest.main()
