@@ -8,6 +8,84 @@
 #include "ik/dq.h"
 #include "ik_private.h"
 
+#if IK_COMPACT
+/* the next two coordinates after k, cyclically */
+static const unsigned char next3[5] = { 1, 2, 0, 1, 2 };
+
+sc_acc_t vn_dot_acc(const sc_t *a, const sc_t *b, int n)
+{
+	sc_acc_t s = sc_acc0();
+	int i;
+
+	for (i = 0; i < n; i++)
+		s = sc_mac(s, a[i], b[i]);
+	return s;
+}
+
+sc_t v3_dot(const struct vec3 *a, const struct vec3 *b)
+{
+	return sc_acc_get(vn_dot_acc(SC_CV(a), SC_CV(b), 3));
+}
+
+sc_t v3_norm(const struct vec3 *a)
+{
+	return sc_acc_sqrt(vn_dot_acc(SC_CV(a), SC_CV(a), 3));
+}
+
+sc_t quat_norm(const struct quat *a)
+{
+	return sc_acc_sqrt(vn_dot_acc(SC_CV(a), SC_CV(a), 4));
+}
+
+static sc_t quat_dot(const struct quat *a, const struct quat *b)
+{
+	return sc_acc_get(vn_dot_acc(SC_CV(a), SC_CV(b), 4));
+}
+
+void v3_cross(const struct vec3 *a, const struct vec3 *b, struct vec3 *out)
+{
+	const sc_t *u = SC_CV(a), *v = SC_CV(b);
+	sc_t c[3];
+	int k;
+
+	for (k = 0; k < 3; k++) {
+		int i = next3[k], j = next3[k + 1];
+
+		c[k] = sc_acc_get(sc_msb(sc_mac(sc_acc0(), u[i], v[j]), u[j], v[i]));
+	}
+	out->x = c[0], out->y = c[1], out->z = c[2];
+}
+
+void quat_mul(const struct quat *a, const struct quat *b, struct quat *out)
+{
+	/* component i of a b sums a_j b_(i xor j); bit 4 i + j of neg: that term is subtracted */
+	const unsigned neg = 0x428eu;
+	const sc_t *u = SC_CV(a), *v = SC_CV(b);
+	sc_t c[4];
+	int i, j;
+
+	for (i = 0; i < 4; i++) {
+		sc_acc_t s = sc_acc0();
+
+		for (j = 0; j < 4; j++)
+			s = neg >> (4 * i + j) & 1u ? sc_msb(s, u[j], v[i ^ j]) : sc_mac(s, u[j], v[i ^ j]);
+		c[i] = sc_acc_get(s);
+	}
+	out->w = c[0], out->x = c[1], out->y = c[2], out->z = c[3];
+}
+
+void quat_axis(const struct quat *q, int k, struct vec3 *out)
+{
+	/* with i, j the next axes: R e_k = (1 - 2 (u_i^2 + u_j^2)) e_k + 2 (u_k u_i + w u_j) e_i + 2 (u_k u_j - w u_i) e_j */
+	const sc_t *u = &q->x;
+	sc_t *o = SC_V(out);
+	int i = next3[k], j = next3[k + 1];
+
+	o[k] = SC_C(1) - 2 * (sc_mul(u[i], u[i]) + sc_mul(u[j], u[j]));
+	o[i] = 2 * (sc_mul(u[k], u[i]) + sc_mul(q->w, u[j]));
+	o[j] = 2 * (sc_mul(u[k], u[j]) - sc_mul(q->w, u[i]));
+}
+#else
 static sc_t quat_dot(const struct quat *a, const struct quat *b)
 {
 	sc_acc_t s = sc_mac(sc_acc0(), a->w, b->w);
@@ -16,6 +94,7 @@ static sc_t quat_dot(const struct quat *a, const struct quat *b)
 	s = sc_mac(s, a->y, b->y);
 	return sc_acc_get(sc_mac(s, a->z, b->z));
 }
+#endif
 
 /* a / n, n the norm of a (or of a larger vector a belongs to) */
 static void quat_div_norm(const struct quat *a, sc_t n, struct quat *out)
@@ -73,6 +152,16 @@ bool quat_normalize(const struct quat *a, struct quat *out)
 
 void quat_to_mat3(const struct quat *q, sc_t m[3][3])
 {
+#if IK_COMPACT
+	struct vec3 c;
+	int i, k;
+
+	for (k = 0; k < 3; k++) {
+		quat_axis(q, k, &c);
+		for (i = 0; i < 3; i++)
+			m[i][k] = SC_V(&c)[i];
+	}
+#else
 	sc_t xx = sc_mul(q->x, q->x), yy = sc_mul(q->y, q->y), zz = sc_mul(q->z, q->z);
 	sc_t xy = sc_mul(q->x, q->y), xz = sc_mul(q->x, q->z), yz = sc_mul(q->y, q->z);
 	sc_t wx = sc_mul(q->w, q->x), wy = sc_mul(q->w, q->y), wz = sc_mul(q->w, q->z);
@@ -86,6 +175,7 @@ void quat_to_mat3(const struct quat *q, sc_t m[3][3])
 	m[2][0] = 2 * (xz - wy);
 	m[2][1] = 2 * (yz + wx);
 	m[2][2] = SC_C(1) - 2 * (xx + yy);
+#endif
 }
 
 void quat_from_mat3(const sc_t m[3][3], struct quat *out)
