@@ -521,11 +521,16 @@ static inline sc_t sc_from_int(int n)
 	return sc_sat((int64_t)n * ((int64_t)1 << SC_FRAC));
 }
 
-/* a n, saturating */
+/* a n, saturating (a function where a 64-bit product is a call anyway) */
+#if SC_FIXQ_OUTLINE
+#define sc_mul_int SCN(sc_mul_int)
+sc_t sc_mul_int(sc_t a, int n);
+#else
 static inline sc_t sc_mul_int(sc_t a, int n)
 {
 	return sc_sat((int64_t)a * n);
 }
+#endif
 
 #define sc_div_int SCN(sc_div_int)
 /* a / n rounded to nearest (half away from zero); n != 0 */

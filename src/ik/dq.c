@@ -100,11 +100,10 @@ static sc_t quat_dot(const struct quat *a, const struct quat *b)
 static void quat_div_norm(const struct quat *a, sc_t n, struct quat *out)
 {
 	sc_recip_t k = sc_recip(n);
+	int i;
 
-	out->w = sc_mul_recip(a->w, k);
-	out->x = sc_mul_recip(a->x, k);
-	out->y = sc_mul_recip(a->y, k);
-	out->z = sc_mul_recip(a->z, k);
+	for (i = 0; i < 4; i++)
+		SC_V(out)[i] = sc_mul_recip(SC_CV(a)[i], k);
 }
 
 /*
@@ -115,13 +114,15 @@ static void quat_div_norm(const struct quat *a, sc_t n, struct quat *out)
  */
 static bool quat_tame(const struct quat *a, struct quat *out)
 {
+	sc_t m = 0;
+	int i;
+
 	*out = *a;
-	if (SC_SQ_SAFE > 0 && (sc_abs(a->w) > SC_SQ_SAFE || sc_abs(a->x) > SC_SQ_SAFE || sc_abs(a->y) > SC_SQ_SAFE ||
-			       sc_abs(a->z) > SC_SQ_SAFE)) {
-		out->w = sc_mul(a->w, SC_C(0.125));
-		out->x = sc_mul(a->x, SC_C(0.125));
-		out->y = sc_mul(a->y, SC_C(0.125));
-		out->z = sc_mul(a->z, SC_C(0.125));
+	for (i = 0; i < 4; i++)
+		m = sc_max(m, sc_abs(SC_CV(a)[i]));
+	if (SC_SQ_SAFE > 0 && m > SC_SQ_SAFE) {
+		for (i = 0; i < 4; i++)
+			SC_V(out)[i] = sc_mul(SC_CV(a)[i], SC_C(0.125));
 		return true;
 	}
 	return false;
@@ -322,29 +323,26 @@ void dq_log_twist_rt(const struct quat *r, const struct vec3 *t, struct twist *o
 	struct quat e = *r;
 	struct vec3 wt, wwt;
 	sc_t s, c, x, k, f, ic, g;
+	int i;
 
 	if (e.w < 0) {
 		/* the shortest path; t does not change with the sign of the dual quaternion */
-		e.w = -e.w;
-		e.x = -e.x;
-		e.y = -e.y;
-		e.z = -e.z;
+		for (i = 0; i < 4; i++)
+			SC_V(&e)[i] = -SC_V(&e)[i];
 	}
 	s = sc_acc_sqrt(sc_mac(sc_mac(sc_mac(sc_acc0(), e.x, e.x), e.y, e.y), e.z, e.z));
 	c = e.w;
 	x = ik_half_angle(s, c, &ic, &g); /* half the rotation angle, in [0, pi/2] */
 	/* 2 x / s; at small angles (2 / c) (1 - u^2/3 + u^4/5) */
 	f = g != 0 ? sc_mul(2 * ic, g) : sc_div(2 * x, s);
-	out->w.x = sc_mul(f, e.x);
-	out->w.y = sc_mul(f, e.y);
-	out->w.z = sc_mul(f, e.z);
+	for (i = 0; i < 3; i++)
+		SC_V(&out->w)[i] = sc_mul(f, SC_V(&e)[i + 1]);
 	/* v = t - 1/2 w x t + k w x (w x t) */
 	k = ik_log_k(x, s, c);
 	v3_cross(&out->w, t, &wt);
 	v3_cross(&out->w, &wt, &wwt);
-	out->v.x = t->x - sc_mul(SC_C(0.5), wt.x) + sc_mul(k, wwt.x);
-	out->v.y = t->y - sc_mul(SC_C(0.5), wt.y) + sc_mul(k, wwt.y);
-	out->v.z = t->z - sc_mul(SC_C(0.5), wt.z) + sc_mul(k, wwt.z);
+	for (i = 0; i < 3; i++)
+		SC_V(&out->v)[i] = SC_CV(t)[i] - sc_mul(SC_C(0.5), SC_V(&wt)[i]) + sc_mul(k, SC_V(&wwt)[i]);
 	*half_angle = x;
 }
 

@@ -28,15 +28,18 @@ void ik_target_set(struct ik_target *t, const struct vec3 *p, const struct quat 
 
 	if (SC_REACH_MAX > 0) {
 		/* fixed point: a target metres beyond any reach keeps its direction only (SC_REACH_MAX) */
-		struct vec3 s = { sc_mul(p->x, SC_C(0.25)), sc_mul(p->y, SC_C(0.25)), sc_mul(p->z, SC_C(0.25)) };
-		sc_t n = v3_norm(&s);
+		struct vec3 s;
+		sc_t n;
+		int i;
 
+		for (i = 0; i < 3; i++)
+			SC_V(&s)[i] = sc_mul(SC_CV(p)[i], SC_C(0.25));
+		n = v3_norm(&s);
 		if (n > sc_mul(SC_REACH_MAX, SC_C(0.25))) {
 			sc_recip_t k = sc_recip(n);
 
-			pp.x = sc_mul(SC_REACH_MAX, sc_mul_recip(s.x, k));
-			pp.y = sc_mul(SC_REACH_MAX, sc_mul_recip(s.y, k));
-			pp.z = sc_mul(SC_REACH_MAX, sc_mul_recip(s.z, k));
+			for (i = 0; i < 3; i++)
+				SC_V(&pp)[i] = sc_mul(SC_REACH_MAX, sc_mul_recip(SC_V(&s)[i], k));
 		}
 	}
 	ok = quat_normalize(r, &t->r) && ok;
@@ -48,14 +51,9 @@ void ik_target_set(struct ik_target *t, const struct vec3 *p, const struct quat 
 		int i, j;
 
 		quat_to_mat3(&t->r, rm);
-		for (i = 0; i < 3; i++)
-			for (j = 0; j < 3; j++)
-				t->m[i][j] = rm[i][j];
-		t->m[0][3] = t->p.x;
-		t->m[1][3] = t->p.y;
-		t->m[2][3] = t->p.z;
-		t->m[3][0] = t->m[3][1] = t->m[3][2] = 0;
-		t->m[3][3] = SC_C(1);
+		for (i = 0; i < 4; i++)
+			for (j = 0; j < 4; j++)
+				t->m[i][j] = i < 3 ? (j < 3 ? rm[i][j] : SC_CV(&t->p)[i]) : (j < 3 ? 0 : SC_C(1));
 	}
 	t->valid = ok;
 }
@@ -84,13 +82,13 @@ static bool kin_dq(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_t
 	struct vec3 rp, te, dp;
 	struct twist tw;
 	sc_t half;
+	int i;
 
 	arm_chain_eval(a, q, &ch, NULL);
 	quat_conj(&ch.r[ARM_DOF], &rc);
 	quat_mul(&t->r, &rc, &re);
-	dp.x = t->p.x - ch.p[ARM_DOF].x;
-	dp.y = t->p.y - ch.p[ARM_DOF].y;
-	dp.z = t->p.z - ch.p[ARM_DOF].z;
+	for (i = 0; i < 3; i++)
+		SC_V(&dp)[i] = SC_CV(&t->p)[i] - SC_CV(&ch.p[ARM_DOF])[i];
 	err->pos = v3_norm(&dp);
 	if (check && err->pos < tol_pos) {
 		/* the rotation error alone, as the logarithm would compute it */
@@ -102,16 +100,13 @@ static bool kin_dq(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_t
 			return true;
 	}
 	quat_rotate(&re, &ch.p[ARM_DOF], &rp);
-	te.x = t->p.x - rp.x;
-	te.y = t->p.y - rp.y;
-	te.z = t->p.z - rp.z;
+	for (i = 0; i < 3; i++)
+		SC_V(&te)[i] = SC_CV(&t->p)[i] - SC_V(&rp)[i];
 	dq_log_twist_rt(&re, &te, &tw, &half);
-	V[0] = tw.w.x;
-	V[1] = tw.w.y;
-	V[2] = tw.w.z;
-	V[3] = tw.v.x;
-	V[4] = tw.v.y;
-	V[5] = tw.v.z;
+	for (i = 0; i < 3; i++) {
+		V[i] = SC_V(&tw.w)[i];
+		V[3 + i] = SC_V(&tw.v)[i];
+	}
 	err->rot = 2 * half;
 	arm_chain_jacobian(a, &ch, J);
 	return check && err->pos < tol_pos && err->rot < tol_rot;
@@ -140,6 +135,10 @@ const struct ik_kin ik_kin_dq = {
 /* sum of a[i] b[i] for i = j..n-1, in two interleaved partial sums (half the dependency chain) */
 static inline sc_acc_t dot_from_acc(int j, const sc_t a[ARM_DOF], const sc_t b[ARM_DOF], int n)
 {
+#if IK_COMPACT
+	/* exact sums: one loop gives the same bits */
+	return vn_dot_acc(a + j, b + j, n - j);
+#else
 	sc_acc_t s0 = sc_acc0(), s1 = sc_acc0();
 	int i;
 
@@ -150,6 +149,7 @@ static inline sc_acc_t dot_from_acc(int j, const sc_t a[ARM_DOF], const sc_t b[A
 	if (i < n)
 		s0 = sc_mac(s0, a[i], b[i]);
 	return sc_acc_add(s0, s1);
+#endif
 }
 
 static inline sc_t dot_from(int j, const sc_t a[ARM_DOF], const sc_t b[ARM_DOF], int n)
@@ -427,7 +427,7 @@ int ik_lsq_step(const sc_t J[6][ARM_DOF], const sc_t V[6], const bool *free, sc_
 		if (!free || free[i])
 			col[n++] = i;
 	}
-	if (n == ARM_DOF) {
+	if (n == ARM_DOF && !IK_COMPACT) {
 		/* well conditioned (nearly always): the normal equations; else J^T = Q R, x = Q R^-T V */
 		if (SC_NE_COND > 0 && lsq_normal_eq(J, V, x))
 			return 6;

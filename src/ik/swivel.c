@@ -23,6 +23,20 @@ static sc_t m3_tdot(const sc_t a[3][3], const sc_t b[3][3], int i, int j)
 	return sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), a[0][i], b[0][j]), a[1][i], b[1][j]), a[2][i], b[2][j]));
 }
 
+/* out = p + k u (p NULL: k u), or p - k u with sub (the product is rounded, then negated) */
+static void v3_madd(const struct vec3 *p, sc_t k, const struct vec3 *u, bool sub, struct vec3 *out)
+{
+	int i;
+
+	for (i = 0; i < 3; i++) {
+		sc_t m = sc_mul(k, SC_CV(u)[i]);
+
+		if (sub)
+			m = -m;
+		SC_V(out)[i] = p ? SC_CV(p)[i] + m : m;
+	}
+}
+
 static sc_t v3_normalize(struct vec3 *v)
 {
 	sc_t n = v3_norm(v);
@@ -49,18 +63,22 @@ static sc_t violation(sc_t v, sc_t lo, sc_t hi)
  */
 static sc_t euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, sc_t out[3])
 {
-	const sc_t *lo = &lim->lo[i0], *hi = &lim->hi[i0];
-	sc_t b = sc_asin(-m[1][2]), a = sc_atan2(m[0][2], m[2][2]), c = sc_atan2(m[1][0], m[1][1]);
-	sc_t a1 = sc_wrap_pi(a + SC_PI), b1 = sc_wrap_pi(SC_PI - b), c1 = sc_wrap_pi(c + SC_PI);
-	sc_t v0 = violation(a, lo[0], hi[0]) + violation(b, lo[1], hi[1]) + violation(c, lo[2], hi[2]);
-	sc_t v1 = violation(a1, lo[0], hi[0]) + violation(b1, lo[1], hi[1]) + violation(c1, lo[2], hi[2]);
+	sc_t e[2][3], v[2] = { 0, 0 };
+	int k, br;
 
-	if (v1 < v0) {
-		out[0] = a1, out[1] = b1, out[2] = c1;
-		return v1;
-	}
-	out[0] = a, out[1] = b, out[2] = c;
-	return v0;
+	e[0][0] = sc_atan2(m[0][2], m[2][2]);
+	e[0][1] = sc_asin(-m[1][2]);
+	e[0][2] = sc_atan2(m[1][0], m[1][1]);
+	e[1][0] = sc_wrap_pi(e[0][0] + SC_PI);
+	e[1][1] = sc_wrap_pi(SC_PI - e[0][1]);
+	e[1][2] = sc_wrap_pi(e[0][2] + SC_PI);
+	for (br = 0; br < 2; br++)
+		for (k = 0; k < 3; k++)
+			v[br] += violation(e[br][k], lim->lo[i0 + k], lim->hi[i0 + k]);
+	br = v[1] < v[0];
+	for (k = 0; k < 3; k++)
+		out[k] = e[br][k];
+	return v[br];
 }
 
 /*
@@ -135,7 +153,7 @@ struct swivel_ctx {
 static bool ctx_init(struct swivel_ctx *x, const struct arm *a, const struct vec3 *w, const sc_t rt[3][3], sc_t q1)
 {
 	sc_t A = a->dims.arm, F = a->dims.forearm, S = a->dims.shoulder;
-	sc_t s1, c1, d, d2, ca, sa, sq5;
+	sc_t s1, c1, d, d2, ca, sa, sq5, AA, FF;
 	struct vec3 dw, g;
 	int j;
 
@@ -144,19 +162,27 @@ static bool ctx_init(struct swivel_ctx *x, const struct arm *a, const struct vec
 	x->inv_a = sc_div(SC_C(1), A);
 	sc_sincos(q1, &s1, &c1);
 	dw = (struct vec3){ w->x - sc_mul(S, c1), w->y - sc_mul(S, s1), w->z };
-	x->u = (struct vec3){ sc_mul(c1, dw.x) + sc_mul(s1, dw.y), sc_mul(c1, dw.y) - sc_mul(s1, dw.x), dw.z };
-	for (j = 0; j < 3; j++) {
-		/* Rz(-q1) rt */
-		x->rt1[0][j] = sc_mul(c1, rt[0][j]) + sc_mul(s1, rt[1][j]);
-		x->rt1[1][j] = sc_mul(c1, rt[1][j]) - sc_mul(s1, rt[0][j]);
-		x->rt1[2][j] = rt[2][j];
+	/* Rz(-q1) applied to dw (j = 3) and to rt's columns */
+	for (j = 0; j < 4; j++) {
+		sc_t vx = j < 3 ? rt[0][j] : dw.x, vy = j < 3 ? rt[1][j] : dw.y;
+		sc_t ox = sc_mul(c1, vx) + sc_mul(s1, vy), oy = sc_mul(c1, vy) - sc_mul(s1, vx);
+
+		if (j < 3) {
+			x->rt1[0][j] = ox;
+			x->rt1[1][j] = oy;
+			x->rt1[2][j] = rt[2][j];
+		} else {
+			x->u = (struct vec3){ ox, oy, dw.z };
+		}
 	}
 	d2 = v3_dot(&x->u, &x->u);
 	d = sc_sqrt(d2);
 	if (d < SC_C(1e-6))
 		return false;
+	AA = sc_mul(A, A);
+	FF = sc_mul(F, F);
 	/* |u|^2 = A^2 + F^2 - 2 A F sin q5 */
-	sq5 = sc_div(sc_mul(A, A) + sc_mul(F, F) - d2, 2 * sc_mul(A, F));
+	sq5 = sc_div(AA + FF - d2, 2 * sc_mul(A, F));
 	if (sq5 > SC_C(1) || sq5 < SC_C(-1))
 		return false;
 	x->q5 = sc_asin(sq5);
@@ -166,19 +192,14 @@ static bool ctx_init(struct swivel_ctx *x, const struct arm *a, const struct vec
 	x->uh = x->u;
 	v3_normalize(&x->uh);
 	/* angle at the shoulder between the upper arm and u */
-	ca = sc_div(sc_mul(A, A) + d2 - sc_mul(F, F), 2 * sc_mul(A, d));
+	ca = sc_div(AA + d2 - FF, 2 * sc_mul(A, d));
 	ca = sc_clamp(ca, SC_C(-1), SC_C(1));
 	sa = sc_sqrt(SC_C(1) - sc_mul(ca, ca));
-	x->c = (struct vec3){ sc_mul(sc_mul(A, ca), x->uh.x), sc_mul(sc_mul(A, ca), x->uh.y),
-			      sc_mul(sc_mul(A, ca), x->uh.z) };
+	v3_madd(NULL, sc_mul(A, ca), &x->uh, false, &x->c);
 	x->r = sc_mul(A, sa);
 	/* n1: "down" projected on the plane (forward when u is vertical) */
 	g = sc_abs(x->uh.z) < SC_C(0.9) ? (struct vec3){ 0, 0, SC_C(-1) } : (struct vec3){ 0, SC_C(1), 0 };
-	{
-		sc_t k = v3_dot(&g, &x->uh);
-
-		x->n1 = (struct vec3){ g.x - sc_mul(k, x->uh.x), g.y - sc_mul(k, x->uh.y), g.z - sc_mul(k, x->uh.z) };
-	}
+	v3_madd(&g, v3_dot(&g, &x->uh), &x->uh, true, &x->n1);
 	v3_normalize(&x->n1);
 	v3_cross(&x->uh, &x->n1, &x->n2);
 	return true;
@@ -210,23 +231,22 @@ static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM
 	int i;
 	struct vec3 n, e, x4, y4, z4;
 
-	n.x = sc_mul(cp, x->n1.x) + sc_mul(sp, x->n2.x);
-	n.y = sc_mul(cp, x->n1.y) + sc_mul(sp, x->n2.y);
-	n.z = sc_mul(cp, x->n1.z) + sc_mul(sp, x->n2.z);
-	e.x = x->c.x + sc_mul(x->r, n.x);
-	e.y = x->c.y + sc_mul(x->r, n.y);
-	e.z = x->c.z + sc_mul(x->r, n.z);
+	for (i = 0; i < 3; i++)
+		SC_V(&n)[i] = sc_mul(cp, SC_CV(&x->n1)[i]) + sc_mul(sp, SC_CV(&x->n2)[i]);
+	v3_madd(&x->c, x->r, &n, false, &e);
 	/*
 	 * Upper-arm frame: -z along the upper arm, x the elbow axis. |e| = A,
 	 * and n, u^ are orthonormal, so z4 and x4 = n x u^ are unit vectors and
 	 * orthogonal (z4 lies in the plane of u^ and n) up to rounding.
 	 */
-	z4 = (struct vec3){ -sc_mul(e.x, x->inv_a), -sc_mul(e.y, x->inv_a), -sc_mul(e.z, x->inv_a) };
+	v3_madd(NULL, x->inv_a, &e, true, &z4);
 	v3_cross(&n, &x->uh, &x4);
 	v3_cross(&z4, &x4, &y4);
-	R[0][0] = x4.x, R[0][1] = y4.x, R[0][2] = z4.x;
-	R[1][0] = x4.y, R[1][1] = y4.y, R[1][2] = z4.y;
-	R[2][0] = x4.z, R[2][1] = y4.z, R[2][2] = z4.z;
+	for (i = 0; i < 3; i++) {
+		R[i][0] = SC_V(&x4)[i];
+		R[i][1] = SC_V(&y4)[i];
+		R[i][2] = SC_V(&z4)[i];
+	}
 	q[0] = x->q1;
 	q[4] = x->q5;
 	if (!full) {
@@ -247,11 +267,12 @@ static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM
 		R15[i][2] = sc_mul(x->c5, R[i][2]) - sc_mul(x->s5, R[i][1]);
 	}
 	M[0][0] = M[0][1] = M[2][0] = M[2][1] = 0;
-	M[0][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 0, 2);
-	M[1][0] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 0);
-	M[1][1] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 1);
-	M[1][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 2);
-	M[2][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 2, 2);
+	for (i = 0; i < 5; i++) {
+		static const unsigned char rc[5] = { 0x02, 0x10, 0x11, 0x12, 0x22 }; /* row << 4 | column */
+		int r = rc[i] >> 4, c = rc[i] & 3;
+
+		M[r][c] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, r, c);
+	}
 	if (!full) {
 		v = euler_fast((const sc_t(*)[3])M, a, 5);
 		if (v > 0)
