@@ -186,17 +186,16 @@ static inline sc_t lsq_cap(sc_t y)
  * column is nearly dependent on the others, a unit reflector keeps every
  * quantity the size of J's entries.
  */
-static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_DOF])
+static void house_qr(int n, int p, sc_t a[6][ARM_DOF], sc_t beta[6], sc_t rd[6])
 {
-	sc_t beta[6], rd[6], rmax = 0;
-	int i, j, c, rank = 0;
+	int i, j, c;
 
-	for (j = 0; j < 6; j++) {
-		sc_acc_t p[6];
+	for (j = 0; j < p; j++) {
+		sc_acc_t pc[6];
 		sc_t ajj = a[j][j], nrm, vj;
 
-		for (c = j + 1; c < 6; c++)
-			p[c] = dot_from_acc(j + 1, a[j], a[c], n);
+		for (c = j + 1; c < p; c++)
+			pc[c] = dot_from_acc(j + 1, a[j], a[c], n);
 		nrm = sc_acc_sqrt(sc_mac(dot_from_acc(j + 1, a[j], a[j], n), ajj, ajj));
 		if (nrm < SC_EPS) {
 			/* nothing left in this column: no reflection, a tiny pivot */
@@ -215,9 +214,9 @@ static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_D
 			a[j][j] = sc_mul_recip(vj, k);
 			for (i = j + 1; i < n; i++)
 				a[j][i] = sc_mul_recip(a[j][i], k);
-			for (c = j + 1; c < 6; c++) {
+			for (c = j + 1; c < p; c++) {
 				/* a_c -= 2 (u . a_c) u, u . a_c = (v_j a_cj + p_c) / |v| */
-				sc_t f = 2 * sc_mul_recip(sc_acc_get(sc_mac(p[c], vj, a[c][j])), k);
+				sc_t f = 2 * sc_mul_recip(sc_acc_get(sc_mac(pc[c], vj, a[c][j])), k);
 
 				a[c][j] -= sc_mul(f, a[j][j]);
 				for (i = j + 1; i < n; i++)
@@ -230,8 +229,8 @@ static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_D
 
 			beta[j] = b;
 			a[j][j] = vj;
-			for (c = j + 1; c < 6; c++) {
-				sc_t f = sc_mul(b, sc_acc_get(sc_mac(p[c], vj, a[c][j])));
+			for (c = j + 1; c < p; c++) {
+				sc_t f = sc_mul(b, sc_acc_get(sc_mac(pc[c], vj, a[c][j])));
 
 				a[c][j] -= sc_mul(f, vj);
 				for (i = j + 1; i < n; i++)
@@ -240,9 +239,53 @@ static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_D
 		}
 #endif
 	}
-	/* R(i, j) = a[j][i] above the diagonal, rd[j] on it: solve R^T y = V, dropping weak pivots */
-	for (j = 0; j < 6; j++)
+}
+
+/* y <- H_j y (reflector j of house_qr, applied to entries j..n-1) */
+static void house_apply(int n, int j, const sc_t a[6][ARM_DOF], const sc_t beta[6], sc_t y[ARM_DOF])
+{
+	sc_t f;
+	int i;
+
+	if (beta[j] == 0)
+		return;
+	f = sc_mul(beta[j], dot_from(j, a[j], y, n));
+	for (i = j; i < n; i++)
+		y[i] -= sc_mul(f, a[j][i]);
+}
+
+/* the largest diagonal entry of R (for the pivot test of lsq_pivot) */
+static sc_t lsq_rmax(int p, const sc_t rd[6])
+{
+	sc_t rmax = 0;
+	int j;
+
+	for (j = 0; j < p; j++)
 		rmax = sc_max(rmax, sc_abs(rd[j]));
+	return rmax;
+}
+
+/* num / d for a pivot d of R, 0 for a weak one (dropped: *rank is not counted) */
+static sc_t lsq_pivot(sc_t num, sc_t d, sc_t rmax, int *rank)
+{
+	if (sc_abs(d) <= sc_mul(IK_RCOND, rmax) || rmax == 0)
+		return 0;
+	++*rank;
+	return lsq_cap(sc_div(num, d));
+}
+
+/*
+ * The minimum-norm step: after house_qr(n, 6) of J_f^T, R(i, j) = a[j][i]
+ * above the diagonal and rd[j] on it: solve R^T y = V, dropping weak pivots,
+ * then y <- Q y = H_0 ... H_5 y.
+ */
+static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_DOF])
+{
+	sc_t beta[6], rd[6], rmax;
+	int i, j, rank = 0;
+
+	house_qr(n, 6, a, beta, rd);
+	rmax = lsq_rmax(6, rd);
 	for (i = 0; i < n; i++)
 		y[i] = 0;
 	for (j = 0; j < 6; j++) {
@@ -250,26 +293,14 @@ static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_D
 
 		for (i = 0; i < j; i++)
 			s = sc_mac(s, a[j][i], y[i]);
-		if (sc_abs(rd[j]) <= sc_mul(IK_RCOND, rmax) || rmax == 0) {
-			y[j] = 0;
-			continue;
-		}
-		y[j] = lsq_cap(sc_div(V[j] - sc_acc_get(s), rd[j]));
-		rank++;
+		y[j] = lsq_pivot(V[j] - sc_acc_get(s), rd[j], rmax, &rank);
 	}
-	/* y <- Q y = H_0 ... H_5 y */
-	for (j = 5; j >= 0; j--) {
-		sc_t f;
-
-		if (beta[j] == 0)
-			continue;
-		f = sc_mul(beta[j], dot_from(j, a[j], y, n));
-		for (i = j; i < n; i++)
-			y[i] -= sc_mul(f, a[j][i]);
-	}
+	for (j = 5; j >= 0; j--)
+		house_apply(n, j, (const sc_t(*)[ARM_DOF])a, beta, y);
 	return rank;
 }
 
+#if SC_TYPE != SC_FIXQ
 /*
  * Householder QR of the 6 x k matrix a (k < 6) in place; v[j] holds reflector
  * j (rows j..5), with beta[j] as in lsq_min_norm (unit reflectors in fixed
@@ -319,6 +350,7 @@ static void house_qr_tall(int k, sc_t a[6][ARM_DOF], sc_t v[ARM_DOF][6], sc_t be
 		}
 	}
 }
+#endif
 
 /* sum of a[i] b[i] over 8 entries in two interleaved partial sums */
 static inline sc_t dot8(const sc_t a[ARM_DOF], const sc_t b[ARM_DOF])
@@ -456,6 +488,35 @@ int ik_lsq_step(const sc_t J[6][ARM_DOF], const sc_t V[6], const bool *free, sc_
 		return rank;
 	}
 	/* fewer free joints than equations: least squares, x = R^-1 Q^T V */
+#if SC_TYPE == SC_FIXQ
+	{
+		/*
+		 * Fixed point: the QR of J_f itself (n columns of 6) by the same
+		 * house_qr, R(j, i) = a[i][j] above the diagonal and rd[j] on it;
+		 * one factorisation for both shapes.
+		 */
+		sc_t beta[6], rd[6], rmax;
+
+		for (i = 0; i < 6; i++) {
+			for (j = 0; j < n; j++)
+				a[j][i] = J[i][col[j]];
+			y[i] = V[i];
+		}
+		house_qr(6, n, a, beta, rd);
+		rmax = lsq_rmax(n, rd);
+		for (j = 0; j < n; j++)
+			house_apply(6, j, (const sc_t(*)[ARM_DOF])a, beta, y);
+		for (j = n - 1; j >= 0; j--) {
+			sc_acc_t s = sc_acc0();
+
+			for (i = j + 1; i < n; i++)
+				s = sc_mac(s, a[i][j], y[i]);
+			y[j] = lsq_pivot(y[j] - sc_acc_get(s), rd[j], rmax, &rank);
+		}
+		for (j = 0; j < n; j++)
+			x[col[j]] = y[j];
+	}
+#else
 	{
 		sc_t v[ARM_DOF][6], beta[ARM_DOF], rmax = 0;
 
@@ -491,6 +552,7 @@ int ik_lsq_step(const sc_t J[6][ARM_DOF], const sc_t V[6], const bool *free, sc_
 		for (j = 0; j < n; j++)
 			x[col[j]] = y[j];
 	}
+#endif
 	return rank;
 }
 

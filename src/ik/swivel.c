@@ -37,6 +37,18 @@ static void v3_madd(const struct vec3 *p, sc_t k, const struct vec3 *u, bool sub
 	}
 }
 
+/*
+ * (c, s) turned by the angle whose cosine and sine are ct, st (back: by its
+ * negative): c ct - s st, s ct + c st, or c ct + s st, s ct - c st
+ */
+static void turn(sc_t *c, sc_t *s, sc_t ct, sc_t st, bool back)
+{
+	sc_t cc = sc_mul(*c, ct), ss = sc_mul(*s, st), sc = sc_mul(*s, ct), cs = sc_mul(*c, st);
+
+	*c = back ? cc + ss : cc - ss;
+	*s = back ? sc - cs : sc + cs;
+}
+
 static sc_t v3_normalize(struct vec3 *v)
 {
 	sc_t n = v3_norm(v);
@@ -163,17 +175,13 @@ static bool ctx_init(struct swivel_ctx *x, const struct arm *a, const struct vec
 	sc_sincos(q1, &s1, &c1);
 	dw = (struct vec3){ w->x - sc_mul(S, c1), w->y - sc_mul(S, s1), w->z };
 	/* Rz(-q1) applied to dw (j = 3) and to rt's columns */
-	for (j = 0; j < 4; j++) {
-		sc_t vx = j < 3 ? rt[0][j] : dw.x, vy = j < 3 ? rt[1][j] : dw.y;
-		sc_t ox = sc_mul(c1, vx) + sc_mul(s1, vy), oy = sc_mul(c1, vy) - sc_mul(s1, vx);
-
-		if (j < 3) {
-			x->rt1[0][j] = ox;
-			x->rt1[1][j] = oy;
-			x->rt1[2][j] = rt[2][j];
-		} else {
-			x->u = (struct vec3){ ox, oy, dw.z };
-		}
+	x->u = dw;
+	turn(&x->u.x, &x->u.y, c1, s1, true);
+	for (j = 0; j < 3; j++) {
+		x->rt1[0][j] = rt[0][j];
+		x->rt1[1][j] = rt[1][j];
+		x->rt1[2][j] = rt[2][j];
+		turn(&x->rt1[0][j], &x->rt1[1][j], c1, s1, true);
 	}
 	d2 = v3_dot(&x->u, &x->u);
 	d = sc_sqrt(d2);
@@ -263,8 +271,9 @@ static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM
 	 */
 	for (i = 0; i < 3; i++) {
 		R15[i][0] = R[i][0];
-		R15[i][1] = sc_mul(x->c5, R[i][1]) + sc_mul(x->s5, R[i][2]);
-		R15[i][2] = sc_mul(x->c5, R[i][2]) - sc_mul(x->s5, R[i][1]);
+		R15[i][1] = R[i][1];
+		R15[i][2] = R[i][2];
+		turn(&R15[i][1], &R15[i][2], x->c5, x->s5, true);
 	}
 	M[0][0] = M[0][1] = M[2][0] = M[2][1] = 0;
 	for (i = 0; i < 5; i++) {
@@ -400,17 +409,12 @@ static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, 
 		return true;
 	bphi = phi0;
 	for (k = 1; 2 * k <= samples; k++) {
-		sc_t nc = sc_mul(cf, cs) - sc_mul(sf, ss);
-
-		sf = sc_mul(sf, cs) + sc_mul(cf, ss);
-		cf = nc;
-		nc = sc_mul(cb, cs) + sc_mul(sb, ss);
-		sb = sc_mul(sb, cs) - sc_mul(cb, ss);
-		cb = nc;
+		turn(&cf, &sf, cs, ss, false);
+		turn(&cb, &sb, cs, ss, true);
 		for (side = -1; side <= 1; side += 2) {
 			sc_t lo, hi = phi0 + sc_mul_int(step, side * k);
 
-			v = side < 0 ? search_eval_cs(s, x, hi, cb, sb, t, false) : search_eval_cs(s, x, hi, cf, sf, t, false);
+			v = search_eval_cs(s, x, hi, side < 0 ? cb : cf, side < 0 ? sb : sf, t, false);
 			if (v > 0) {
 				if (v < bv)
 					bv = v, bphi = hi;
