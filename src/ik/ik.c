@@ -274,6 +274,55 @@ static sc_t lsq_pivot(sc_t num, sc_t d, sc_t rmax, int *rank)
 	return lsq_cap(sc_div(num, d));
 }
 
+#if SC_TYPE == SC_FIXQ
+/*
+ * Fixed point: one Householder factorisation serves both shapes. With n >= 6
+ * free joints the minimum-norm step: house_qr(n, 6) of J_f^T, R(i, j) =
+ * a[j][i] above the diagonal and rd[j] on it, R^T y = V, x = Q y. With fewer
+ * the least-squares one: house_qr(6, n) of J_f itself, R(j, i) = a[i][j],
+ * R x = Q^T V. (The floating builds keep their three paths: the normal
+ * equations, the same minimum-norm QR, and a tall QR of its own.)
+ */
+int ik_lsq_step(const sc_t J[6][ARM_DOF], const sc_t V[6], const bool *free, sc_t x[ARM_DOF])
+{
+	sc_t a[6][ARM_DOF], beta[6], rd[6], y[ARM_DOF], rmax;
+	int col[ARM_DOF], n = 0, m, p, i, j, k, rank = 0;
+	bool wide;
+
+	for (i = 0; i < ARM_DOF; i++) {
+		x[i] = 0;
+		if (!free || free[i])
+			col[n++] = i;
+	}
+	wide = n >= 6;
+	m = wide ? n : 6;
+	p = wide ? 6 : n;
+	for (j = 0; j < 6; j++)
+		for (i = 0; i < n; i++)
+			*(wide ? &a[j][i] : &a[i][j]) = J[j][col[i]];
+	house_qr(m, p, a, beta, rd);
+	rmax = lsq_rmax(p, rd);
+	for (i = 0; i < m; i++)
+		y[i] = wide ? 0 : V[i];
+	for (j = 0; j < p && !wide; j++)
+		house_apply(6, j, (const sc_t(*)[ARM_DOF])a, beta, y);
+	for (k = 0; k < p; k++) {
+		/* wide: R^T y = V forward; tall: R x = Q^T V backward */
+		sc_acc_t s = sc_acc0();
+
+		j = wide ? k : p - 1 - k;
+		for (i = 0; i < p; i++)
+			if (wide ? i < j : i > j)
+				s = sc_mac(s, wide ? a[j][i] : a[i][j], y[i]);
+		y[j] = lsq_pivot((wide ? V[j] : y[j]) - sc_acc_get(s), rd[j], rmax, &rank);
+	}
+	for (j = 5; j >= 0 && wide; j--)
+		house_apply(n, j, (const sc_t(*)[ARM_DOF])a, beta, y);
+	for (i = 0; i < n; i++)
+		x[col[i]] = y[i];
+	return rank;
+}
+#else
 /*
  * The minimum-norm step: after house_qr(n, 6) of J_f^T, R(i, j) = a[j][i]
  * above the diagonal and rd[j] on it: solve R^T y = V, dropping weak pivots,
@@ -300,11 +349,9 @@ static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_D
 	return rank;
 }
 
-#if SC_TYPE != SC_FIXQ
 /*
  * Householder QR of the 6 x k matrix a (k < 6) in place; v[j] holds reflector
- * j (rows j..5), with beta[j] as in lsq_min_norm (unit reflectors in fixed
- * point).
+ * j (rows j..5), with beta[j] as in lsq_min_norm.
  */
 static void house_qr_tall(int k, sc_t a[6][ARM_DOF], sc_t v[ARM_DOF][6], sc_t beta[ARM_DOF])
 {
@@ -326,18 +373,7 @@ static void house_qr_tall(int k, sc_t a[6][ARM_DOF], sc_t v[ARM_DOF][6], sc_t be
 		for (i = j; i < 6; i++)
 			v[j][i] = a[i][j];
 		v[j][j] -= alpha;
-#if SC_TYPE == SC_FIXQ
-		{
-			/* |v|^2 = 2 nrm (nrm + |a_jj|) */
-			sc_recip_t r = sc_recip(sc_acc_sqrt(sc_mac(sc_acc0(), 2 * nrm, nrm + sc_abs(a[j][j]))));
-
-			for (i = j; i < 6; i++)
-				v[j][i] = sc_mul_recip(v[j][i], r);
-			beta[j] = SC_C(2);
-		}
-#else
 		beta[j] = sc_div(SC_C(2), 2 * sc_mul(nrm, nrm + sc_abs(a[j][j])));
-#endif
 		for (c = j; c < k; c++) {
 			sc_acc_t t = sc_acc0();
 			sc_t f;
@@ -350,7 +386,6 @@ static void house_qr_tall(int k, sc_t a[6][ARM_DOF], sc_t v[ARM_DOF][6], sc_t be
 		}
 	}
 }
-#endif
 
 /* sum of a[i] b[i] over 8 entries in two interleaved partial sums */
 static inline sc_t dot8(const sc_t a[ARM_DOF], const sc_t b[ARM_DOF])
@@ -488,35 +523,6 @@ int ik_lsq_step(const sc_t J[6][ARM_DOF], const sc_t V[6], const bool *free, sc_
 		return rank;
 	}
 	/* fewer free joints than equations: least squares, x = R^-1 Q^T V */
-#if SC_TYPE == SC_FIXQ
-	{
-		/*
-		 * Fixed point: the QR of J_f itself (n columns of 6) by the same
-		 * house_qr, R(j, i) = a[i][j] above the diagonal and rd[j] on it;
-		 * one factorisation for both shapes.
-		 */
-		sc_t beta[6], rd[6], rmax;
-
-		for (i = 0; i < 6; i++) {
-			for (j = 0; j < n; j++)
-				a[j][i] = J[i][col[j]];
-			y[i] = V[i];
-		}
-		house_qr(6, n, a, beta, rd);
-		rmax = lsq_rmax(n, rd);
-		for (j = 0; j < n; j++)
-			house_apply(6, j, (const sc_t(*)[ARM_DOF])a, beta, y);
-		for (j = n - 1; j >= 0; j--) {
-			sc_acc_t s = sc_acc0();
-
-			for (i = j + 1; i < n; i++)
-				s = sc_mac(s, a[i][j], y[i]);
-			y[j] = lsq_pivot(y[j] - sc_acc_get(s), rd[j], rmax, &rank);
-		}
-		for (j = 0; j < n; j++)
-			x[col[j]] = y[j];
-	}
-#else
 	{
 		sc_t v[ARM_DOF][6], beta[ARM_DOF], rmax = 0;
 
@@ -552,9 +558,9 @@ int ik_lsq_step(const sc_t J[6][ARM_DOF], const sc_t V[6], const bool *free, sc_
 		for (j = 0; j < n; j++)
 			x[col[j]] = y[j];
 	}
-#endif
 	return rank;
 }
+#endif /* SC_TYPE */
 
 static bool q_finite(const sc_t q[ARM_DOF])
 {
