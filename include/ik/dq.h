@@ -141,6 +141,24 @@ struct line {
 #define DQ_PROTO 0
 #endif
 
+/* a b + c d and a b - c d, each product rounded (one call instead of two in a compact build) */
+#if IK_COMPACT
+#define sc_mul_add SCN(sc_mul_add)
+#define sc_mul_sub SCN(sc_mul_sub)
+sc_t sc_mul_add(sc_t a, sc_t b, sc_t c, sc_t d);
+sc_t sc_mul_sub(sc_t a, sc_t b, sc_t c, sc_t d);
+#else
+static inline sc_t sc_mul_add(sc_t a, sc_t b, sc_t c, sc_t d)
+{
+	return sc_mul(a, b) + sc_mul(c, d);
+}
+
+static inline sc_t sc_mul_sub(sc_t a, sc_t b, sc_t c, sc_t d)
+{
+	return sc_mul(a, b) - sc_mul(c, d);
+}
+#endif
+
 #if IK_COMPACT
 #define vn_dot_acc SCN(vn_dot_acc)
 #define quat_axis SCN(quat_axis)

@@ -144,10 +144,10 @@ static void rot_k(struct quat *r, int k, sc_t s, sc_t c)
 	sc_t *u = &r->x, w = r->w, ui, uj;
 	int i = next[k], j = next[k + 1];
 
-	ui = sc_mul(u[i], c) + sc_mul(u[j], s);
-	uj = sc_mul(u[j], c) - sc_mul(u[i], s);
-	r->w = sc_mul(w, c) - sc_mul(u[k], s);
-	u[k] = sc_mul(w, s) + sc_mul(u[k], c);
+	ui = sc_mul_add(u[i], c, u[j], s);
+	uj = sc_mul_sub(u[j], c, u[i], s);
+	r->w = sc_mul_sub(w, c, u[k], s);
+	u[k] = sc_mul_add(w, s, u[k], c);
 	u[i] = ui;
 	u[j] = uj;
 }

@@ -12,6 +12,16 @@
 /* the next two coordinates after k, cyclically */
 static const unsigned char next3[5] = { 1, 2, 0, 1, 2 };
 
+sc_t sc_mul_add(sc_t a, sc_t b, sc_t c, sc_t d)
+{
+	return sc_mul(a, b) + sc_mul(c, d);
+}
+
+sc_t sc_mul_sub(sc_t a, sc_t b, sc_t c, sc_t d)
+{
+	return sc_mul(a, b) - sc_mul(c, d);
+}
+
 sc_acc_t vn_dot_acc(const sc_t *a, const sc_t *b, int n)
 {
 	sc_acc_t s = sc_acc0();
@@ -81,9 +91,9 @@ void quat_axis(const struct quat *q, int k, struct vec3 *out)
 	sc_t *o = SC_V(out);
 	int i = next3[k], j = next3[k + 1];
 
-	o[k] = SC_C(1) - 2 * (sc_mul(u[i], u[i]) + sc_mul(u[j], u[j]));
-	o[i] = 2 * (sc_mul(u[k], u[i]) + sc_mul(q->w, u[j]));
-	o[j] = 2 * (sc_mul(u[k], u[j]) - sc_mul(q->w, u[i]));
+	o[k] = SC_C(1) - 2 * sc_mul_add(u[i], u[i], u[j], u[j]);
+	o[i] = 2 * sc_mul_add(u[k], u[i], q->w, u[j]);
+	o[j] = 2 * sc_mul_sub(u[k], u[j], q->w, u[i]);
 }
 #else
 static sc_t quat_dot(const struct quat *a, const struct quat *b)

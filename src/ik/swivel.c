@@ -43,10 +43,10 @@ static void v3_madd(const struct vec3 *p, sc_t k, const struct vec3 *u, bool sub
  */
 static void turn(sc_t *c, sc_t *s, sc_t ct, sc_t st, bool back)
 {
-	sc_t cc = sc_mul(*c, ct), ss = sc_mul(*s, st), sc = sc_mul(*s, ct), cs = sc_mul(*c, st);
+	sc_t c0 = *c;
 
-	*c = back ? cc + ss : cc - ss;
-	*s = back ? sc - cs : sc + cs;
+	*c = back ? sc_mul_add(c0, ct, *s, st) : sc_mul_sub(c0, ct, *s, st);
+	*s = back ? sc_mul_sub(*s, ct, c0, st) : sc_mul_add(*s, ct, c0, st);
 }
 
 static sc_t v3_normalize(struct vec3 *v)
@@ -102,8 +102,8 @@ static sc_t euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, 
 static sc_t arc_violation(const struct arm *a, int j, sc_t c, sc_t s)
 {
 	const sc_t *cs = a->lim_cs[j];
-	sc_t slo = sc_mul(cs[0], s) - sc_mul(cs[1], c);
-	sc_t shi = sc_mul(c, cs[3]) - sc_mul(s, cs[2]);
+	sc_t slo = sc_mul_sub(cs[0], s, cs[1], c);
+	sc_t shi = sc_mul_sub(c, cs[3], s, cs[2]);
 	bool in;
 
 	if (a->lim.hi[j] - a->lim.lo[j] <= SC_PI)
@@ -112,7 +112,7 @@ static sc_t arc_violation(const struct arm *a, int j, sc_t c, sc_t s)
 		in = slo >= 0 || shi >= 0;
 	if (in)
 		return 0;
-	return SC_C(1) - sc_max(sc_mul(c, cs[0]) + sc_mul(s, cs[1]), sc_mul(c, cs[2]) + sc_mul(s, cs[3])) + SC_EPS;
+	return SC_C(1) - sc_max(sc_mul_add(c, cs[0], s, cs[1]), sc_mul_add(c, cs[2], s, cs[3])) + SC_EPS;
 }
 
 /*
@@ -240,7 +240,7 @@ static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM
 	struct vec3 n, e, x4, y4, z4;
 
 	for (i = 0; i < 3; i++)
-		SC_V(&n)[i] = sc_mul(cp, SC_CV(&x->n1)[i]) + sc_mul(sp, SC_CV(&x->n2)[i]);
+		SC_V(&n)[i] = sc_mul_add(cp, SC_CV(&x->n1)[i], sp, SC_CV(&x->n2)[i]);
 	v3_madd(&x->c, x->r, &n, false, &e);
 	/*
 	 * Upper-arm frame: -z along the upper arm, x the elbow axis. |e| = A,
@@ -660,9 +660,9 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 		sc_sincos(pref[1], &s2, &c2);
 		sc_sincos(pref[2], &s3, &c3);
 		sc_sincos(pref[3], &s4, &c4);
-		st.x4p.x = sc_mul(c2, c4) + sc_mul(s2, sc_mul(s3, s4));
+		st.x4p.x = sc_mul_add(c2, c4, s2, sc_mul(s3, s4));
 		st.x4p.y = sc_mul(c3, s4);
-		st.x4p.z = -sc_mul(s2, c4) + sc_mul(c2, sc_mul(s3, s4));
+		st.x4p.z = sc_mul_sub(c2, sc_mul(s3, s4), s2, c4);
 	}
 	q1p = sc_clamp(pref[0], a->lim.lo[0], a->lim.hi[0]);
 	nc = yaw_candidates(&st, q1p, n1, q1c, (int)(sizeof(q1c) / sizeof(q1c[0])));
