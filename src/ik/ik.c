@@ -90,7 +90,7 @@ static bool kin_dq(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_t
 	for (i = 0; i < 3; i++)
 		SC_V(&dp)[i] = SC_CV(&t->p)[i] - SC_CV(&ch.p[ARM_DOF])[i];
 	err->pos = v3_norm(&dp);
-	if (check && err->pos < tol_pos) {
+	if (check && err->pos < tol_pos && !IK_COMPACT) {
 		/* the rotation error alone, as the logarithm would compute it */
 		sc_t s, c = sc_abs(re.w), ic, g;
 
@@ -108,6 +108,12 @@ static bool kin_dq(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_t
 		V[3 + i] = SC_V(&tw.v)[i];
 	}
 	err->rot = 2 * half;
+	/*
+	 * A compact build takes the rotation error from the logarithm (the same
+	 * value as the shortcut above, which it skips: the same s and c)
+	 */
+	if (IK_COMPACT && check && err->pos < tol_pos && err->rot < tol_rot)
+		return true;
 	arm_chain_jacobian(a, &ch, J);
 	return check && err->pos < tol_pos && err->rot < tol_rot;
 }
