@@ -213,14 +213,26 @@ static bool ctx_init(struct swivel_ctx *x, const struct arm *a, const struct vec
 	return true;
 }
 
-/* swivel angle whose bend plane is closest to an elbow axis x4 (J1 frame) */
-static sc_t ctx_swivel_of(const struct swivel_ctx *x, const struct vec3 *x4)
+/*
+ * The swivel angle whose bend plane is closest to an elbow axis x4 (J1
+ * frame); with x4 NULL the one that points the forearm as close as possible
+ * along the hand (the wrist nearest neutral).
+ */
+static sc_t ctx_swivel(const struct swivel_ctx *x, const struct vec3 *x4)
 {
-	/* the elbow sits at n = u^ x x4 from the shoulder-wrist line */
 	struct vec3 n;
+	sc_t d1, d2;
 
-	v3_cross(&x->uh, x4, &n);
-	return sc_atan2(v3_dot(&n, &x->n2), v3_dot(&n, &x->n1));
+	if (x4) {
+		/* the elbow sits at n = u^ x x4 from the shoulder-wrist line */
+		v3_cross(&x->uh, x4, &n);
+	} else {
+		/* forearm = (w - c - r n) / F: closest to the hand's y axis h when n is along -h */
+		n = (struct vec3){ x->rt1[0][1], x->rt1[1][1], x->rt1[2][1] };
+	}
+	d2 = v3_dot(&n, &x->n2);
+	d1 = v3_dot(&n, &x->n1);
+	return x4 ? sc_atan2(d2, d1) : sc_atan2(-d2, -d1);
 }
 
 /* added to the violation when the upper arm is already outside its limits */
@@ -293,15 +305,6 @@ static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM
 	}
 	v += euler_yxz((const sc_t(*)[3])M, &a->lim, 5, &q[5]);
 	return v + x->viol15;
-}
-
-/* swivel that points the forearm as close as possible along the hand (wrist nearest neutral) */
-static sc_t ctx_swivel_hand(const struct swivel_ctx *x)
-{
-	/* forearm = (w - c - r n) / F: closest to the hand's y axis h when n is along -h */
-	struct vec3 h = { x->rt1[0][1], x->rt1[1][1], x->rt1[2][1] };
-
-	return sc_atan2(-v3_dot(&h, &x->n2), -v3_dot(&h, &x->n1));
 }
 
 static void q_copy(sc_t dst[ARM_DOF], const sc_t src[ARM_DOF])
@@ -671,12 +674,12 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 			continue;
 		if (x.viol15 > 0) {
 			/* rounding at the edge of reach: only the fallback may use it */
-			search_eval(&s, &x, ctx_swivel_of(&x, &st.x4p), cand, true);
+			search_eval(&s, &x, ctx_swivel(&x, &st.x4p), cand, true);
 			continue;
 		}
 		/* the nearest J1 is searched closely, the others coarsely first */
 		/* past the first J1, start where the wrist is nearest neutral: its limits are the tightest */
-		if (!ctx_search(&s, &x, k == 0 ? ctx_swivel_of(&x, &st.x4p) : ctx_swivel_hand(&x), k == 0, cand))
+		if (!ctx_search(&s, &x, ctx_swivel(&x, k == 0 ? &st.x4p : NULL), k == 0, cand))
 			continue;
 		found = true;
 		q_copy(q, cand);
