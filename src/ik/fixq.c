@@ -11,6 +11,8 @@
  * the end; the argument reduction works in Q6.56. No table, no floating
  * point, no libc.
  */
+/* with SC_FIXQ_OUTLINE on ARMv6-M this file holds the one copy of sc_sat and sc_abs (scalar.h) */
+#define SC_FIXQ_DEFINE_SMALL
 #include "ik/scalar.h"
 
 #if SC_TYPE == SC_FIXQ
