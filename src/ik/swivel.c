@@ -532,29 +532,31 @@ static int reach_intervals(const struct swivel_target *st, sc_t lo[2], sc_t hi[2
 	const struct arm *a = st->a;
 	sc_t A = a->dims.arm, F = a->dims.forearm, S = a->dims.shoulder;
 	sc_t l1 = a->lim.lo[0], h1 = a->lim.hi[0];
-	sc_t s5lo = sc_sin_lim(sc_max(a->lim.lo[4], -SC_HALF_PI)), s5hi = sc_sin_lim(sc_min(a->lim.hi[4], SC_HALF_PI));
-	sc_t base = sc_mul(A, A) + sc_mul(F, F), af2 = 2 * sc_mul(A, F);
-	sc_t dmax2 = base - sc_mul(af2, s5lo), dmin2 = base - sc_mul(af2, s5hi);
-	sc_t rho = sc_sqrt(sc_mul(st->w.x, st->w.x) + sc_mul(st->w.y, st->w.y));
+	sc_t base = sc_mul_add(A, A, F, F), af2 = 2 * sc_mul(A, F);
+	sc_t rho = sc_sqrt(sc_mul_add(st->w.x, st->w.x, st->w.y, st->w.y));
 	sc_t k = v3_dot(&st->w, &st->w) + sc_mul(S, S), srho = 2 * sc_mul(S, rho);
-	sc_t beta, cl, ch, amin, amax, cand[2][2];
+	sc_t beta, d2[2], cb[2], amin, amax, cand[2][2];
 	int n = 0, i;
 
+	/* the squared shoulder-wrist distance at J5's lower limit (the largest) and upper (the smallest) */
+	for (i = 0; i < 2; i++)
+		d2[i] = base - sc_mul(af2, sc_sin_lim(i ? sc_min(a->lim.hi[4], SC_HALF_PI) : sc_max(a->lim.lo[4], -SC_HALF_PI)));
 	if (!(srho > SC_C(1e-9))) {
 		/* the distance does not depend on J1 */
-		if (k > dmax2 || k < dmin2)
+		if (k > d2[0] || k < d2[1])
 			return 0;
 		lo[0] = l1;
 		hi[0] = h1;
 		return 1;
 	}
-	cl = ratio_2(k - dmax2, srho);
-	ch = ratio_2(k - dmin2, srho);
-	if (cl > SC_C(1) || ch < SC_C(-1))
+	/* cos(q1 - beta) in [cb[0], cb[1]] */
+	for (i = 0; i < 2; i++)
+		cb[i] = ratio_2(k - d2[i], srho);
+	if (cb[0] > SC_C(1) || cb[1] < SC_C(-1))
 		return 0;
-	/* cos(q1 - beta) in [cl, ch]: |q1 - beta| in [acos(ch), acos(cl)] */
-	amin = sc_acos(sc_min(ch, SC_C(1)));
-	amax = sc_acos(sc_max(cl, SC_C(-1)));
+	/* |q1 - beta| in [acos(cb[1]), acos(cb[0])] */
+	amin = sc_acos(sc_min(cb[1], SC_C(1)));
+	amax = sc_acos(sc_max(cb[0], SC_C(-1)));
 	beta = sc_atan2(st->w.y, st->w.x);
 	cand[0][0] = beta + amin, cand[0][1] = beta + amax;
 	cand[1][0] = beta - amax, cand[1][1] = beta - amin;
@@ -655,7 +657,12 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 		arm_mirror_dq(&t->d, &d);
 	dq_translation(&d, &p);
 	quat_to_mat3(&d.r, st.rt);
-	st.w = (struct vec3){ p.x - sc_mul(H, st.rt[0][1]), p.y - sc_mul(H, st.rt[1][1]), p.z - sc_mul(H, st.rt[2][1]) };
+	{
+		/* the wrist centre: H back along the hand's y axis */
+		struct vec3 hy = { st.rt[0][1], st.rt[1][1], st.rt[2][1] };
+
+		v3_madd(&p, H, &hy, true, &st.w);
+	}
 	{
 		/* the preferred elbow axis in the J1 frame: Ry(q2) Rx(q3) Rz(q4) x */
 		sc_t s2, c2, s3, c3, s4, c4;
