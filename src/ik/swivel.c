@@ -75,6 +75,7 @@ static sc_t violation(sc_t v, sc_t lo, sc_t hi)
  */
 static sc_t euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, sc_t out[3])
 {
+#if IK_COMPACT
 	sc_t e[2][3], v[2] = { 0, 0 };
 	int k, br;
 
@@ -91,6 +92,20 @@ static sc_t euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, 
 	for (k = 0; k < 3; k++)
 		out[k] = e[br][k];
 	return v[br];
+#else
+	const sc_t *lo = &lim->lo[i0], *hi = &lim->hi[i0];
+	sc_t b = sc_asin(-m[1][2]), a = sc_atan2(m[0][2], m[2][2]), c = sc_atan2(m[1][0], m[1][1]);
+	sc_t a1 = sc_wrap_pi(a + SC_PI), b1 = sc_wrap_pi(SC_PI - b), c1 = sc_wrap_pi(c + SC_PI);
+	sc_t v0 = violation(a, lo[0], hi[0]) + violation(b, lo[1], hi[1]) + violation(c, lo[2], hi[2]);
+	sc_t v1 = violation(a1, lo[0], hi[0]) + violation(b1, lo[1], hi[1]) + violation(c1, lo[2], hi[2]);
+
+	if (v1 < v0) {
+		out[0] = a1, out[1] = b1, out[2] = c1;
+		return v1;
+	}
+	out[0] = a, out[1] = b, out[2] = c;
+	return v0;
+#endif
 }
 
 /*
@@ -251,14 +266,25 @@ static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM
 	int i;
 	struct vec3 n, e, x4, y4, z4;
 
+	/* (the compact build's loops would cost the host's inner loop a third more time) */
+#if IK_COMPACT
 	for (i = 0; i < 3; i++)
 		SC_V(&n)[i] = sc_mul_add(cp, SC_CV(&x->n1)[i], sp, SC_CV(&x->n2)[i]);
 	v3_madd(&x->c, x->r, &n, false, &e);
+#else
+	n.x = sc_mul(cp, x->n1.x) + sc_mul(sp, x->n2.x);
+	n.y = sc_mul(cp, x->n1.y) + sc_mul(sp, x->n2.y);
+	n.z = sc_mul(cp, x->n1.z) + sc_mul(sp, x->n2.z);
+	e.x = x->c.x + sc_mul(x->r, n.x);
+	e.y = x->c.y + sc_mul(x->r, n.y);
+	e.z = x->c.z + sc_mul(x->r, n.z);
+#endif
 	/*
 	 * Upper-arm frame: -z along the upper arm, x the elbow axis. |e| = A,
 	 * and n, u^ are orthonormal, so z4 and x4 = n x u^ are unit vectors and
 	 * orthogonal (z4 lies in the plane of u^ and n) up to rounding.
 	 */
+#if IK_COMPACT
 	v3_madd(NULL, x->inv_a, &e, true, &z4);
 	v3_cross(&n, &x->uh, &x4);
 	v3_cross(&z4, &x4, &y4);
@@ -267,6 +293,14 @@ static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM
 		R[i][1] = SC_V(&y4)[i];
 		R[i][2] = SC_V(&z4)[i];
 	}
+#else
+	z4 = (struct vec3){ -sc_mul(e.x, x->inv_a), -sc_mul(e.y, x->inv_a), -sc_mul(e.z, x->inv_a) };
+	v3_cross(&n, &x->uh, &x4);
+	v3_cross(&z4, &x4, &y4);
+	R[0][0] = x4.x, R[0][1] = y4.x, R[0][2] = z4.x;
+	R[1][0] = x4.y, R[1][1] = y4.y, R[1][2] = z4.y;
+	R[2][0] = x4.z, R[2][1] = y4.z, R[2][2] = z4.z;
+#endif
 	q[0] = x->q1;
 	q[4] = x->q5;
 	if (!full) {
@@ -283,17 +317,30 @@ static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM
 	 */
 	for (i = 0; i < 3; i++) {
 		R15[i][0] = R[i][0];
+#if IK_COMPACT
 		R15[i][1] = R[i][1];
 		R15[i][2] = R[i][2];
 		turn(&R15[i][1], &R15[i][2], x->c5, x->s5, true);
+#else
+		R15[i][1] = sc_mul(x->c5, R[i][1]) + sc_mul(x->s5, R[i][2]);
+		R15[i][2] = sc_mul(x->c5, R[i][2]) - sc_mul(x->s5, R[i][1]);
+#endif
 	}
 	M[0][0] = M[0][1] = M[2][0] = M[2][1] = 0;
+#if IK_COMPACT
 	for (i = 0; i < 5; i++) {
 		static const unsigned char rc[5] = { 0x02, 0x10, 0x11, 0x12, 0x22 }; /* row << 4 | column */
 		int r = rc[i] >> 4, c = rc[i] & 3;
 
 		M[r][c] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, r, c);
 	}
+#else
+	M[0][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 0, 2);
+	M[1][0] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 0);
+	M[1][1] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 1);
+	M[1][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 2);
+	M[2][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 2, 2);
+#endif
 	if (!full) {
 		v = euler_fast((const sc_t(*)[3])M, a, 5);
 		if (v > 0)
