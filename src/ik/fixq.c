@@ -24,27 +24,28 @@ unsigned long sc_saturations;
 #define Q31_ONE ((int64_t)1 << 31)
 
 #if SC_FIXQ_OUTLINE
-sc_t sc_acc_get(sc_acc_t s)
+/* (noinline: under link-time optimisation as well, one call per use is what makes them small) */
+__attribute__((noinline)) sc_t sc_acc_get(sc_acc_t s)
 {
 	return sc_acc_get_inline(s);
 }
 
-sc_t sc_mul(sc_t a, sc_t b)
+__attribute__((noinline)) sc_t sc_mul(sc_t a, sc_t b)
 {
 	return sc_acc_get((sc_acc_t)a * b);
 }
 
-sc_acc_t sc_mac(sc_acc_t s, sc_t a, sc_t b)
+__attribute__((noinline)) sc_acc_t sc_mac(sc_acc_t s, sc_t a, sc_t b)
 {
 	return sc_mac_inline(s, a, b);
 }
 
-sc_t sc_mul_int(sc_t a, int n)
+__attribute__((noinline)) sc_t sc_mul_int(sc_t a, int n)
 {
 	return sc_sat((int64_t)a * n);
 }
 
-sc_acc_t sc_msb(sc_acc_t s, sc_t a, sc_t b)
+__attribute__((noinline)) sc_acc_t sc_msb(sc_acc_t s, sc_t a, sc_t b)
 {
 	return -sc_mac(-s, a, b);
 }
