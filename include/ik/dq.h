@@ -104,8 +104,9 @@ struct line {
  * does, so both forms give the same bits (the embedded self-test compares
  * them: its Cortex-M images are compact, the host's are not). The floating
  * builds and -O2 keep the straight-line code, which the host's speed relies
- * on. IK_COMPACT=0 or 1 overrides the choice. A compact build also has
- * v3_cross and quat_mul out of line (in dq.c).
+ * on. IK_COMPACT=0 or 1 overrides the choice (a compact floating build
+ * works, but sums some products in another order: not the same bits). A
+ * compact build also has v3_cross and quat_mul out of line (in dq.c).
  */
 #ifndef IK_COMPACT
 #if SC_TYPE == SC_FIXQ && defined(__OPTIMIZE_SIZE__)

@@ -522,7 +522,7 @@ int ik_lsq_step(const sc_t J[6][ARM_DOF], const sc_t V[6], const bool *free, sc_
 		if (!free || free[i])
 			col[n++] = i;
 	}
-	if (n == ARM_DOF && !IK_COMPACT) {
+	if (n == ARM_DOF) {
 		/* well conditioned (nearly always): the normal equations; else J^T = Q R, x = Q R^-T V */
 		if (SC_NE_COND > 0 && lsq_normal_eq(J, V, x))
 			return 6;
