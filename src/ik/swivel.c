@@ -41,7 +41,7 @@ static void v3_madd(const struct vec3 *p, sc_t k, const struct vec3 *u, bool sub
  * (c, s) turned by the angle whose cosine and sine are ct, st (back: by its
  * negative): c ct - s st, s ct + c st, or c ct + s st, s ct - c st
  */
-static void turn(sc_t *c, sc_t *s, sc_t ct, sc_t st, bool back)
+static inline void turn(sc_t *c, sc_t *s, sc_t ct, sc_t st, bool back)
 {
 	sc_t c0 = *c;
 
