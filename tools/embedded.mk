@@ -113,7 +113,7 @@ $(EMB)/$(1)/%.o: src/ik/%.c tools/embedded.mk
 $(EMB)/$(1)/%.o: tests/embedded/%.c $(EMB_VEC) tools/embedded.mk
 	@mkdir -p $$(dir $$@)
 	$$(EMB_CC_$(1)) $$(EMB_FLAGS_$(1)) $$(EMB_INC) -DIKT_PLATFORM='"$$(EMB_NAME_$(1))"' -MMD -MP -c $$< -o $$@
-$(EMB)/$(1)/min-%.o: tests/embedded/min.c tools/embedded.mk
+$(addprefix $(EMB)/$(1)/min-,none.o newton.o solve.o): $(EMB)/$(1)/min-%.o: tests/embedded/min.c tools/embedded.mk
 	@mkdir -p $$(dir $$@)
 	$$(EMB_CC_$(1)) $$(EMB_FLAGS_$(1)) $$(EMB_INC) -DIKT_MIN_$$(shell echo $$* | tr a-z A-Z) -MMD -MP -c $$< -o $$@
 endef

@@ -95,12 +95,82 @@ struct line {
  * and quat_mul, are one function each in dq.c (which defines
  * DQ_DEFINE_OUTLINE) instead of a copy in every file: 0.8 kB less code.
  */
-#if SC_TYPE == SC_FIXQ && SC_FIXQ_OUTLINE
+/*
+ * IK_COMPACT: the core written as loops over tables instead of straight-line
+ * code where that is all that differs (axes, components, columns), for
+ * size-optimised fixed-point builds (-Os: the microcontroller images, where
+ * much of the solver's code would otherwise be unrolled vector algebra).
+ * Fixed point accumulates exactly and rounds where the straight-line form
+ * does, so both forms give the same bits (the embedded self-test compares
+ * them: its Cortex-M images are compact, the host's are not). The floating
+ * builds and -O2 keep the straight-line code, which the host's speed relies
+ * on. IK_COMPACT=0 or 1 overrides the choice (a compact floating build
+ * works, but sums some products in another order: not the same bits). A
+ * compact build also has v3_cross and quat_mul out of line (in dq.c).
+ */
+#ifndef IK_COMPACT
+#if SC_TYPE == SC_FIXQ && defined(__OPTIMIZE_SIZE__)
+#define IK_COMPACT 1
+#else
+#define IK_COMPACT 0
+#endif
+#endif
+
+#if SC_TYPE == SC_FIXQ && (SC_FIXQ_OUTLINE || IK_COMPACT)
 #define DQ_OUTLINE 1
 #else
 #define DQ_OUTLINE 0
 #endif
 
+/* the components of a vec3 (x, y, z) or a quat (w, x, y, z) as an array */
+#define SC_V(v) ((sc_t *)(v))
+#define SC_CV(v) ((const sc_t *)(v))
+
+/*
+ * DQ_INL: the small functions below are static inline, or in a compact
+ * build one out-of-line copy each in dq.c (DQ_PROTO: this file gives only
+ * their prototypes).
+ */
+#if IK_COMPACT
+#define DQ_INL
+#else
+#define DQ_INL static inline
+#endif
+#if IK_COMPACT && !defined(DQ_DEFINE_OUTLINE)
+#define DQ_PROTO 1
+#else
+#define DQ_PROTO 0
+#endif
+
+/* a b + c d and a b - c d, each product rounded (one call instead of two in a compact build) */
+#if IK_COMPACT
+#define sc_mul_add SCN(sc_mul_add)
+#define sc_mul_sub SCN(sc_mul_sub)
+sc_t sc_mul_add(sc_t a, sc_t b, sc_t c, sc_t d);
+sc_t sc_mul_sub(sc_t a, sc_t b, sc_t c, sc_t d);
+#else
+static inline sc_t sc_mul_add(sc_t a, sc_t b, sc_t c, sc_t d)
+{
+	return sc_mul(a, b) + sc_mul(c, d);
+}
+
+static inline sc_t sc_mul_sub(sc_t a, sc_t b, sc_t c, sc_t d)
+{
+	return sc_mul(a, b) - sc_mul(c, d);
+}
+#endif
+
+#if IK_COMPACT
+#define vn_dot_acc SCN(vn_dot_acc)
+#define quat_axis SCN(quat_axis)
+/* the sum of a[i] b[i], i < n, unrounded */
+sc_acc_t vn_dot_acc(const sc_t *a, const sc_t *b, int n);
+/* column k (0: x, 1: y, 2: z) of the rotation matrix of q, R e_k, as quat_to_mat3 computes it */
+void quat_axis(const struct quat *q, int k, struct vec3 *out);
+/* loops, in dq.c */
+sc_t v3_dot(const struct vec3 *a, const struct vec3 *b);
+sc_t v3_norm(const struct vec3 *a);
+#else
 static inline sc_t v3_dot(const struct vec3 *a, const struct vec3 *b)
 {
 	sc_acc_t s = sc_acc0();
@@ -115,17 +185,19 @@ static inline sc_t v3_norm(const struct vec3 *a)
 {
 	return sc_acc_sqrt(sc_mac(sc_mac(sc_mac(sc_acc0(), a->x, a->x), a->y, a->y), a->z, a->z));
 }
+#endif
 
-#if DQ_OUTLINE && !defined(DQ_DEFINE_OUTLINE)
-void v3_cross(const struct vec3 *a, const struct vec3 *b, struct vec3 *out);
-/* out = a b (Hamilton) */
-void quat_mul(const struct quat *a, const struct quat *b, struct quat *out);
-#else
 #if DQ_OUTLINE
 #define DQ_SMALL
 #else
 #define DQ_SMALL static inline
 #endif
+#if (DQ_OUTLINE && !defined(DQ_DEFINE_OUTLINE)) || IK_COMPACT
+/* one copy in dq.c (a compact build's: loops) */
+void v3_cross(const struct vec3 *a, const struct vec3 *b, struct vec3 *out);
+/* out = a b (Hamilton) */
+void quat_mul(const struct quat *a, const struct quat *b, struct quat *out);
+#else
 DQ_SMALL void v3_cross(const struct vec3 *a, const struct vec3 *b, struct vec3 *out)
 {
 	struct vec3 c;
@@ -170,6 +242,9 @@ static inline void quat_conj(const struct quat *a, struct quat *out)
 	out->z = -a->z;
 }
 
+#if IK_COMPACT
+sc_t quat_norm(const struct quat *a);
+#else
 static inline sc_t quat_norm(const struct quat *a)
 {
 	sc_acc_t s = sc_mac(sc_acc0(), a->w, a->w);
@@ -178,12 +253,16 @@ static inline sc_t quat_norm(const struct quat *a)
 	s = sc_mac(s, a->y, a->y);
 	return sc_acc_sqrt(sc_mac(s, a->z, a->z));
 }
+#endif
 
 /* Returns false (and writes the identity) if |a| is zero or not finite. */
 bool quat_normalize(const struct quat *a, struct quat *out);
 
 /* out = q v q*, q a unit quaternion */
-static inline void quat_rotate(const struct quat *q, const struct vec3 *v, struct vec3 *out)
+DQ_INL void quat_rotate(const struct quat *q, const struct vec3 *v, struct vec3 *out)
+#if DQ_PROTO
+;
+#else
 {
 	/* v' = v + 2w (u x v) + 2 u x (u x v), u the vector part */
 	struct vec3 u, c, cc;
@@ -200,6 +279,7 @@ static inline void quat_rotate(const struct quat *q, const struct vec3 *v, struc
 	out->y = v->y + sc_mul(q->w, c.y) + cc.y;
 	out->z = v->z + sc_mul(q->w, c.z) + cc.z;
 }
+#endif
 
 /* axis must be a unit vector */
 static inline void quat_from_axis_angle(const struct vec3 *axis, sc_t angle, struct quat *out)
@@ -255,7 +335,10 @@ static inline void dq_conj(const struct dq *a, struct dq *out)
 bool dq_normalize(const struct dq *a, struct dq *out);
 
 /* x' = R x + t from a unit rotation r and a translation t */
-static inline void dq_from_rt(const struct quat *r, const struct vec3 *t, struct dq *out)
+DQ_INL void dq_from_rt(const struct quat *r, const struct vec3 *t, struct dq *out)
+#if DQ_PROTO
+;
+#else
 {
 	struct quat tq, rr = *r;
 
@@ -266,11 +349,15 @@ static inline void dq_from_rt(const struct quat *r, const struct vec3 *t, struct
 	quat_mul(&tq, &rr, &out->d);
 	out->r = rr;
 }
+#endif
 
 /* the paper's Q(R, theta, T): rotation about the unit axis, then translation t in the parent frame */
 void dq_from_axis_angle_t(const struct vec3 *axis, sc_t angle, const struct vec3 *t, struct dq *out);
 
-static inline void dq_translation(const struct dq *a, struct vec3 *out)
+DQ_INL void dq_translation(const struct dq *a, struct vec3 *out)
+#if DQ_PROTO
+;
+#else
 {
 	/* t = 2 d r* */
 	struct quat rc, t;
@@ -281,6 +368,7 @@ static inline void dq_translation(const struct dq *a, struct vec3 *out)
 	out->y = 2 * t.y;
 	out->z = 2 * t.z;
 }
+#endif
 
 static inline void dq_transform_point(const struct dq *a, const struct vec3 *p, struct vec3 *out)
 {

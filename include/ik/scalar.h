@@ -507,7 +507,26 @@ sc_recip_t sc_recip(sc_t n);
 /* a / n through the reciprocal: within 0.55 ulp when |a / n| <= 1, 1.5 ulp at most; saturates */
 sc_t sc_mul_recip(sc_t a, sc_recip_t r);
 
-static inline sc_t sc_sat(int64_t v)
+/*
+ * Where every product is a call (ARMv6-M, SC_FIXQ_OUTLINE below), the
+ * saturation (a 64-bit compare: a dozen instructions there) and sc_abs are
+ * one function each in fixq.c instead of inline code at every use.
+ */
+#if defined(__ARM_ARCH_6M__) && !defined(SC_FIXQ_DEFINE_SMALL)
+#define sc_sat SCN(sc_sat)
+#define sc_abs SCN(sc_abs)
+sc_t sc_sat(int64_t v);
+sc_t sc_abs(sc_t a);
+#else
+#if defined(__ARM_ARCH_6M__)
+#define sc_sat SCN(sc_sat)
+#define sc_abs SCN(sc_abs)
+/* (and kept a call under link-time optimisation) */
+#define SC_FIXQ_SMALL __attribute__((noinline))
+#else
+#define SC_FIXQ_SMALL static inline
+#endif
+SC_FIXQ_SMALL sc_t sc_sat(int64_t v)
 {
 	if (v > INT32_MAX) {
 		SC_FIXQ_SATURATED();
@@ -519,6 +538,12 @@ static inline sc_t sc_sat(int64_t v)
 	}
 	return (sc_t)v;
 }
+
+SC_FIXQ_SMALL sc_t sc_abs(sc_t a)
+{
+	return a >= 0 ? a : (a == INT32_MIN ? INT32_MAX : -a);
+}
+#endif
 
 /* Q(2F) -> Q(F), rounding half up (GCC's >> on a negative int64 is arithmetic) */
 static inline sc_t sc_acc_get_inline(sc_acc_t s)
@@ -582,11 +607,6 @@ static inline sc_acc_t sc_msb(sc_acc_t s, sc_t a, sc_t b)
 }
 #endif
 
-static inline sc_t sc_abs(sc_t a)
-{
-	return a >= 0 ? a : (a == INT32_MIN ? INT32_MAX : -a);
-}
-
 static inline bool sc_isfinite(sc_t a)
 {
 	(void)a;
@@ -609,11 +629,16 @@ static inline sc_t sc_from_int(int n)
 	return sc_sat((int64_t)n * ((int64_t)1 << SC_FRAC));
 }
 
-/* a n, saturating */
+/* a n, saturating (a function where a 64-bit product is a call anyway) */
+#if SC_FIXQ_OUTLINE
+#define sc_mul_int SCN(sc_mul_int)
+sc_t sc_mul_int(sc_t a, int n);
+#else
 static inline sc_t sc_mul_int(sc_t a, int n)
 {
 	return sc_sat((int64_t)a * n);
 }
+#endif
 
 #define sc_div_int SCN(sc_div_int)
 /* a / n rounded to nearest (half away from zero); n != 0 */

@@ -128,6 +128,74 @@ static inline void col_z(const struct quat *q, struct vec3 *o)
 
 
 
+#if IK_COMPACT
+/*
+ * The compact form of arm_chain_eval and arm_chain_jacobian below (IK_COMPACT,
+ * dq.h): one loop over the joints, the axis and translation of each from
+ * the arm, the same products in the same order.
+ */
+/* axis of joint i: 0 x, 1 y, 2 z */
+static const unsigned char chain_axis[ARM_DOF] = { 2, 1, 0, 2, 0, 1, 0, 2 };
+
+/* r <- r (c, s e_k): with i, j the next axes, as rot_x, rot_y, rot_z */
+static void rot_k(struct quat *r, int k, sc_t s, sc_t c)
+{
+	static const unsigned char next[5] = { 1, 2, 0, 1, 2 };
+	sc_t *u = &r->x, w = r->w, ui, uj;
+	int i = next[k], j = next[k + 1];
+
+	ui = sc_mul_add(u[i], c, u[j], s);
+	uj = sc_mul_sub(u[j], c, u[i], s);
+	r->w = sc_mul_sub(w, c, u[k], s);
+	u[k] = sc_mul_add(w, s, u[k], c);
+	u[i] = ui;
+	u[j] = uj;
+}
+
+void arm_chain_eval(const struct arm *a, const sc_t q[ARM_DOF], struct arm_chain *ch, sc_t J[6][ARM_DOF])
+{
+	struct quat *r = ch->r;
+	struct vec3 *p = ch->p, u;
+	int i, k;
+
+	r[0] = (struct quat){ SC_C(1), 0, 0, 0 };
+	p[0] = (struct vec3){ 0, 0, 0 };
+	for (i = 0; i < ARM_DOF; i++) {
+		const sc_t *t = SC_CV(&a->trans[i]);
+		sc_t s, c;
+
+		k = chain_axis[i];
+		sc_sincos(sc_mul(q[i], SC_C(0.5)), &s, &c);
+		r[i + 1] = r[i];
+		rot_k(&r[i + 1], k, sc_mul(SC_CV(&a->axis[i])[k], s), c);
+		p[i + 1] = p[i];
+		/* the translation after J1, J4, J5, J8: along one axis of the new frame */
+		for (k = 0; k < 3; k++) {
+			if (t[k]) {
+				quat_axis(&r[i + 1], k, &u);
+				ik_add_scaled(&p[i], t[k], &u, &p[i + 1]);
+			}
+		}
+	}
+	if (J)
+		arm_chain_jacobian(a, ch, J);
+}
+
+void arm_chain_jacobian(const struct arm *a, const struct arm_chain *ch, sc_t J[6][ARM_DOF])
+{
+	/* the frame whose axis column serves for joint i (before or after it turns: the same axis) */
+	static const unsigned char frame[ARM_DOF] = { 0, 1, 2, 4, 5, 5, 6, 8 };
+	struct vec3 u;
+	int i;
+
+	for (i = 0; i < ARM_DOF; i++) {
+		int k = chain_axis[i];
+
+		quat_axis(&ch->r[frame[i]], k, &u);
+		ik_jac_col(J, i, &ch->p[i], SC_CV(&a->axis[i])[k], &u);
+	}
+}
+#else
 void arm_chain_eval(const struct arm *a, const sc_t q[ARM_DOF], struct arm_chain *ch, sc_t J[6][ARM_DOF])
 {
 	/*
@@ -217,6 +285,7 @@ void arm_chain_jacobian(const struct arm *a, const struct arm_chain *ch, sc_t J[
 	col_z(&r[8], &u);
 	ik_jac_col(J, 7, &p[7], a->axis[7].z, &u);
 }
+#endif /* IK_COMPACT */
 
 void arm_fk_frames(const struct arm *a, const sc_t q[ARM_DOF], struct dq k[ARM_DOF + 1])
 {

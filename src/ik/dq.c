@@ -8,6 +8,94 @@
 #include "ik/dq.h"
 #include "ik_private.h"
 
+#if IK_COMPACT
+/* the next two coordinates after k, cyclically */
+static const unsigned char next3[5] = { 1, 2, 0, 1, 2 };
+
+sc_t sc_mul_add(sc_t a, sc_t b, sc_t c, sc_t d)
+{
+	return sc_mul(a, b) + sc_mul(c, d);
+}
+
+sc_t sc_mul_sub(sc_t a, sc_t b, sc_t c, sc_t d)
+{
+	return sc_mul(a, b) - sc_mul(c, d);
+}
+
+sc_acc_t vn_dot_acc(const sc_t *a, const sc_t *b, int n)
+{
+	sc_acc_t s = sc_acc0();
+	int i;
+
+	for (i = 0; i < n; i++)
+		s = sc_mac(s, a[i], b[i]);
+	return s;
+}
+
+sc_t v3_dot(const struct vec3 *a, const struct vec3 *b)
+{
+	return sc_acc_get(vn_dot_acc(SC_CV(a), SC_CV(b), 3));
+}
+
+sc_t v3_norm(const struct vec3 *a)
+{
+	return sc_acc_sqrt(vn_dot_acc(SC_CV(a), SC_CV(a), 3));
+}
+
+sc_t quat_norm(const struct quat *a)
+{
+	return sc_acc_sqrt(vn_dot_acc(SC_CV(a), SC_CV(a), 4));
+}
+
+static sc_t quat_dot(const struct quat *a, const struct quat *b)
+{
+	return sc_acc_get(vn_dot_acc(SC_CV(a), SC_CV(b), 4));
+}
+
+void v3_cross(const struct vec3 *a, const struct vec3 *b, struct vec3 *out)
+{
+	const sc_t *u = SC_CV(a), *v = SC_CV(b);
+	sc_t c[3];
+	int k;
+
+	for (k = 0; k < 3; k++) {
+		int i = next3[k], j = next3[k + 1];
+
+		c[k] = sc_acc_get(sc_msb(sc_mac(sc_acc0(), u[i], v[j]), u[j], v[i]));
+	}
+	out->x = c[0], out->y = c[1], out->z = c[2];
+}
+
+void quat_mul(const struct quat *a, const struct quat *b, struct quat *out)
+{
+	/* component i of a b sums a_j b_(i xor j); bit 4 i + j of neg: that term is subtracted */
+	const unsigned neg = 0x428eu;
+	const sc_t *u = SC_CV(a), *v = SC_CV(b);
+	sc_t c[4];
+	int i, j;
+
+	for (i = 0; i < 4; i++) {
+		sc_acc_t s = sc_acc0();
+
+		for (j = 0; j < 4; j++)
+			s = neg >> (4 * i + j) & 1u ? sc_msb(s, u[j], v[i ^ j]) : sc_mac(s, u[j], v[i ^ j]);
+		c[i] = sc_acc_get(s);
+	}
+	out->w = c[0], out->x = c[1], out->y = c[2], out->z = c[3];
+}
+
+void quat_axis(const struct quat *q, int k, struct vec3 *out)
+{
+	/* with i, j the next axes: R e_k = (1 - 2 (u_i^2 + u_j^2)) e_k + 2 (u_k u_i + w u_j) e_i + 2 (u_k u_j - w u_i) e_j */
+	const sc_t *u = &q->x;
+	sc_t *o = SC_V(out);
+	int i = next3[k], j = next3[k + 1];
+
+	o[k] = SC_C(1) - 2 * sc_mul_add(u[i], u[i], u[j], u[j]);
+	o[i] = 2 * sc_mul_add(u[k], u[i], q->w, u[j]);
+	o[j] = 2 * sc_mul_sub(u[k], u[j], q->w, u[i]);
+}
+#else
 static sc_t quat_dot(const struct quat *a, const struct quat *b)
 {
 	sc_acc_t s = sc_mac(sc_acc0(), a->w, b->w);
@@ -16,16 +104,16 @@ static sc_t quat_dot(const struct quat *a, const struct quat *b)
 	s = sc_mac(s, a->y, b->y);
 	return sc_acc_get(sc_mac(s, a->z, b->z));
 }
+#endif
 
 /* a / n, n the norm of a (or of a larger vector a belongs to) */
 static void quat_div_norm(const struct quat *a, sc_t n, struct quat *out)
 {
 	sc_recip_t k = sc_recip(n);
+	int i;
 
-	out->w = sc_mul_recip(a->w, k);
-	out->x = sc_mul_recip(a->x, k);
-	out->y = sc_mul_recip(a->y, k);
-	out->z = sc_mul_recip(a->z, k);
+	for (i = 0; i < 4; i++)
+		SC_V(out)[i] = sc_mul_recip(SC_CV(a)[i], k);
 }
 
 /*
@@ -36,13 +124,15 @@ static void quat_div_norm(const struct quat *a, sc_t n, struct quat *out)
  */
 static bool quat_tame(const struct quat *a, struct quat *out)
 {
+	sc_t m = 0;
+	int i;
+
 	*out = *a;
-	if (SC_SQ_SAFE > 0 && (sc_abs(a->w) > SC_SQ_SAFE || sc_abs(a->x) > SC_SQ_SAFE || sc_abs(a->y) > SC_SQ_SAFE ||
-			       sc_abs(a->z) > SC_SQ_SAFE)) {
-		out->w = sc_mul(a->w, SC_C(0.125));
-		out->x = sc_mul(a->x, SC_C(0.125));
-		out->y = sc_mul(a->y, SC_C(0.125));
-		out->z = sc_mul(a->z, SC_C(0.125));
+	for (i = 0; i < 4; i++)
+		m = sc_max(m, sc_abs(SC_CV(a)[i]));
+	if (SC_SQ_SAFE > 0 && m > SC_SQ_SAFE) {
+		for (i = 0; i < 4; i++)
+			SC_V(out)[i] = sc_mul(SC_CV(a)[i], SC_C(0.125));
 		return true;
 	}
 	return false;
@@ -73,6 +163,16 @@ bool quat_normalize(const struct quat *a, struct quat *out)
 
 void quat_to_mat3(const struct quat *q, sc_t m[3][3])
 {
+#if IK_COMPACT
+	struct vec3 c;
+	int i, k;
+
+	for (k = 0; k < 3; k++) {
+		quat_axis(q, k, &c);
+		for (i = 0; i < 3; i++)
+			m[i][k] = SC_V(&c)[i];
+	}
+#else
 	sc_t xx = sc_mul(q->x, q->x), yy = sc_mul(q->y, q->y), zz = sc_mul(q->z, q->z);
 	sc_t xy = sc_mul(q->x, q->y), xz = sc_mul(q->x, q->z), yz = sc_mul(q->y, q->z);
 	sc_t wx = sc_mul(q->w, q->x), wy = sc_mul(q->w, q->y), wz = sc_mul(q->w, q->z);
@@ -86,6 +186,7 @@ void quat_to_mat3(const struct quat *q, sc_t m[3][3])
 	m[2][0] = 2 * (xz - wy);
 	m[2][1] = 2 * (yz + wx);
 	m[2][2] = SC_C(1) - 2 * (xx + yy);
+#endif
 }
 
 void quat_from_mat3(const sc_t m[3][3], struct quat *out)
@@ -245,16 +346,30 @@ void dq_log_twist_rt(const struct quat *r, const struct vec3 *t, struct twist *o
 	x = ik_half_angle(s, c, &ic, &g); /* half the rotation angle, in [0, pi/2] */
 	/* 2 x / s; at small angles (2 / c) (1 - u^2/3 + u^4/5) */
 	f = g != 0 ? sc_mul(2 * ic, g) : sc_div(2 * x, s);
+	/* v = t - 1/2 w x t + k w x (w x t) */
+	k = ik_log_k(x, s, c);
+#if IK_COMPACT
+	{
+		int i;
+
+		for (i = 0; i < 3; i++)
+			SC_V(&out->w)[i] = sc_mul(f, SC_V(&e)[i + 1]);
+		v3_cross(&out->w, t, &wt);
+		v3_cross(&out->w, &wt, &wwt);
+		for (i = 0; i < 3; i++)
+			SC_V(&out->v)[i] = SC_CV(t)[i] - sc_mul(SC_C(0.5), SC_V(&wt)[i]) + sc_mul(k, SC_V(&wwt)[i]);
+	}
+#else
+	/* (straight-line where speed matters: the loops cost the host's Newton step 17 %) */
 	out->w.x = sc_mul(f, e.x);
 	out->w.y = sc_mul(f, e.y);
 	out->w.z = sc_mul(f, e.z);
-	/* v = t - 1/2 w x t + k w x (w x t) */
-	k = ik_log_k(x, s, c);
 	v3_cross(&out->w, t, &wt);
 	v3_cross(&out->w, &wt, &wwt);
 	out->v.x = t->x - sc_mul(SC_C(0.5), wt.x) + sc_mul(k, wwt.x);
 	out->v.y = t->y - sc_mul(SC_C(0.5), wt.y) + sc_mul(k, wwt.y);
 	out->v.z = t->z - sc_mul(SC_C(0.5), wt.z) + sc_mul(k, wwt.z);
+#endif
 	*half_angle = x;
 }
 

@@ -11,6 +11,8 @@
  * the end; the argument reduction works in Q6.56. No table, no floating
  * point, no libc.
  */
+/* with SC_FIXQ_OUTLINE on ARMv6-M this file holds the one copy of sc_sat and sc_abs (scalar.h) */
+#define SC_FIXQ_DEFINE_SMALL
 #include "ik/scalar.h"
 
 #if SC_TYPE == SC_FIXQ
@@ -22,24 +24,30 @@ unsigned long sc_saturations;
 #define Q31_ONE ((int64_t)1 << 31)
 
 #if SC_FIXQ_OUTLINE
-sc_t sc_acc_get(sc_acc_t s)
+/* (noinline: under link-time optimisation as well, one call per use is what makes them small) */
+__attribute__((noinline)) sc_t sc_acc_get(sc_acc_t s)
 {
 	return sc_acc_get_inline(s);
 }
 
-sc_t sc_mul(sc_t a, sc_t b)
+__attribute__((noinline)) sc_t sc_mul(sc_t a, sc_t b)
 {
-	return sc_mul_inline(a, b);
+	return sc_acc_get((sc_acc_t)a * b);
 }
 
-sc_acc_t sc_mac(sc_acc_t s, sc_t a, sc_t b)
+__attribute__((noinline)) sc_acc_t sc_mac(sc_acc_t s, sc_t a, sc_t b)
 {
 	return sc_mac_inline(s, a, b);
 }
 
-sc_acc_t sc_msb(sc_acc_t s, sc_t a, sc_t b)
+__attribute__((noinline)) sc_t sc_mul_int(sc_t a, int n)
 {
-	return s - (sc_acc_t)a * b;
+	return sc_sat((int64_t)a * n);
+}
+
+__attribute__((noinline)) sc_acc_t sc_msb(sc_acc_t s, sc_t a, sc_t b)
+{
+	return -sc_mac(-s, a, b);
 }
 #endif
 
@@ -52,6 +60,16 @@ static inline int64_t mul31(int64_t a, int64_t b)
 #endif
 {
 	return (a * b + ((int64_t)1 << 30)) >> 31;
+}
+
+/* k[0] + z (k[1] + z (... k[n - 1])) in Q1.31 */
+static int64_t horner31(int64_t z, const int32_t *k, int n)
+{
+	int64_t t = k[--n];
+
+	while (n--)
+		t = k[n] + mul31(z, t);
+	return t;
 }
 
 /* Q1.31 -> Q5.26, rounded half up; |v| < 2^36 */
@@ -225,15 +243,10 @@ void sc_sincos(sc_t a, sc_t *s, sc_t *c)
 	int64_t r56 = (int64_t)a * ((int64_t)1 << 30) - n * PIO2_Q56;
 	int64_t x = (r56 + ((int64_t)1 << 24)) >> 25, z = mul31(x, x), ps, pc, t;
 	unsigned q = (unsigned)n;
-	int i;
 
-	t = sin_k[4];
-	for (i = 3; i >= 0; i--)
-		t = sin_k[i] + mul31(z, t);
+	t = horner31(z, sin_k, 5);
 	ps = x + mul31(x, mul31(z, t));
-	t = cos_k[5];
-	for (i = 4; i >= 0; i--)
-		t = cos_k[i] + mul31(z, t);
+	t = horner31(z, cos_k, 6);
 	pc = Q31_ONE + mul31(z, t);
 	/* quadrant q: (s, c) = (ps, pc), (pc, -ps), (-ps, -pc), (-pc, ps) */
 	{
@@ -255,7 +268,6 @@ static int64_t atan_unit31(int64_t t)
 	}; /* -1/3, 1/5, ... -1/15 */
 	const int64_t sqrt3 = INT64_C(3719550787), tan_pi12 = INT64_C(575416509), pi6 = INT64_C(1124419809);
 	int64_t off = 0, z, p;
-	int i;
 
 	if (t > tan_pi12) {
 		/* atan t = pi/6 + atan((sqrt3 t - 1) / (sqrt3 + t)); den / 2 fits 32 bits, |num| < den */
@@ -266,9 +278,7 @@ static int64_t atan_unit31(int64_t t)
 		off = pi6;
 	}
 	z = mul31(t, t);
-	p = k[6];
-	for (i = 5; i >= 0; i--)
-		p = k[i] + mul31(z, p);
+	p = horner31(z, k, 7);
 	return off + t + mul31(t, mul31(z, p));
 }
 

@@ -28,15 +28,18 @@ void ik_target_set(struct ik_target *t, const struct vec3 *p, const struct quat 
 
 	if (SC_REACH_MAX > 0) {
 		/* fixed point: a target metres beyond any reach keeps its direction only (SC_REACH_MAX) */
-		struct vec3 s = { sc_mul(p->x, SC_C(0.25)), sc_mul(p->y, SC_C(0.25)), sc_mul(p->z, SC_C(0.25)) };
-		sc_t n = v3_norm(&s);
+		struct vec3 s;
+		sc_t n;
+		int i;
 
+		for (i = 0; i < 3; i++)
+			SC_V(&s)[i] = sc_mul(SC_CV(p)[i], SC_C(0.25));
+		n = v3_norm(&s);
 		if (n > sc_mul(SC_REACH_MAX, SC_C(0.25))) {
 			sc_recip_t k = sc_recip(n);
 
-			pp.x = sc_mul(SC_REACH_MAX, sc_mul_recip(s.x, k));
-			pp.y = sc_mul(SC_REACH_MAX, sc_mul_recip(s.y, k));
-			pp.z = sc_mul(SC_REACH_MAX, sc_mul_recip(s.z, k));
+			for (i = 0; i < 3; i++)
+				SC_V(&pp)[i] = sc_mul(SC_REACH_MAX, sc_mul_recip(SC_V(&s)[i], k));
 		}
 	}
 	ok = quat_normalize(r, &t->r) && ok;
@@ -48,14 +51,9 @@ void ik_target_set(struct ik_target *t, const struct vec3 *p, const struct quat 
 		int i, j;
 
 		quat_to_mat3(&t->r, rm);
-		for (i = 0; i < 3; i++)
-			for (j = 0; j < 3; j++)
-				t->m[i][j] = rm[i][j];
-		t->m[0][3] = t->p.x;
-		t->m[1][3] = t->p.y;
-		t->m[2][3] = t->p.z;
-		t->m[3][0] = t->m[3][1] = t->m[3][2] = 0;
-		t->m[3][3] = SC_C(1);
+		for (i = 0; i < 4; i++)
+			for (j = 0; j < 4; j++)
+				t->m[i][j] = i < 3 ? (j < 3 ? rm[i][j] : SC_CV(&t->p)[i]) : (j < 3 ? 0 : SC_C(1));
 	}
 	t->valid = ok;
 }
@@ -84,15 +82,24 @@ static bool kin_dq(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_t
 	struct vec3 rp, te, dp;
 	struct twist tw;
 	sc_t half;
+#if IK_COMPACT
+	int i;
+#endif
 
 	arm_chain_eval(a, q, chp, NULL);
 	quat_conj(&chp->r[ARM_DOF], &rc);
 	quat_mul(&t->r, &rc, &re);
+#if IK_COMPACT
+	for (i = 0; i < 3; i++)
+		SC_V(&dp)[i] = SC_CV(&t->p)[i] - SC_CV(&chp->p[ARM_DOF])[i];
+#else
+	/* (straight-line where speed matters: the loops cost the host's Newton step 17 %) */
 	dp.x = t->p.x - chp->p[ARM_DOF].x;
 	dp.y = t->p.y - chp->p[ARM_DOF].y;
 	dp.z = t->p.z - chp->p[ARM_DOF].z;
+#endif
 	err->pos = v3_norm(&dp);
-	if (check && err->pos < tol_pos) {
+	if (check && err->pos < tol_pos && !IK_COMPACT) {
 		/* the rotation error alone, as the logarithm would compute it */
 		sc_t s, c = sc_abs(re.w), ic, g;
 
@@ -102,6 +109,15 @@ static bool kin_dq(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_t
 			return true;
 	}
 	quat_rotate(&re, &chp->p[ARM_DOF], &rp);
+#if IK_COMPACT
+	for (i = 0; i < 3; i++)
+		SC_V(&te)[i] = SC_CV(&t->p)[i] - SC_V(&rp)[i];
+	dq_log_twist_rt(&re, &te, &tw, &half);
+	for (i = 0; i < 3; i++) {
+		V[i] = SC_V(&tw.w)[i];
+		V[3 + i] = SC_V(&tw.v)[i];
+	}
+#else
 	te.x = t->p.x - rp.x;
 	te.y = t->p.y - rp.y;
 	te.z = t->p.z - rp.z;
@@ -112,7 +128,14 @@ static bool kin_dq(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_t
 	V[3] = tw.v.x;
 	V[4] = tw.v.y;
 	V[5] = tw.v.z;
+#endif
 	err->rot = 2 * half;
+	/*
+	 * A compact build takes the rotation error from the logarithm (the same
+	 * value as the shortcut above, which it skips: the same s and c)
+	 */
+	if (IK_COMPACT && check && err->pos < tol_pos && err->rot < tol_rot)
+		return true;
 	arm_chain_jacobian(a, chp, J);
 	return check && err->pos < tol_pos && err->rot < tol_rot;
 }
@@ -140,6 +163,10 @@ const struct ik_kin ik_kin_dq = {
 /* sum of a[i] b[i] for i = j..n-1, in two interleaved partial sums (half the dependency chain) */
 static inline sc_acc_t dot_from_acc(int j, const sc_t a[ARM_DOF], const sc_t b[ARM_DOF], int n)
 {
+#if IK_COMPACT
+	/* exact sums: one loop gives the same bits */
+	return vn_dot_acc(a + j, b + j, n - j);
+#else
 	sc_acc_t s0 = sc_acc0(), s1 = sc_acc0();
 	int i;
 
@@ -150,6 +177,7 @@ static inline sc_acc_t dot_from_acc(int j, const sc_t a[ARM_DOF], const sc_t b[A
 	if (i < n)
 		s0 = sc_mac(s0, a[i], b[i]);
 	return sc_acc_add(s0, s1);
+#endif
 }
 
 static inline sc_t dot_from(int j, const sc_t a[ARM_DOF], const sc_t b[ARM_DOF], int n)
@@ -186,17 +214,16 @@ static inline sc_t lsq_cap(sc_t y)
  * column is nearly dependent on the others, a unit reflector keeps every
  * quantity the size of J's entries.
  */
-static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_DOF])
+static void house_qr(int n, int p, sc_t a[6][ARM_DOF], sc_t beta[6], sc_t rd[6])
 {
-	sc_t beta[6], rd[6], rmax = 0;
-	int i, j, c, rank = 0;
+	int i, j, c;
 
-	for (j = 0; j < 6; j++) {
-		sc_acc_t p[6];
+	for (j = 0; j < p; j++) {
+		sc_acc_t pc[6];
 		sc_t ajj = a[j][j], nrm, vj;
 
-		for (c = j + 1; c < 6; c++)
-			p[c] = dot_from_acc(j + 1, a[j], a[c], n);
+		for (c = j + 1; c < p; c++)
+			pc[c] = dot_from_acc(j + 1, a[j], a[c], n);
 		nrm = sc_acc_sqrt(sc_mac(dot_from_acc(j + 1, a[j], a[j], n), ajj, ajj));
 		if (nrm < SC_EPS) {
 			/* nothing left in this column: no reflection, a tiny pivot */
@@ -215,9 +242,9 @@ static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_D
 			a[j][j] = sc_mul_recip(vj, k);
 			for (i = j + 1; i < n; i++)
 				a[j][i] = sc_mul_recip(a[j][i], k);
-			for (c = j + 1; c < 6; c++) {
+			for (c = j + 1; c < p; c++) {
 				/* a_c -= 2 (u . a_c) u, u . a_c = (v_j a_cj + p_c) / |v| */
-				sc_t f = 2 * sc_mul_recip(sc_acc_get(sc_mac(p[c], vj, a[c][j])), k);
+				sc_t f = 2 * sc_mul_recip(sc_acc_get(sc_mac(pc[c], vj, a[c][j])), k);
 
 				a[c][j] -= sc_mul(f, a[j][j]);
 				for (i = j + 1; i < n; i++)
@@ -230,8 +257,8 @@ static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_D
 
 			beta[j] = b;
 			a[j][j] = vj;
-			for (c = j + 1; c < 6; c++) {
-				sc_t f = sc_mul(b, sc_acc_get(sc_mac(p[c], vj, a[c][j])));
+			for (c = j + 1; c < p; c++) {
+				sc_t f = sc_mul(b, sc_acc_get(sc_mac(pc[c], vj, a[c][j])));
 
 				a[c][j] -= sc_mul(f, vj);
 				for (i = j + 1; i < n; i++)
@@ -240,9 +267,102 @@ static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_D
 		}
 #endif
 	}
-	/* R(i, j) = a[j][i] above the diagonal, rd[j] on it: solve R^T y = V, dropping weak pivots */
-	for (j = 0; j < 6; j++)
+}
+
+/* y <- H_j y (reflector j of house_qr, applied to entries j..n-1) */
+static void house_apply(int n, int j, const sc_t a[6][ARM_DOF], const sc_t beta[6], sc_t y[ARM_DOF])
+{
+	sc_t f;
+	int i;
+
+	if (beta[j] == 0)
+		return;
+	f = sc_mul(beta[j], dot_from(j, a[j], y, n));
+	for (i = j; i < n; i++)
+		y[i] -= sc_mul(f, a[j][i]);
+}
+
+/* the largest diagonal entry of R (for the pivot test of lsq_pivot) */
+static sc_t lsq_rmax(int p, const sc_t rd[6])
+{
+	sc_t rmax = 0;
+	int j;
+
+	for (j = 0; j < p; j++)
 		rmax = sc_max(rmax, sc_abs(rd[j]));
+	return rmax;
+}
+
+/* num / d for a pivot d of R, 0 for a weak one (dropped: *rank is not counted) */
+static sc_t lsq_pivot(sc_t num, sc_t d, sc_t rmax, int *rank)
+{
+	if (sc_abs(d) <= sc_mul(IK_RCOND, rmax) || rmax == 0)
+		return 0;
+	++*rank;
+	return lsq_cap(sc_div(num, d));
+}
+
+#if SC_TYPE == SC_FIXQ
+/*
+ * Fixed point: one Householder factorisation serves both shapes. With n >= 6
+ * free joints the minimum-norm step: house_qr(n, 6) of J_f^T, R(i, j) =
+ * a[j][i] above the diagonal and rd[j] on it, R^T y = V, x = Q y. With fewer
+ * the least-squares one: house_qr(6, n) of J_f itself, R(j, i) = a[i][j],
+ * R x = Q^T V. (The floating builds keep their three paths: the normal
+ * equations, the same minimum-norm QR, and a tall QR of its own.)
+ */
+int ik_lsq_step(const sc_t J[6][ARM_DOF], const sc_t V[6], const bool *free, sc_t x[ARM_DOF])
+{
+	sc_t a[6][ARM_DOF], beta[6], rd[6], y[ARM_DOF], rmax;
+	int col[ARM_DOF], n = 0, m, p, i, j, k, rank = 0;
+	bool wide;
+
+	for (i = 0; i < ARM_DOF; i++) {
+		x[i] = 0;
+		if (!free || free[i])
+			col[n++] = i;
+	}
+	wide = n >= 6;
+	m = wide ? n : 6;
+	p = wide ? 6 : n;
+	for (j = 0; j < 6; j++)
+		for (i = 0; i < n; i++)
+			*(wide ? &a[j][i] : &a[i][j]) = J[j][col[i]];
+	house_qr(m, p, a, beta, rd);
+	rmax = lsq_rmax(p, rd);
+	for (i = 0; i < m; i++)
+		y[i] = wide ? 0 : V[i];
+	for (j = 0; j < p && !wide; j++)
+		house_apply(6, j, (const sc_t(*)[ARM_DOF])a, beta, y);
+	for (k = 0; k < p; k++) {
+		/* wide: R^T y = V forward; tall: R x = Q^T V backward */
+		sc_acc_t s = sc_acc0();
+
+		j = wide ? k : p - 1 - k;
+		for (i = 0; i < p; i++)
+			if (wide ? i < j : i > j)
+				s = sc_mac(s, wide ? a[j][i] : a[i][j], y[i]);
+		y[j] = lsq_pivot((wide ? V[j] : y[j]) - sc_acc_get(s), rd[j], rmax, &rank);
+	}
+	for (j = 5; j >= 0 && wide; j--)
+		house_apply(n, j, (const sc_t(*)[ARM_DOF])a, beta, y);
+	for (i = 0; i < n; i++)
+		x[col[i]] = y[i];
+	return rank;
+}
+#else
+/*
+ * The minimum-norm step: after house_qr(n, 6) of J_f^T, R(i, j) = a[j][i]
+ * above the diagonal and rd[j] on it: solve R^T y = V, dropping weak pivots,
+ * then y <- Q y = H_0 ... H_5 y.
+ */
+static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_DOF])
+{
+	sc_t beta[6], rd[6], rmax;
+	int i, j, rank = 0;
+
+	house_qr(n, 6, a, beta, rd);
+	rmax = lsq_rmax(6, rd);
 	for (i = 0; i < n; i++)
 		y[i] = 0;
 	for (j = 0; j < 6; j++) {
@@ -250,30 +370,16 @@ static int lsq_min_norm(int n, sc_t a[6][ARM_DOF], const sc_t V[6], sc_t y[ARM_D
 
 		for (i = 0; i < j; i++)
 			s = sc_mac(s, a[j][i], y[i]);
-		if (sc_abs(rd[j]) <= sc_mul(IK_RCOND, rmax) || rmax == 0) {
-			y[j] = 0;
-			continue;
-		}
-		y[j] = lsq_cap(sc_div(V[j] - sc_acc_get(s), rd[j]));
-		rank++;
+		y[j] = lsq_pivot(V[j] - sc_acc_get(s), rd[j], rmax, &rank);
 	}
-	/* y <- Q y = H_0 ... H_5 y */
-	for (j = 5; j >= 0; j--) {
-		sc_t f;
-
-		if (beta[j] == 0)
-			continue;
-		f = sc_mul(beta[j], dot_from(j, a[j], y, n));
-		for (i = j; i < n; i++)
-			y[i] -= sc_mul(f, a[j][i]);
-	}
+	for (j = 5; j >= 0; j--)
+		house_apply(n, j, (const sc_t(*)[ARM_DOF])a, beta, y);
 	return rank;
 }
 
 /*
  * Householder QR of the 6 x k matrix a (k < 6) in place; v[j] holds reflector
- * j (rows j..5), with beta[j] as in lsq_min_norm (unit reflectors in fixed
- * point).
+ * j (rows j..5), with beta[j] as in lsq_min_norm.
  */
 static void house_qr_tall(int k, sc_t a[6][ARM_DOF], sc_t v[ARM_DOF][6], sc_t beta[ARM_DOF])
 {
@@ -295,18 +401,7 @@ static void house_qr_tall(int k, sc_t a[6][ARM_DOF], sc_t v[ARM_DOF][6], sc_t be
 		for (i = j; i < 6; i++)
 			v[j][i] = a[i][j];
 		v[j][j] -= alpha;
-#if SC_TYPE == SC_FIXQ
-		{
-			/* |v|^2 = 2 nrm (nrm + |a_jj|) */
-			sc_recip_t r = sc_recip(sc_acc_sqrt(sc_mac(sc_acc0(), 2 * nrm, nrm + sc_abs(a[j][j]))));
-
-			for (i = j; i < 6; i++)
-				v[j][i] = sc_mul_recip(v[j][i], r);
-			beta[j] = SC_C(2);
-		}
-#else
 		beta[j] = sc_div(SC_C(2), 2 * sc_mul(nrm, nrm + sc_abs(a[j][j])));
-#endif
 		for (c = j; c < k; c++) {
 			sc_acc_t t = sc_acc0();
 			sc_t f;
@@ -493,6 +588,7 @@ int ik_lsq_step(const sc_t J[6][ARM_DOF], const sc_t V[6], const bool *free, sc_
 	}
 	return rank;
 }
+#endif /* SC_TYPE */
 
 static bool q_finite(const sc_t q[ARM_DOF])
 {

@@ -23,6 +23,32 @@ static sc_t m3_tdot(const sc_t a[3][3], const sc_t b[3][3], int i, int j)
 	return sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), a[0][i], b[0][j]), a[1][i], b[1][j]), a[2][i], b[2][j]));
 }
 
+/* out = p + k u (p NULL: k u), or p - k u with sub (the product is rounded, then negated) */
+static void v3_madd(const struct vec3 *p, sc_t k, const struct vec3 *u, bool sub, struct vec3 *out)
+{
+	int i;
+
+	for (i = 0; i < 3; i++) {
+		sc_t m = sc_mul(k, SC_CV(u)[i]);
+
+		if (sub)
+			m = -m;
+		SC_V(out)[i] = p ? SC_CV(p)[i] + m : m;
+	}
+}
+
+/*
+ * (c, s) turned by the angle whose cosine and sine are ct, st (back: by its
+ * negative): c ct - s st, s ct + c st, or c ct + s st, s ct - c st
+ */
+static inline void turn(sc_t *c, sc_t *s, sc_t ct, sc_t st, bool back)
+{
+	sc_t c0 = *c;
+
+	*c = back ? sc_mul_add(c0, ct, *s, st) : sc_mul_sub(c0, ct, *s, st);
+	*s = back ? sc_mul_sub(*s, ct, c0, st) : sc_mul_add(*s, ct, c0, st);
+}
+
 static sc_t v3_normalize(struct vec3 *v)
 {
 	sc_t n = v3_norm(v);
@@ -49,6 +75,24 @@ static sc_t violation(sc_t v, sc_t lo, sc_t hi)
  */
 static sc_t euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, sc_t out[3])
 {
+#if IK_COMPACT
+	sc_t e[2][3], v[2] = { 0, 0 };
+	int k, br;
+
+	e[0][0] = sc_atan2(m[0][2], m[2][2]);
+	e[0][1] = sc_asin(-m[1][2]);
+	e[0][2] = sc_atan2(m[1][0], m[1][1]);
+	e[1][0] = sc_wrap_pi(e[0][0] + SC_PI);
+	e[1][1] = sc_wrap_pi(SC_PI - e[0][1]);
+	e[1][2] = sc_wrap_pi(e[0][2] + SC_PI);
+	for (br = 0; br < 2; br++)
+		for (k = 0; k < 3; k++)
+			v[br] += violation(e[br][k], lim->lo[i0 + k], lim->hi[i0 + k]);
+	br = v[1] < v[0];
+	for (k = 0; k < 3; k++)
+		out[k] = e[br][k];
+	return v[br];
+#else
 	const sc_t *lo = &lim->lo[i0], *hi = &lim->hi[i0];
 	sc_t b = sc_asin(-m[1][2]), a = sc_atan2(m[0][2], m[2][2]), c = sc_atan2(m[1][0], m[1][1]);
 	sc_t a1 = sc_wrap_pi(a + SC_PI), b1 = sc_wrap_pi(SC_PI - b), c1 = sc_wrap_pi(c + SC_PI);
@@ -61,6 +105,7 @@ static sc_t euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, 
 	}
 	out[0] = a, out[1] = b, out[2] = c;
 	return v0;
+#endif
 }
 
 /*
@@ -72,8 +117,8 @@ static sc_t euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, 
 static sc_t arc_violation(const struct arm *a, int j, sc_t c, sc_t s)
 {
 	const sc_t *cs = a->lim_cs[j];
-	sc_t slo = sc_mul(cs[0], s) - sc_mul(cs[1], c);
-	sc_t shi = sc_mul(c, cs[3]) - sc_mul(s, cs[2]);
+	sc_t slo = sc_mul_sub(cs[0], s, cs[1], c);
+	sc_t shi = sc_mul_sub(c, cs[3], s, cs[2]);
 	bool in;
 
 	if (a->lim.hi[j] - a->lim.lo[j] <= SC_PI)
@@ -82,7 +127,7 @@ static sc_t arc_violation(const struct arm *a, int j, sc_t c, sc_t s)
 		in = slo >= 0 || shi >= 0;
 	if (in)
 		return 0;
-	return SC_C(1) - sc_max(sc_mul(c, cs[0]) + sc_mul(s, cs[1]), sc_mul(c, cs[2]) + sc_mul(s, cs[3])) + SC_EPS;
+	return SC_C(1) - sc_max(sc_mul_add(c, cs[0], s, cs[1]), sc_mul_add(c, cs[2], s, cs[3])) + SC_EPS;
 }
 
 /*
@@ -135,7 +180,7 @@ struct swivel_ctx {
 static bool ctx_init(struct swivel_ctx *x, const struct arm *a, const struct vec3 *w, const sc_t rt[3][3], sc_t q1)
 {
 	sc_t A = a->dims.arm, F = a->dims.forearm, S = a->dims.shoulder;
-	sc_t s1, c1, d, d2, ca, sa, sq5;
+	sc_t s1, c1, d, d2, ca, sa, sq5, AA, FF;
 	struct vec3 dw, g;
 	int j;
 
@@ -144,19 +189,23 @@ static bool ctx_init(struct swivel_ctx *x, const struct arm *a, const struct vec
 	x->inv_a = sc_div(SC_C(1), A);
 	sc_sincos(q1, &s1, &c1);
 	dw = (struct vec3){ w->x - sc_mul(S, c1), w->y - sc_mul(S, s1), w->z };
-	x->u = (struct vec3){ sc_mul(c1, dw.x) + sc_mul(s1, dw.y), sc_mul(c1, dw.y) - sc_mul(s1, dw.x), dw.z };
+	/* Rz(-q1) applied to dw (j = 3) and to rt's columns */
+	x->u = dw;
+	turn(&x->u.x, &x->u.y, c1, s1, true);
 	for (j = 0; j < 3; j++) {
-		/* Rz(-q1) rt */
-		x->rt1[0][j] = sc_mul(c1, rt[0][j]) + sc_mul(s1, rt[1][j]);
-		x->rt1[1][j] = sc_mul(c1, rt[1][j]) - sc_mul(s1, rt[0][j]);
+		x->rt1[0][j] = rt[0][j];
+		x->rt1[1][j] = rt[1][j];
 		x->rt1[2][j] = rt[2][j];
+		turn(&x->rt1[0][j], &x->rt1[1][j], c1, s1, true);
 	}
 	d2 = v3_dot(&x->u, &x->u);
 	d = sc_sqrt(d2);
 	if (d < SC_C(1e-6))
 		return false;
+	AA = sc_mul(A, A);
+	FF = sc_mul(F, F);
 	/* |u|^2 = A^2 + F^2 - 2 A F sin q5 */
-	sq5 = sc_div(sc_mul(A, A) + sc_mul(F, F) - d2, 2 * sc_mul(A, F));
+	sq5 = sc_div(AA + FF - d2, 2 * sc_mul(A, F));
 	if (sq5 > SC_C(1) || sq5 < SC_C(-1))
 		return false;
 	x->q5 = sc_asin(sq5);
@@ -166,32 +215,39 @@ static bool ctx_init(struct swivel_ctx *x, const struct arm *a, const struct vec
 	x->uh = x->u;
 	v3_normalize(&x->uh);
 	/* angle at the shoulder between the upper arm and u */
-	ca = sc_div(sc_mul(A, A) + d2 - sc_mul(F, F), 2 * sc_mul(A, d));
+	ca = sc_div(AA + d2 - FF, 2 * sc_mul(A, d));
 	ca = sc_clamp(ca, SC_C(-1), SC_C(1));
 	sa = sc_sqrt(SC_C(1) - sc_mul(ca, ca));
-	x->c = (struct vec3){ sc_mul(sc_mul(A, ca), x->uh.x), sc_mul(sc_mul(A, ca), x->uh.y),
-			      sc_mul(sc_mul(A, ca), x->uh.z) };
+	v3_madd(NULL, sc_mul(A, ca), &x->uh, false, &x->c);
 	x->r = sc_mul(A, sa);
 	/* n1: "down" projected on the plane (forward when u is vertical) */
 	g = sc_abs(x->uh.z) < SC_C(0.9) ? (struct vec3){ 0, 0, SC_C(-1) } : (struct vec3){ 0, SC_C(1), 0 };
-	{
-		sc_t k = v3_dot(&g, &x->uh);
-
-		x->n1 = (struct vec3){ g.x - sc_mul(k, x->uh.x), g.y - sc_mul(k, x->uh.y), g.z - sc_mul(k, x->uh.z) };
-	}
+	v3_madd(&g, v3_dot(&g, &x->uh), &x->uh, true, &x->n1);
 	v3_normalize(&x->n1);
 	v3_cross(&x->uh, &x->n1, &x->n2);
 	return true;
 }
 
-/* swivel angle whose bend plane is closest to an elbow axis x4 (J1 frame) */
-static sc_t ctx_swivel_of(const struct swivel_ctx *x, const struct vec3 *x4)
+/*
+ * The swivel angle whose bend plane is closest to an elbow axis x4 (J1
+ * frame); with x4 NULL the one that points the forearm as close as possible
+ * along the hand (the wrist nearest neutral).
+ */
+static sc_t ctx_swivel(const struct swivel_ctx *x, const struct vec3 *x4)
 {
-	/* the elbow sits at n = u^ x x4 from the shoulder-wrist line */
 	struct vec3 n;
+	sc_t d1, d2;
 
-	v3_cross(&x->uh, x4, &n);
-	return sc_atan2(v3_dot(&n, &x->n2), v3_dot(&n, &x->n1));
+	if (x4) {
+		/* the elbow sits at n = u^ x x4 from the shoulder-wrist line */
+		v3_cross(&x->uh, x4, &n);
+	} else {
+		/* forearm = (w - c - r n) / F: closest to the hand's y axis h when n is along -h */
+		n = (struct vec3){ x->rt1[0][1], x->rt1[1][1], x->rt1[2][1] };
+	}
+	d2 = v3_dot(&n, &x->n2);
+	d1 = v3_dot(&n, &x->n1);
+	return x4 ? sc_atan2(d2, d1) : sc_atan2(-d2, -d1);
 }
 
 /* added to the violation when the upper arm is already outside its limits */
@@ -210,23 +266,41 @@ static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM
 	int i;
 	struct vec3 n, e, x4, y4, z4;
 
+	/* (the compact build's loops would cost the host's inner loop a third more time) */
+#if IK_COMPACT
+	for (i = 0; i < 3; i++)
+		SC_V(&n)[i] = sc_mul_add(cp, SC_CV(&x->n1)[i], sp, SC_CV(&x->n2)[i]);
+	v3_madd(&x->c, x->r, &n, false, &e);
+#else
 	n.x = sc_mul(cp, x->n1.x) + sc_mul(sp, x->n2.x);
 	n.y = sc_mul(cp, x->n1.y) + sc_mul(sp, x->n2.y);
 	n.z = sc_mul(cp, x->n1.z) + sc_mul(sp, x->n2.z);
 	e.x = x->c.x + sc_mul(x->r, n.x);
 	e.y = x->c.y + sc_mul(x->r, n.y);
 	e.z = x->c.z + sc_mul(x->r, n.z);
+#endif
 	/*
 	 * Upper-arm frame: -z along the upper arm, x the elbow axis. |e| = A,
 	 * and n, u^ are orthonormal, so z4 and x4 = n x u^ are unit vectors and
 	 * orthogonal (z4 lies in the plane of u^ and n) up to rounding.
 	 */
+#if IK_COMPACT
+	v3_madd(NULL, x->inv_a, &e, true, &z4);
+	v3_cross(&n, &x->uh, &x4);
+	v3_cross(&z4, &x4, &y4);
+	for (i = 0; i < 3; i++) {
+		R[i][0] = SC_V(&x4)[i];
+		R[i][1] = SC_V(&y4)[i];
+		R[i][2] = SC_V(&z4)[i];
+	}
+#else
 	z4 = (struct vec3){ -sc_mul(e.x, x->inv_a), -sc_mul(e.y, x->inv_a), -sc_mul(e.z, x->inv_a) };
 	v3_cross(&n, &x->uh, &x4);
 	v3_cross(&z4, &x4, &y4);
 	R[0][0] = x4.x, R[0][1] = y4.x, R[0][2] = z4.x;
 	R[1][0] = x4.y, R[1][1] = y4.y, R[1][2] = z4.y;
 	R[2][0] = x4.z, R[2][1] = y4.z, R[2][2] = z4.z;
+#endif
 	q[0] = x->q1;
 	q[4] = x->q5;
 	if (!full) {
@@ -243,15 +317,30 @@ static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM
 	 */
 	for (i = 0; i < 3; i++) {
 		R15[i][0] = R[i][0];
+#if IK_COMPACT
+		R15[i][1] = R[i][1];
+		R15[i][2] = R[i][2];
+		turn(&R15[i][1], &R15[i][2], x->c5, x->s5, true);
+#else
 		R15[i][1] = sc_mul(x->c5, R[i][1]) + sc_mul(x->s5, R[i][2]);
 		R15[i][2] = sc_mul(x->c5, R[i][2]) - sc_mul(x->s5, R[i][1]);
+#endif
 	}
 	M[0][0] = M[0][1] = M[2][0] = M[2][1] = 0;
+#if IK_COMPACT
+	for (i = 0; i < 5; i++) {
+		static const unsigned char rc[5] = { 0x02, 0x10, 0x11, 0x12, 0x22 }; /* row << 4 | column */
+		int r = rc[i] >> 4, c = rc[i] & 3;
+
+		M[r][c] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, r, c);
+	}
+#else
 	M[0][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 0, 2);
 	M[1][0] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 0);
 	M[1][1] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 1);
 	M[1][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 2);
 	M[2][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 2, 2);
+#endif
 	if (!full) {
 		v = euler_fast((const sc_t(*)[3])M, a, 5);
 		if (v > 0)
@@ -263,15 +352,6 @@ static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM
 	}
 	v += euler_yxz((const sc_t(*)[3])M, &a->lim, 5, &q[5]);
 	return v + x->viol15;
-}
-
-/* swivel that points the forearm as close as possible along the hand (wrist nearest neutral) */
-static sc_t ctx_swivel_hand(const struct swivel_ctx *x)
-{
-	/* forearm = (w - c - r n) / F: closest to the hand's y axis h when n is along -h */
-	struct vec3 h = { x->rt1[0][1], x->rt1[1][1], x->rt1[2][1] };
-
-	return sc_atan2(-v3_dot(&h, &x->n2), -v3_dot(&h, &x->n1));
 }
 
 static void q_copy(sc_t dst[ARM_DOF], const sc_t src[ARM_DOF])
@@ -379,17 +459,12 @@ static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, 
 		return true;
 	bphi = phi0;
 	for (k = 1; 2 * k <= samples; k++) {
-		sc_t nc = sc_mul(cf, cs) - sc_mul(sf, ss);
-
-		sf = sc_mul(sf, cs) + sc_mul(cf, ss);
-		cf = nc;
-		nc = sc_mul(cb, cs) + sc_mul(sb, ss);
-		sb = sc_mul(sb, cs) - sc_mul(cb, ss);
-		cb = nc;
+		turn(&cf, &sf, cs, ss, false);
+		turn(&cb, &sb, cs, ss, true);
 		for (side = -1; side <= 1; side += 2) {
 			sc_t lo, hi = phi0 + sc_mul_int(step, side * k);
 
-			v = side < 0 ? search_eval_cs(s, x, hi, cb, sb, t, false) : search_eval_cs(s, x, hi, cf, sf, t, false);
+			v = search_eval_cs(s, x, hi, side < 0 ? cb : cf, side < 0 ? sb : sf, t, false);
 			if (v > 0) {
 				if (v < bv)
 					bv = v, bphi = hi;
@@ -504,29 +579,31 @@ static int reach_intervals(const struct swivel_target *st, sc_t lo[2], sc_t hi[2
 	const struct arm *a = st->a;
 	sc_t A = a->dims.arm, F = a->dims.forearm, S = a->dims.shoulder;
 	sc_t l1 = a->lim.lo[0], h1 = a->lim.hi[0];
-	sc_t s5lo = sc_sin_lim(sc_max(a->lim.lo[4], -SC_HALF_PI)), s5hi = sc_sin_lim(sc_min(a->lim.hi[4], SC_HALF_PI));
-	sc_t base = sc_mul(A, A) + sc_mul(F, F), af2 = 2 * sc_mul(A, F);
-	sc_t dmax2 = base - sc_mul(af2, s5lo), dmin2 = base - sc_mul(af2, s5hi);
-	sc_t rho = sc_sqrt(sc_mul(st->w.x, st->w.x) + sc_mul(st->w.y, st->w.y));
+	sc_t base = sc_mul_add(A, A, F, F), af2 = 2 * sc_mul(A, F);
+	sc_t rho = sc_sqrt(sc_mul_add(st->w.x, st->w.x, st->w.y, st->w.y));
 	sc_t k = v3_dot(&st->w, &st->w) + sc_mul(S, S), srho = 2 * sc_mul(S, rho);
-	sc_t beta, cl, ch, amin, amax, cand[2][2];
+	sc_t beta, d2[2], cb[2], amin, amax, cand[2][2];
 	int n = 0, i;
 
+	/* the squared shoulder-wrist distance at J5's lower limit (the largest) and upper (the smallest) */
+	for (i = 0; i < 2; i++)
+		d2[i] = base - sc_mul(af2, sc_sin_lim(i ? sc_min(a->lim.hi[4], SC_HALF_PI) : sc_max(a->lim.lo[4], -SC_HALF_PI)));
 	if (!(srho > SC_C(1e-9))) {
 		/* the distance does not depend on J1 */
-		if (k > dmax2 || k < dmin2)
+		if (k > d2[0] || k < d2[1])
 			return 0;
 		lo[0] = l1;
 		hi[0] = h1;
 		return 1;
 	}
-	cl = ratio_2(k - dmax2, srho);
-	ch = ratio_2(k - dmin2, srho);
-	if (cl > SC_C(1) || ch < SC_C(-1))
+	/* cos(q1 - beta) in [cb[0], cb[1]] */
+	for (i = 0; i < 2; i++)
+		cb[i] = ratio_2(k - d2[i], srho);
+	if (cb[0] > SC_C(1) || cb[1] < SC_C(-1))
 		return 0;
-	/* cos(q1 - beta) in [cl, ch]: |q1 - beta| in [acos(ch), acos(cl)] */
-	amin = sc_acos(sc_min(ch, SC_C(1)));
-	amax = sc_acos(sc_max(cl, SC_C(-1)));
+	/* |q1 - beta| in [acos(cb[1]), acos(cb[0])] */
+	amin = sc_acos(sc_min(cb[1], SC_C(1)));
+	amax = sc_acos(sc_max(cb[0], SC_C(-1)));
 	beta = sc_atan2(st->w.y, st->w.x);
 	cand[0][0] = beta + amin, cand[0][1] = beta + amax;
 	cand[1][0] = beta - amax, cand[1][1] = beta - amin;
@@ -627,7 +704,12 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 		arm_mirror_dq(&t->d, &d);
 	dq_translation(&d, &p);
 	quat_to_mat3(&d.r, st.rt);
-	st.w = (struct vec3){ p.x - sc_mul(H, st.rt[0][1]), p.y - sc_mul(H, st.rt[1][1]), p.z - sc_mul(H, st.rt[2][1]) };
+	{
+		/* the wrist centre: H back along the hand's y axis */
+		struct vec3 hy = { st.rt[0][1], st.rt[1][1], st.rt[2][1] };
+
+		v3_madd(&p, H, &hy, true, &st.w);
+	}
 	{
 		/* the preferred elbow axis in the J1 frame: Ry(q2) Rx(q3) Rz(q4) x */
 		sc_t s2, c2, s3, c3, s4, c4;
@@ -635,9 +717,9 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 		sc_sincos(pref[1], &s2, &c2);
 		sc_sincos(pref[2], &s3, &c3);
 		sc_sincos(pref[3], &s4, &c4);
-		st.x4p.x = sc_mul(c2, c4) + sc_mul(s2, sc_mul(s3, s4));
+		st.x4p.x = sc_mul_add(c2, c4, s2, sc_mul(s3, s4));
 		st.x4p.y = sc_mul(c3, s4);
-		st.x4p.z = -sc_mul(s2, c4) + sc_mul(c2, sc_mul(s3, s4));
+		st.x4p.z = sc_mul_sub(c2, sc_mul(s3, s4), s2, c4);
 	}
 	q1p = sc_clamp(pref[0], a->lim.lo[0], a->lim.hi[0]);
 	nc = yaw_candidates(&st, q1p, n1, q1c, (int)(sizeof(q1c) / sizeof(q1c[0])));
@@ -646,12 +728,12 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 			continue;
 		if (x.viol15 > 0) {
 			/* rounding at the edge of reach: only the fallback may use it */
-			search_eval(&s, &x, ctx_swivel_of(&x, &st.x4p), cand, true);
+			search_eval(&s, &x, ctx_swivel(&x, &st.x4p), cand, true);
 			continue;
 		}
 		/* the nearest J1 is searched closely, the others coarsely first */
 		/* past the first J1, start where the wrist is nearest neutral: its limits are the tightest */
-		if (!ctx_search(&s, &x, k == 0 ? ctx_swivel_of(&x, &st.x4p) : ctx_swivel_hand(&x), k == 0, cand))
+		if (!ctx_search(&s, &x, ctx_swivel(&x, k == 0 ? &st.x4p : NULL), k == 0, cand))
 			continue;
 		found = true;
 		q_copy(q, cand);

@@ -349,10 +349,38 @@ static void test_jacobian(void)
 }
 
 /* the minimum-norm step solves J x = V and is no longer than the step that made V */
-static void test_lsq(void)
+/*
+ * The step with held joints (newton_limited's re-solves): 7 to 3 free
+ * columns, so both shapes (minimum norm, and least squares with fewer free
+ * joints than equations) run on every target; held joints must not move.
+ * Returns the hash of the steps.
+ */
+static uint32_t lsq_held(const sc_t J[6][ARM_DOF], const sc_t V[6], int n)
+{
+	uint32_t h = FNV_INIT;
+	int held, i;
+
+	for (held = 1; held <= 5; held++) {
+		bool free[ARM_DOF];
+		sc_t x[ARM_DOF];
+		int rank;
+
+		for (i = 0; i < ARM_DOF; i++)
+			free[i] = (i * 3 + n) % ARM_DOF >= held;
+		rank = ik_lsq_step(J, V, free, x);
+		check(rank <= ARM_DOF - held, "lsq held: rank", n, rank);
+		for (i = 0; i < ARM_DOF; i++)
+			check(free[i] || x[i] == 0, "lsq held: a held joint moves", n, i);
+		h = hash_q(h, x, (unsigned)rank);
+	}
+	return h;
+}
+
+static uint32_t test_lsq(void)
 {
 	struct arm a;
 	sc_t worst = 0;
+	uint32_t h = FNV_INIT;
 	int n, i, r;
 
 	arm_init(&a, ARM_RIGHT, &bench_dims, NULL);
@@ -384,9 +412,11 @@ static void test_lsq(void)
 		}
 		check(sc_acc_sqrt(n1) <= sc_acc_sqrt(n0) + TOL_LSQ, "lsq minimum norm", nano(sc_acc_sqrt(n1)),
 		      nano(sc_acc_sqrt(n0)));
+		h = hash_word(h, lsq_held((const sc_t(*)[ARM_DOF])J, V, n));
 	}
 	check(worst <= TOL_LSQ, "lsq residual", nano(worst), nano(TOL_LSQ));
 	out("ikt: least squares: largest residual %ld e-9", nano(worst));
+	return h;
 }
 
 /* random targets, each from the rest posture (the paper's reset) */
@@ -566,18 +596,18 @@ static uint32_t test_newton(struct cost *cost)
 int ikt_run(void)
 {
 	struct cost reset = { 0 }, warm = { 0 }, iter = { 0 }, newton = { 0 };
-	uint32_t hr, ht, hl, hn;
+	uint32_t hs, hr, ht, hl, hn;
 
 	out("ikt: IK core self-test, scalar %s, on %s", SC_NAME, ikt_platform);
 	test_fk();
 	test_jacobian();
-	test_lsq();
+	hs = test_lsq();
 	hr = test_random(&reset, &iter);
 	ht = test_trajectory(&warm);
 	hl = test_left();
 	hn = test_newton(&newton);
-	out("ikt: hash random %x trajectory %x left %x newton %x", hr, ht, hl, hn);
-	out("ikt: hash %s %x", SC_NAME, hash_word(hash_word(hash_word(hr, ht), hl), hn));
+	out("ikt: hash random %x trajectory %x left %x newton %x lsq %x", hr, ht, hl, hn, hs);
+	out("ikt: hash %s %x", SC_NAME, hash_word(hash_word(hash_word(hash_word(hr, ht), hl), hn), hs));
 	cost_print("per Newton iteration (kinematics, Jacobian, error twist, least-squares step)", &iter);
 	cost_print("per solve, trajectory, warm", &warm);
 	cost_print("per solve, random targets, reset", &reset);
