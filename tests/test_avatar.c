@@ -410,6 +410,69 @@ static void test_yaw_hands(void **state)
 	assert_true(fabs(y) < 1e-12);
 }
 
+/*
+ * The chest's heading is computed as unit vectors, its angle last: the chest
+ * is a pure turn about z by exactly the yaw it reports, for every head and
+ * pair of hands, across the +-pi seam, and the hands' fade (45 to 60
+ * degrees off the head) moves the yaw monotonically, without a jump.
+ */
+static void test_chest_heading_consistent(void **state)
+{
+	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.08 };
+	const struct vec3 off = { 0, 0, 0.25 };
+	struct avatar av;
+	struct dq head, lh, rh, chest;
+	struct quat id = { 1, 0, 0, 0 }, hr, pitch, r;
+	sc_t y, prev = 0;
+	int i, j;
+
+	(void)state;
+	avatar_init(&av, &dims, &off, NULL);
+	quat_from_axis_angle(&(struct vec3){ 1, 0, 0 }, 0.3, &pitch);
+	for (i = 0; i < 36; i++) {
+		double hy = -M_PI + (i + 0.5) * (2 * M_PI / 36);
+
+		quat_from_axis_angle(&(struct vec3){ 0, 0, 1 }, hy, &hr);
+		quat_mul(&hr, &pitch, &r);
+		dq_from_rt(&r, &(struct vec3){ 0, 0, 1.6 }, &head);
+		for (j = 1; j < 24; j++) {
+			double ly = hy + (j - 12) * (M_PI / 48), d; /* the hands' line up to 41 degrees off either way */
+
+			dq_from_rt(&id, &(struct vec3){ -0.3 * cos(ly), -0.3 * sin(ly), 1.0 }, &lh);
+			dq_from_rt(&id, &(struct vec3){ 0.3 * cos(ly), 0.3 * sin(ly), 1.0 }, &rh);
+			assert_true(avatar_chest_hands(&av, &head, &lh, &rh, &chest, &y));
+			assert_true(chest.r.w >= 0 && chest.r.x == 0 && chest.r.y == 0);
+			assert_true(fabs(chest.r.w * chest.r.w + chest.r.z * chest.r.z - 1) < 1e-10);
+			assert_true(fabs(2 * atan2(chest.r.z, chest.r.w) - y) < 1e-12);
+			/* equal weights: halfway between the head's heading and the hands' */
+			d = remainder(y - (hy + (ly - hy) / 2), 2 * M_PI);
+			assert_true(fabs(d) < 1e-9);
+		}
+	}
+	/* the line turning from 40 to 70 degrees off (near the +-pi seam): back to the head's yaw without a jump */
+	quat_from_axis_angle(&(struct vec3){ 0, 0, 1 }, 3.0, &hr);
+	dq_from_rt(&hr, &(struct vec3){ 0, 0, 1.6 }, &head);
+	for (j = 0; j <= 60; j++) {
+		double ly = 3.0 + (40 + j * 0.5) * M_PI / 180, d;
+
+		dq_from_rt(&id, &(struct vec3){ -0.3 * cos(ly), -0.3 * sin(ly), 1.0 }, &lh);
+		dq_from_rt(&id, &(struct vec3){ 0.3 * cos(ly), 0.3 * sin(ly), 1.0 }, &rh);
+		assert_true(avatar_chest_hands(&av, &head, &lh, &rh, &chest, &y));
+		d = remainder(y - 3.0, 2 * M_PI);
+		assert_true(d >= -1e-12 && d < 0.4);
+		if (j > 0) {
+			if (j > 10)
+				assert_true(remainder(y - prev, 2 * M_PI) <= 1e-12); /* falling from 45 degrees off */
+			assert_true(fabs(remainder(y - prev, 2 * M_PI)) < 2.5 * M_PI / 180); /* no jump */
+		}
+		if (j == 0)
+			assert_true(fabs(d - 20 * M_PI / 180) < 1e-9); /* 40 off: full weight */
+		if (j == 60)
+			assert_true(fabs(d) < 1e-12); /* 70 off: the head's */
+		prev = y;
+	}
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -419,6 +482,7 @@ int main(void)
 		cmocka_unit_test(test_hand_elbow),
 		cmocka_unit_test(test_reach_first),
 		cmocka_unit_test(test_yaw_hands),
+		cmocka_unit_test(test_chest_heading_consistent),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

@@ -54,16 +54,19 @@ sc_t avatar_head_yaw(const struct quat *head)
 }
 
 /*
- * The heading of the line from the left to the right hand, and how far to
- * trust it as the chest's: hands at least 30 cm apart sideways count fully
- * from 50 cm on, and a line more than 60 degrees off the head's heading is
- * not the chest's (one arm reaching out, the hands crossed). Returns the
- * weight in [0, 1].
+ * The heading of the line from the left to the right hand, as a unit
+ * vector (*hx, *hy), and how far to trust it as the chest's: hands at
+ * least 30 cm apart sideways count fully from 50 cm on, and a line more
+ * than 60 degrees off the head's heading (cy, sy) is not the chest's (one
+ * arm reaching out, the hands crossed). Returns the weight in [0, 1].
  */
-static sc_t hands_yaw(const struct dq *lhand, const struct dq *rhand, sc_t head_yaw, sc_t *yaw)
+#define COS45 SC_C(0.7071067811865476)
+#define COS60 SC_C(0.5)
+
+static sc_t hands_heading(const struct dq *lhand, const struct dq *rhand, sc_t cy, sc_t sy, sc_t *hx, sc_t *hy)
 {
 	struct vec3 l, r;
-	sc_t dx, dy, sep, d, wgt;
+	sc_t dx, dy, sep, k, wgt;
 
 	if (!lhand || !rhand || !dq_is_finite(lhand) || !dq_is_finite(rhand))
 		return 0;
@@ -74,36 +77,73 @@ static sc_t hands_yaw(const struct dq *lhand, const struct dq *rhand, sc_t head_
 	sep = sc_sqrt(sc_mul(dx, dx) + sc_mul(dy, dy));
 	if (!(sep > SC_C(0.3)))
 		return 0;
-	*yaw = sc_atan2(dy, dx);
-	d = sc_abs(sc_wrap_pi(*yaw - head_yaw));
+	k = sc_div(SC_C(1), sep);
+	*hx = sc_mul(dx, k);
+	*hy = sc_mul(dy, k);
 	wgt = sc_min(sc_div(sep - SC_C(0.3), SC_C(0.2)), SC_C(1));
-	/* fading out from 45 to 60 degrees off the head's heading: no jump of the chest when it crosses */
-	return sc_mul(wgt, sc_clamp(sc_div(SC_C(1.0471975511965976) - d, SC_C(0.2617993877991494)), SC_C(0), SC_C(1)));
+	/*
+	 * fading out from 45 to 60 degrees off the head's heading (linearly in
+	 * the cosine: no angle computed): no jump of the chest when it crosses
+	 */
+	return sc_mul(wgt, sc_clamp(sc_div(sc_mul(*hx, cy) + sc_mul(*hy, sy) - COS60, COS45 - COS60), SC_C(0), SC_C(1)));
 }
 
+/*
+ * The chest's heading without an angle until the last: the head's twist
+ * about z, (w, z) normalised, is the half-angle rotation itself; the hands'
+ * heading is averaged in as unit vectors, and the mean's half-angle
+ * rotation is (1 + cos, sin) normalised. One atan2, for *yaw.
+ */
 bool avatar_chest_hands(const struct avatar *av, const struct dq *head, const struct dq *lhand, const struct dq *rhand,
 			struct dq *chest, sc_t *yaw)
 {
 	struct quat r;
 	struct vec3 hp, off, o;
-	sc_t s, c, hy, w;
+	sc_t w, z, n, cy, sy, hx = 0, hy = 0, wt;
 
 	if (!dq_is_finite(head) || !quat_normalize(&head->r, &r)) {
 		dq_identity(chest);
 		*yaw = 0;
 		return false;
 	}
-	*yaw = avatar_head_yaw(&r);
-	if ((av->body.model & AVATAR_YAW_HANDS) && (w = hands_yaw(lhand, rhand, *yaw, &hy)) > 0) {
-		/* the weighted circular mean of the two headings */
-		sc_t sh, ch, sy, cy;
-
-		sc_sincos(*yaw, &sy, &cy);
-		sc_sincos(hy, &sh, &ch);
-		*yaw = sc_atan2(sy + sc_mul(w, sh), cy + sc_mul(w, ch));
+	w = r.w;
+	z = r.z;
+	if (w < 0) {
+		w = -w;
+		z = -z;
 	}
-	sc_sincos(sc_mul(*yaw, SC_C(0.5)), &s, &c);
-	r = (struct quat){ c, 0, 0, s };
+	if (sc_abs(w) + sc_abs(z) < SC_C(1e-6)) {
+		w = SC_C(1); /* upside down: no yaw */
+		z = 0;
+	} else {
+		n = sc_div(SC_C(1), sc_sqrt(sc_mul(w, w) + sc_mul(z, z)));
+		w = sc_mul(w, n);
+		z = sc_mul(z, n);
+	}
+	cy = sc_mul(w, w) - sc_mul(z, z);
+	sy = 2 * sc_mul(w, z);
+	if ((av->body.model & AVATAR_YAW_HANDS) && (wt = hands_heading(lhand, rhand, cy, sy, &hx, &hy)) > 0) {
+		/* the weighted circular mean of the two headings */
+		sc_t mx = cy + sc_mul(wt, hx), my = sy + sc_mul(wt, hy), k;
+
+		n = sc_sqrt(sc_mul(mx, mx) + sc_mul(my, my));
+		if (n > SC_C(1e-6)) {
+			k = sc_div(SC_C(1), n);
+			cy = sc_mul(mx, k);
+			sy = sc_mul(my, k);
+			n = sc_sqrt(2 * (SC_C(1) + cy));
+			if (n > SC_C(1e-6)) {
+				k = sc_div(SC_C(1), n);
+				w = sc_mul(SC_C(1) + cy, k);
+				z = sc_mul(sy, k);
+			} else {
+				w = 0;
+				z = SC_C(1);
+			}
+		}
+	}
+	*yaw = 2 * sc_atan2(z, w);
+	r = (struct quat){ w, 0, 0, z };
 	dq_translation(head, &hp);
 	quat_rotate(&r, &av->body.head_offset, &off);
 	o = (struct vec3){ hp.x - off.x, hp.y - off.y, hp.z - off.z };
@@ -219,7 +259,12 @@ static bool goal_init(const struct arm *a, const struct ik_target *t, sc_t q1, s
 	g->w = p;
 	v3_axpy(-dm->hand, &hy, &g->w);
 	g->q1 = sc_clamp(q1, a->lim.lo[0], a->lim.hi[0]);
-	sc_sincos(g->q1, &g->s1, &g->c1);
+	if (g->q1 == 0) {
+		g->s1 = 0;
+		g->c1 = SC_C(1);
+	} else {
+		sc_sincos(g->q1, &g->s1, &g->c1);
+	}
 	g->s = (struct vec3){ sc_mul(dm->shoulder, g->c1), sc_mul(dm->shoulder, g->s1), 0 };
 	g->ax = (struct vec3){ g->w.x - g->s.x, g->w.y - g->s.y, g->w.z - g->s.z };
 	L = v3_unit(&g->ax);
@@ -322,55 +367,72 @@ static void goal_wrist_cost(const struct arm *a, const struct arm_goal *g, struc
 	trig2_add_sq(c, W7, z0, z1, z2);
 }
 
-#define SWIVEL_STEPS 24
 #define STEP15 SC_C(0.2617993877991494)
+#define STEP30 SC_C(0.5235987755982988)
+#define SWIVEL_STEPS 12
 
-/* cos and sin of k 15 degrees, k = 0..23 (cos 2phi and sin 2phi are entries 2k mod 24) */
-static const sc_t cos15k[SWIVEL_STEPS] = {
-	SC_C(1), SC_C(0.96592582628906828675), SC_C(0.86602540378443864676), SC_C(0.70710678118654752440),
-	SC_C(0.5), SC_C(0.25881904510252076235), SC_C(0), SC_C(-0.25881904510252076235),
-	SC_C(-0.5), SC_C(-0.70710678118654752440), SC_C(-0.86602540378443864676), SC_C(-0.96592582628906828675),
-	SC_C(-1), SC_C(-0.96592582628906828675), SC_C(-0.86602540378443864676), SC_C(-0.70710678118654752440),
-	SC_C(-0.5), SC_C(-0.25881904510252076235), SC_C(0), SC_C(0.25881904510252076235),
-	SC_C(0.5), SC_C(0.70710678118654752440), SC_C(0.86602540378443864676), SC_C(0.96592582628906828675)
-};
-static const sc_t sin15k[SWIVEL_STEPS] = {
-	SC_C(0), SC_C(0.25881904510252076235), SC_C(0.5), SC_C(0.70710678118654752440),
-	SC_C(0.86602540378443864676), SC_C(0.96592582628906828675), SC_C(1), SC_C(0.96592582628906828675),
-	SC_C(0.86602540378443864676), SC_C(0.70710678118654752440), SC_C(0.5), SC_C(0.25881904510252076235),
-	SC_C(0), SC_C(-0.25881904510252076235), SC_C(-0.5), SC_C(-0.70710678118654752440),
-	SC_C(-0.86602540378443864676), SC_C(-0.96592582628906828675), SC_C(-1), SC_C(-0.96592582628906828675),
-	SC_C(-0.86602540378443864676), SC_C(-0.70710678118654752440), SC_C(-0.5), SC_C(-0.25881904510252076235)
-};
+/* cos and sin of k * 30 degrees, k = 0..5 (k + 6: both negated), and of 2 k * 30 degrees */
+static const sc_t cos30k[6] = { SC_C(1), SC_C(0.8660254037844387), SC_C(0.5), SC_C(0), SC_C(-0.5), SC_C(-0.8660254037844387) };
+static const sc_t sin30k[6] = { SC_C(0), SC_C(0.5), SC_C(0.8660254037844387), SC_C(1), SC_C(0.8660254037844387), SC_C(0.5) };
+static const sc_t cos60k[6] = { SC_C(1), SC_C(0.5), SC_C(-0.5), SC_C(-1), SC_C(-0.5), SC_C(0.5) };
+static const sc_t sin60k[6] = { SC_C(0), SC_C(0.8660254037844387), SC_C(0.8660254037844387), SC_C(0), SC_C(-0.8660254037844387),
+				SC_C(-0.8660254037844387) };
+
+/* (c, s) turned by a (|a| <= 15 degrees; Taylor to a^5, off by under 1e-6) */
+static void rot_small(sc_t a, sc_t *c, sc_t *s)
+{
+	sc_t a2 = sc_mul(a, a);
+	sc_t ca = SC_C(1) - sc_mul(a2, SC_C(0.5) - sc_mul(a2, SC_C(1.0 / 24)));
+	sc_t sa = sc_mul(a, SC_C(1) - sc_mul(a2, SC_C(1.0 / 6) - sc_mul(a2, SC_C(1.0 / 120))));
+	sc_t nc = sc_mul(*c, ca) - sc_mul(*s, sa);
+
+	*s = sc_mul(*s, ca) + sc_mul(*c, sa);
+	*c = nc;
+}
 
 /*
- * The least of a trig2 over the circle: 24 samples 15 degrees apart (their
- * cosines and sines from the tables), then the parabola through the best
- * and its neighbours. Writes the angle; returns the least value.
+ * The least of a trig2 over the circle: samples 30 degrees apart (every
+ * cosine and sine of phi and 2 phi a constant; phi + 180 degrees shares
+ * the 2 phi terms), a parabola through the lowest and its neighbours, then
+ * one Newton step on the polynomial itself. Writes the angle and its
+ * cosine and sine (no sine or cosine computed: the sample's turned by the
+ * small steps); returns the least value.
  */
-static sc_t trig2_min(const struct trig2 *c, sc_t *phi)
+static sc_t trig2_min(const struct trig2 *c, sc_t *phi, sc_t *cpo, sc_t *spo)
 {
-	sc_t v[SWIVEL_STEPS], best, d, den;
+	sc_t v[SWIVEL_STEPS], vm, vp, den, d, sp, cp, c2, s2, d1, d2, h;
 	int k, kb = 0;
 
-	for (k = 0; k < SWIVEL_STEPS; k++) {
-		int k2 = (2 * k) % SWIVEL_STEPS;
+	for (k = 0; k < 6; k++) {
+		sc_t e = c->k[0] + sc_mul(c->k[3], cos60k[k]) + sc_mul(c->k[4], sin60k[k]);
+		sc_t o = sc_mul(c->k[1], cos30k[k]) + sc_mul(c->k[2], sin30k[k]);
 
-		v[k] = c->k[0] + sc_mul(c->k[1], cos15k[k]) + sc_mul(c->k[2], sin15k[k]) + sc_mul(c->k[3], cos15k[k2]) +
-		       sc_mul(c->k[4], sin15k[k2]);
+		v[k] = e + o;
+		v[k + 6] = e - o;
 	}
-	best = v[0];
 	for (k = 1; k < SWIVEL_STEPS; k++)
-		if (v[k] < best)
-			best = v[k], kb = k;
-	{
-		sc_t vm = v[(kb + SWIVEL_STEPS - 1) % SWIVEL_STEPS], vp = v[(kb + 1) % SWIVEL_STEPS];
-
-		den = vm - 2 * best + vp;
-		d = den > SC_EPS ? sc_clamp(sc_div(vm - vp, 2 * den), SC_C(-0.5), SC_C(0.5)) : SC_C(0);
-		*phi = sc_wrap_pi(sc_mul(sc_from_int(kb) + d, STEP15));
-		return best - sc_mul(sc_mul(SC_C(0.25), vm - vp), d);
-	}
+		if (v[k] < v[kb])
+			kb = k;
+	vm = v[(kb + SWIVEL_STEPS - 1) % SWIVEL_STEPS];
+	vp = v[(kb + 1) % SWIVEL_STEPS];
+	den = vm - 2 * v[kb] + vp;
+	d = den > SC_EPS ? sc_clamp(sc_div(vm - vp, 2 * den), SC_C(-0.5), SC_C(0.5)) : SC_C(0);
+	cp = kb < 6 ? cos30k[kb] : -cos30k[kb - 6];
+	sp = kb < 6 ? sin30k[kb] : -sin30k[kb - 6];
+	rot_small(sc_mul(d, STEP30), &cp, &sp);
+	c2 = sc_mul(cp, cp) - sc_mul(sp, sp);
+	s2 = 2 * sc_mul(sp, cp);
+	/* the first and second derivatives in phi */
+	d1 = sc_mul(c->k[2], cp) - sc_mul(c->k[1], sp) + 2 * (sc_mul(c->k[4], c2) - sc_mul(c->k[3], s2));
+	d2 = -(sc_mul(c->k[1], cp) + sc_mul(c->k[2], sp)) - 4 * (sc_mul(c->k[3], c2) + sc_mul(c->k[4], s2));
+	h = d2 > SC_EPS ? sc_clamp(-sc_div(d1, d2), -STEP15, STEP15) : SC_C(0);
+	*phi = sc_wrap_pi(sc_mul(sc_from_int(kb) + d, STEP30) + h);
+	d2 = c->k[0] + sc_mul(c->k[1], cp) + sc_mul(c->k[2], sp) + sc_mul(c->k[3], c2) + sc_mul(c->k[4], s2) +
+	     sc_mul(sc_mul(SC_C(0.5), h), d1);
+	rot_small(h, &cp, &sp);
+	*cpo = cp;
+	*spo = sp;
+	return d2;
 }
 
 /*
@@ -381,15 +443,14 @@ static sc_t trig2_min(const struct trig2 *c, sc_t *phi)
  * limit violations of J2..J5 (arm) and J6..J8 (wrist), radians; false if
  * something is not finite.
  */
-static bool goal_posture(const struct arm *a, const struct arm_goal *g, sc_t phi, sc_t q[ARM_DOF], sc_t *v_arm,
-			 sc_t *v_wrist)
+static bool goal_posture_cs(const struct arm *a, const struct arm_goal *g, sc_t cp, sc_t sp, sc_t q[ARM_DOF],
+			    sc_t *v_arm, sc_t *v_wrist)
 {
 	const struct arm_limits *lim = &a->lim;
 	struct vec3 e, u, f, zu, yu, xu, v;
-	sc_t Ru[3][3], M[3][3], Rf[3][3], N[3][3], sp, cp, k, s5, c5;
+	sc_t Ru[3][3], M[3][3], Rf[3][3], N[3][3], k, s5, c5;
 	int i, j;
 
-	sc_sincos(phi, &sp, &cp);
 	v = (struct vec3){ sc_mul(cp, g->d0.x) + sc_mul(sp, g->d1.x), sc_mul(cp, g->d0.y) + sc_mul(sp, g->d1.y),
 			   sc_mul(cp, g->d0.z) + sc_mul(sp, g->d1.z) };
 	e = g->s;
@@ -450,62 +511,40 @@ static bool goal_posture(const struct arm *a, const struct arm_goal *g, sc_t phi
 	return true;
 }
 
-/*
- * Where on the goal's circle the elbow of posture q lies, as the cosine
- * and sine of its swivel: the right arm's elbow is Rz(q1) [(S, 0, 0) +
- * Ry(q2) Rx(q3) (0, 0, -A)] (J4 turns about the upper arm); the left
- * arm's, mirrored, is the same numbers. false on the axis.
- */
-static bool goal_swivel_of(const struct arm *a, const struct arm_goal *g, const sc_t q[ARM_DOF], sc_t *cp, sc_t *sp)
+static bool goal_posture(const struct arm *a, const struct arm_goal *g, sc_t phi, sc_t q[ARM_DOF], sc_t *v_arm,
+			 sc_t *v_wrist)
 {
-	sc_t s1, c1, s2, c2, s3, c3, A = a->dims.arm, x, y, n;
-	struct vec3 u, e, v;
+	sc_t sp, cp;
 
-	sc_sincos(q[0], &s1, &c1);
-	sc_sincos(q[1], &s2, &c2);
-	sc_sincos(q[2], &s3, &c3);
-	/* Ry(q2) Rx(q3) (0, 0, -A) */
-	u = (struct vec3){ -sc_mul(A, sc_mul(s2, c3)), sc_mul(A, s3), -sc_mul(A, sc_mul(c2, c3)) };
-	u.x += a->dims.shoulder;
-	e = (struct vec3){ sc_mul(c1, u.x) - sc_mul(s1, u.y), sc_mul(s1, u.x) + sc_mul(c1, u.y), u.z };
-	v = (struct vec3){ e.x - g->s.x, e.y - g->s.y, e.z - g->s.z };
-	x = v3_dot(&v, &g->d0);
-	y = v3_dot(&v, &g->d1);
-	n = sc_sqrt(sc_mul(x, x) + sc_mul(y, y));
-	if (!(n > SC_C(1e-4)))
-		return false;
-	*cp = sc_div(x, n);
-	*sp = sc_div(y, n);
-	return true;
+	sc_sincos(phi, &sp, &cp);
+	return goal_posture_cs(a, g, cp, sp, q, v_arm, v_wrist);
 }
 
 #define MISFIT_RATE SC_C(0.02)  /* of the running mean per frame */
 /*
  * Besides the wrist: a pull of the elbow toward its natural place, down and
  * turned 30 degrees out (the least effort against gravity; where people's
- * elbows are when nothing else says), and optionally toward where it was
- * the frame before. Each costs as much at 90 degrees off as one SIG of the
- * wrist.
+ * elbows are when nothing else says). It costs as much at 90 degrees off as
+ * one SIG of the wrist. (A pull toward the previous frame's elbow, tried,
+ * changed the clips' medians by under 0.1 cm.)
  */
 #define W_NATURAL SC_C(1)
-#define W_TRACK SC_C(0) /* 1 changed the clips' medians by under 0.1 cm and cost 3 sines and cosines: off */
 #define COS_NATURAL SC_C(0.8660254037844387) /* -30 degrees: d1 = ax x d0 points inward for a forward reach */
 #define SIN_NATURAL SC_C(-0.5)
 
 /*
- * The least cost swivel of a goal: the wrist's, the natural place's and,
- * with prev, the previous posture's. Returns the least cost.
+ * The least cost swivel of a goal: the wrist's and the natural place's.
+ * Returns the least cost. (The cost has a single local least in every frame
+ * of the motion-capture clips: an elbow that leaves the truth at a wave's
+ * extremes is that least drifting, not a jump between two; docs/FIDELITY.md.)
  */
-static sc_t goal_swivel(const struct arm *a, const struct arm_goal *g, const sc_t *prev, sc_t *phi)
+static sc_t goal_swivel(const struct arm *a, const struct arm_goal *g, sc_t *phi, sc_t *cp, sc_t *sp)
 {
 	struct trig2 c;
-	sc_t cp, sp;
 
 	goal_wrist_cost(a, g, &c);
 	trig2_add_pull(&c, W_NATURAL, COS_NATURAL, SIN_NATURAL);
-	if (W_TRACK > 0 && prev && goal_swivel_of(a, g, prev, &cp, &sp))
-		trig2_add_pull(&c, W_TRACK, cp, sp);
-	return trig2_min(&c, phi);
+	return trig2_min(&c, phi, cp, sp);
 }
 
 /*
@@ -515,20 +554,20 @@ static sc_t goal_swivel(const struct arm *a, const struct arm_goal *g, const sc_
  * is too close to the shoulder (the solver then starts from the previous
  * posture).
  */
-static bool hand_elbow_posture(const struct arm *a, const struct ik_target *t, const sc_t *prev, bool first,
-			       sc_t prev_misfit, sc_t *misfit, sc_t pref[ARM_DOF])
+static bool hand_elbow_posture(const struct arm *a, const struct ik_target *t, bool first, sc_t prev_misfit,
+			       sc_t *misfit, sc_t pref[ARM_DOF])
 {
 	struct arm_goal g;
-	sc_t va, vw, m, phi;
+	sc_t va, vw, m, phi, cp, sp;
 
 	/* J1 at mid-range: what the shoulders do beyond the chest's yaw is the solver's to find */
 	if (!goal_init(a, t, SC_C(0), &g))
 		return false;
-	m = goal_swivel(a, &g, first ? NULL : prev, &phi);
+	m = goal_swivel(a, &g, &phi, &cp, &sp);
 	if (!first && sc_isfinite(prev_misfit))
 		m = prev_misfit + sc_mul(MISFIT_RATE, m - prev_misfit);
 	*misfit = m;
-	return goal_posture(a, &g, phi, pref, &va, &vw);
+	return goal_posture_cs(a, &g, cp, sp, pref, &va, &vw);
 }
 
 /* ---- the hand to its sensor first ---------------------------------------------------------- */
@@ -554,11 +593,11 @@ static bool reach_first(const struct arm *a, const struct ik_target *t, const sc
 
 	for (i = 0; i < n1 && !(found && best_vw == 0); i++) {
 		struct arm_goal g;
-		sc_t phi0;
+		sc_t phi0, c0, s0;
 
 		if (!goal_init(a, t, q1s[i], &g) || !g.in_reach)
 			continue;
-		goal_swivel(a, &g, NULL, &phi0);
+		goal_swivel(a, &g, &phi0, &c0, &s0);
 		for (k = 0; k < 24; k++) {
 			/* 0, +1, -1, +2, ... steps from the hand's swivel */
 			sc_t phi = phi0 + sc_mul(SC_C((k + 1) / 2 * (k & 1 ? 1 : -1)), STEP15);
@@ -636,7 +675,7 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 			ik_solve(a, kin, t, NULL, o, base, res);
 			pq = base;
 		}
-		if (hand_elbow_posture(a, t, pq, !prev, prev ? prev->hand_misfit[side] : SC_C(0),
+		if (hand_elbow_posture(a, t, !prev, prev ? prev->hand_misfit[side] : SC_C(0),
 				       &out->hand_misfit[side], pref))
 			seed = pref;
 		else
