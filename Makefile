@@ -23,6 +23,9 @@ else
 BUILD ?= build
 SANFLAGS =
 OPT ?= -O2
+# the IK core, the loop's arithmetic: -O3 unrolls and vectorises its fixed-size loops (about 10 % less
+# time per avatar in make bench); no contraction, so the results are the same bits as at -O2
+CORE_OPT ?= -O3
 endif
 
 WARN = -Wall -Wextra -Werror
@@ -31,7 +34,7 @@ ALL_CFLAGS = -std=c11 $(WARN) $(CFLAGS) $(SANFLAGS) -Iinclude -MMD -MP
 ALL_CXXFLAGS = -std=c++17 $(WARN) $(CFLAGS) $(SANFLAGS) -Iinclude -MMD -MP
 LDFLAGS += $(SANFLAGS)
 # The IK core is pure: no errno from libm, no contraction differences between targets.
-CORE_CFLAGS = -fno-math-errno -ffp-contract=off
+CORE_CFLAGS = -fno-math-errno -ffp-contract=off $(CORE_OPT)
 
 CMOCKA_LIBS = $(shell pkg-config --libs cmocka 2>/dev/null || echo -lcmocka)
 

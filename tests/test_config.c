@@ -766,6 +766,7 @@ static void test_defaults(void **state)
 	assert_near(c->daemon.stale_ms, 100, 0);
 	assert_int_equal(c->daemon.realtime_priority, 0);
 	assert_int_equal(c->daemon.cpu, -1);
+	assert_false(c->daemon.busy_wait);
 	assert_true(c->daemon.lock_memory);
 	assert_string_equal(c->daemon.control_socket, "auto");
 	assert_near(c->daemon.describe_interval, 1, 0);
@@ -866,7 +867,7 @@ static void test_shipped_config(void **state)
 static void test_err_unknown_key(void **state)
 {
 	expect_text_err(*state, "[daemon]\nrate = 100\nrat = 100\n", "e.conf:3: [daemon] rat: unknown key",
-			"(known: rate, mode, stale_ms, realtime_priority, cpu, lock_memory, control_socket, "
+			"(known: rate, mode, stale_ms, realtime_priority, cpu, busy_wait, lock_memory, control_socket, "
 			"describe_interval, log_level, record_dir, record_messages, record_flush, record_flush_records, "
 			"record_fsync, record_rotate_size, record_rotate_time, record_buffer, record_keyframe_rate",
 			NULL);
@@ -897,6 +898,18 @@ static void test_err_key_outside_section(void **state)
 {
 	expect_text_err(*state, "; a comment\nrate = 100\n[daemon]\n", "e.conf:2: rate: a key outside any section",
 			NULL);
+}
+
+static void test_busy_wait(void **state)
+{
+	struct fx *f = *state;
+
+	assert_true(load_text_ok(f, "[daemon]\nbusy_wait = yes\ncpu = 1\n[source s]\ntype = sim\n"
+				    "[avatar a]\nperson = s/p0\n")->daemon.busy_wait);
+	config_free(&f->c);
+	expect_text_err(*state, "[daemon]\nmode = events\n; spin\nbusy_wait = yes\n",
+			"e.conf:4: [daemon] busy_wait: only with mode = deadline", NULL);
+	expect_text_err(*state, "[daemon]\nbusy_wait = sometimes\n", "e.conf:2: [daemon] busy_wait:", NULL);
 }
 
 static void test_err_key_twice(void **state)
@@ -1779,6 +1792,7 @@ int main(void)
 		T(test_err_unknown_section),
 		T(test_err_key_outside_section),
 		T(test_err_key_twice),
+		T(test_busy_wait),
 		T(test_err_out_of_range),
 		T(test_err_not_a_number),
 		T(test_err_not_whole),

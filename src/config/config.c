@@ -95,6 +95,8 @@ static const struct key_def keys[] = {
 	  "SCHED_FIFO priority of the loop thread, 0 = normal scheduling" },
 	{ S_DAEMON, "cpu", K_INT, D(cpu), 0, -1, 1023, "-1", NULL, NULL, NULL,
 	  "pin the loop thread to this CPU, -1 = no pinning" },
+	{ S_DAEMON, "busy_wait", K_BOOL, D(busy_wait), 0, 0, 0, "no", NULL, NULL, NULL,
+	  "the loop spins to each deadline instead of sleeping: a whole CPU for the lowest latency (deadline mode)" },
 	{ S_DAEMON, "lock_memory", K_BOOL, D(lock_memory), 0, 0, 0, "yes", NULL, NULL, NULL,
 	  "mlockall() at start-up so that the loop never page-faults" },
 	{ S_DAEMON, "control_socket", K_PATH, D(control_socket), 0, 0, 0, "auto", NULL, NULL,
@@ -1228,6 +1230,12 @@ static int build(struct parse *p)
 
 		if (apply_section(&s))
 			return -1;
+		if (c->daemon.busy_wait && c->daemon.mode == CFG_LOOP_EVENTS) {
+			const struct cfg_entry *b = entry_of(c, "daemon", "busy_wait");
+
+			return failf(p, b ? b->where : (struct cfg_where){ -1, 0 },
+				     "[daemon] busy_wait: only with mode = deadline (an event-mode loop waits for its sources)");
+		}
 	}
 	/* each kind in turn, sections in order of first appearance */
 	for (int pass = 0; pass < S_COUNT; pass++) {

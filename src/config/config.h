@@ -42,6 +42,7 @@ struct cfg_daemon {
 	double stale_ms;
 	int realtime_priority;  /* SCHED_FIFO, 0 = off */
 	int cpu;                /* -1 = no affinity */
+	bool busy_wait;         /* spin to each deadline instead of sleeping */
 	bool lock_memory;
 	char control_socket[CFG_PATH_MAX];
 	double describe_interval; /* seconds */

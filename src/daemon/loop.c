@@ -70,6 +70,16 @@ static bool checkpoint(struct loop *l)
 	return atomic_load_explicit(&l->cmd, memory_order_acquire) != CMD_STOP;
 }
 
+/* a spin-wait's pause: lets a sibling hyperthread run and saves power while spinning */
+static inline void cpu_relax(void)
+{
+#if defined(__x86_64__) || defined(__i386__)
+	__builtin_ia32_pause();
+#elif defined(__aarch64__) || defined(__arm__)
+	__asm__ volatile("yield");
+#endif
+}
+
 static void arm_events(struct loop *l)
 {
 	int fds[CFG_MAX_SOURCES], n;
@@ -131,9 +141,15 @@ static void *loop_main(void *arg)
 			struct timespec ts;
 			uint64_t woke;
 
-			ts_from_ns(next, &ts);
-			while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR)
-				;
+			if (g->cfg.daemon.busy_wait) {
+				/* a CPU that never idles keeps its caches: the cycle starts warm */
+				while (gw_mono_ns() < next)
+					cpu_relax();
+			} else {
+				ts_from_ns(next, &ts);
+				while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR)
+					;
+			}
 			/* before the clock that stamps the samples: outside the latency it measures */
 			cpu0 = thread_cpu_ns();
 			gw_clock(&now);

@@ -505,5 +505,42 @@ class EventModeTest(unittest.TestCase):
                 self.assertEqual(d.stop(), 0)
 
 
+class BusyWaitTest(unittest.TestCase):
+    def test_spins_at_rate_and_stops(self):
+        """busy_wait = yes: the loop thread never sleeps (its CPU time keeps up with the clock), the
+        cycles still come at the rate, and SIGTERM ends it within a second"""
+        port = free_port()
+        conf = ("[daemon]\nrate = 200\nbusy_wait = yes\n[source s]\ntype = sim\n[avatar a]\nperson = s/p0\n"
+                "[output u]\ntype = udp\naddress = 127.0.0.1\nport = %d\n" % port)
+        with tempfile.TemporaryDirectory() as tmp:
+            d = Daemon(tmp, conf)
+            try:
+                loop = [t for t in os.listdir("/proc/%d/task" % d.proc.pid)
+                        if open("/proc/%d/task/%s/comm" % (d.proc.pid, t)).read().strip() == "avatargw-loop"]
+                self.assertEqual(len(loop), 1)
+                stat = "/proc/%d/task/%s/stat" % (d.proc.pid, loop[0])
+                tick = os.sysconf("SC_CLK_TCK")
+
+                def cpu_s():
+                    f = open(stat).read().rsplit(")", 1)[1].split()
+                    return (int(f[11]) + int(f[12])) / tick  # utime + stime
+
+                c0, st0, w0 = cpu_s(), d.status(), time.monotonic()
+                fr = [m for _, m in dump(["--udp", "127.0.0.1:%d" % port], 300)]
+                c1, st1, w1 = cpu_s(), d.status(), time.monotonic()
+                self.assertEqual(len(fr), 300)
+                cycles = st1["loop"]["cycles"] - st0["loop"]["cycles"]
+                dt = st1["uptime_s"] - st0["uptime_s"]
+                self.assertAlmostEqual(cycles / dt, 200, delta=20)
+                self.assertGreater(c1 - c0, 0.5 * (w1 - w0), "the loop slept: %.2f s of CPU in %.2f s"
+                                   % (c1 - c0, w1 - w0))
+                t0 = time.monotonic()
+                d.proc.send_signal(signal.SIGTERM)
+                self.assertEqual(d.proc.wait(timeout=2), 0)
+                self.assertLess(time.monotonic() - t0, 1.0)
+            finally:
+                d.stop()
+
+
 if __name__ == "__main__":
     unittest.main()
