@@ -247,14 +247,21 @@ struct arm_goal {
 static bool goal_init(const struct arm *a, const struct ik_target *t, sc_t q1, struct arm_goal *g)
 {
 	const struct arm_dims *dm = &a->dims;
-	struct dq d = t->d;
-	struct vec3 p, hy;
+	struct vec3 p = t->p, hy;
 	sc_t L, r2, k;
+	int i, j;
 
-	if (a->side == ARM_LEFT)
-		arm_mirror_dq(&t->d, &d);
-	dq_translation(&d, &p);
-	quat_to_mat3(&d.r, g->R);
+	/* the target's matrix form; a left arm's mirrored (x -> -x: M R M flips row 0 and column 0) */
+	for (i = 0; i < 3; i++)
+		for (j = 0; j < 3; j++)
+			g->R[i][j] = t->m[i][j];
+	if (a->side == ARM_LEFT) {
+		p.x = -p.x;
+		g->R[0][1] = -g->R[0][1];
+		g->R[0][2] = -g->R[0][2];
+		g->R[1][0] = -g->R[1][0];
+		g->R[2][0] = -g->R[2][0];
+	}
 	hy = (struct vec3){ g->R[0][1], g->R[1][1], g->R[2][1] };
 	g->w = p;
 	v3_axpy(-dm->hand, &hy, &g->w);
