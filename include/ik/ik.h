@@ -134,7 +134,7 @@ unsigned ik_solve(const struct arm *a, const struct ik_kin *kin, const struct ik
  * ik_solve, and the arm's segment poses at the returned q in pose (what
  * arm_fk_pose gives): from the solver's own last evaluation, which is at q
  * whenever it ran Newton steps with the dual-quaternion backend (the common
- * case), else evaluated here. pose NULL: ik_solve.
+ * case), else evaluated here.
  */
 unsigned ik_solve_pose(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t, const sc_t *seed,
 		       const struct ik_opts *o, sc_t q[ARM_DOF], struct ik_result *res, struct arm_pose *pose);

@@ -226,10 +226,11 @@ static inline void sc_sincos(sc_t a, sc_t *s, sc_t *c)
 	*c = (n + 1u) & 2u ? -tc : tc;
 }
 
-#if defined(__GNUC__) && !defined(SC_NO_VECTOR)
+#if defined(__GNUC__) && !defined(SC_NO_VECTOR) && (defined(__SSE2__) || defined(__ARM_NEON) || defined(__aarch64__))
 /*
- * Four sc_sincos at once in GCC's generic vectors (SSE2 and NEON: two doubles
- * or four floats per instruction; elsewhere the compiler splits them): the
+ * Four sc_sincos at once in GCC's generic vectors, where the machine has
+ * vector registers (SSE2 and NEON: two doubles or four floats per
+ * instruction; a Cortex-M would only get longer code): the
  * same operations in the same order, the quadrant by bit masks, so every lane
  * equals sc_sincos bit for bit. Callers check |a| <= 8 first.
  */

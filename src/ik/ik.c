@@ -755,12 +755,14 @@ static void newton_limited(const struct arm *a, const struct ik_kin *kin, const 
 	}
 }
 
-unsigned ik_solve_pose(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t, const sc_t *seed,
-		       const struct ik_opts *o, sc_t q[ARM_DOF], struct ik_result *res, struct arm_pose *pose)
+/*
+ * The solver; with chp it also leaves its last chain there, and *ch_at
+ * says whether that chain is at the returned q (ik_solve_pose).
+ */
+static unsigned solve(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t, const sc_t *seed,
+		      const struct ik_opts *o, sc_t q[ARM_DOF], struct ik_result *res, struct arm_chain *chp, bool *ch_at)
 {
 	sc_t pref[ARM_DOF];
-	struct arm_chain ch, *chp = pose ? &ch : NULL;
-	bool ch_at = false;
 	int i;
 
 	res->flags = 0;
@@ -789,14 +791,14 @@ unsigned ik_solve_pose(const struct arm *a, const struct ik_kin *kin, const stru
 		wo.max_iter = o->warm_iter;
 		for (i = 0; i < ARM_DOF; i++)
 			q[i] = pref[i];
-		newton_limited(a, kin, t, &wo, o->center_gain, q, res, chp, &ch_at);
+		newton_limited(a, kin, t, &wo, o->center_gain, q, res, chp, ch_at);
 		if (err_ok(&res->err, o))
 			goto done;
 	}
 	if (ik_swivel_solve(a, t, pref, o, q, &res->evals))
 		res->flags |= IK_ANALYTIC;
 	arm_clamp(a, q);
-	newton_limited(a, kin, t, o, 0, q, res, chp, &ch_at);
+	newton_limited(a, kin, t, o, 0, q, res, chp, ch_at);
 done:
 	if (err_ok(&res->err, o))
 		res->flags |= IK_REACHED;
@@ -806,18 +808,26 @@ done:
 		if (q[i] <= a->lim.lo[i] || q[i] >= a->lim.hi[i])
 			res->flags |= IK_LIMITED;
 out:
-	if (pose) {
-		/* the solver's last evaluation was at q (newton_limited ends with one): its chain, unless another backend made it */
-		if (ch_at)
-			arm_chain_pose(&ch, pose);
-		else
-			arm_fk_pose(a, q, pose);
-	}
 	return res->flags;
+}
+
+unsigned ik_solve_pose(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t, const sc_t *seed,
+		       const struct ik_opts *o, sc_t q[ARM_DOF], struct ik_result *res, struct arm_pose *pose)
+{
+	struct arm_chain ch;
+	bool ch_at = false;
+	unsigned flags = solve(a, kin, t, seed, o, q, res, &ch, &ch_at);
+
+	/* the solver's last evaluation was at q (newton_limited ends with one): its chain, unless another backend made it */
+	if (ch_at)
+		arm_chain_pose(&ch, pose);
+	else
+		arm_fk_pose(a, q, pose);
+	return flags;
 }
 
 unsigned ik_solve(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t, const sc_t *seed,
 		  const struct ik_opts *o, sc_t q[ARM_DOF], struct ik_result *res)
 {
-	return ik_solve_pose(a, kin, t, seed, o, q, res, NULL);
+	return solve(a, kin, t, seed, o, q, res, NULL, NULL);
 }
