@@ -2,11 +2,13 @@
 # SPDX-License-Identifier: MIT
 # make bench, second part: the daemon's goals, measured on the real binary.
 #   1. sample arrival -> datagram sent, one avatar at 240 Hz (the daemon's own
-#      histogram, read with avatargw-ctl), p50/p99/p99.9/max;
+#      histogram, read with avatargw-ctl), p50/p99/p99.9/max, with the loop
+#      sleeping to each deadline (the default) and spinning (busy_wait = yes);
 #   2. RSS with one avatar (the embedded demo);
 #   3. avatars one core carries at 240 Hz: the loop (one thread) runs N sim
-#      avatars for a few seconds; it carries N when no cycle overran and the
-#      cycle's work p99 fits in the period.
+#      avatars for a few seconds, three times; a run carries N when no cycle
+#      overran and the cycle's work p99 fits in the period, and N is carried
+#      when two runs of the three carry it.
 # One JSON line per measurement in $BUILD/bench-daemon.jsonl, and a table.
 set -eu
 BUILD=${1:-build}
@@ -44,10 +46,21 @@ run() {
 	conf "$1" 240 "${3:-no}" >"$TMP/a.conf"
 	"$BUILD/avatargw-dump" --udp "127.0.0.1:$PORT" --stats >/dev/null 2>&1 &
 	dump=$!
+	rm -f "$TMP/ctl"
 	"$BUILD/avatargw" -c "$TMP/a.conf" 2>"$TMP/err" &
 	d=$!
+	# serving once its control socket exists (start-up locks and touches its memory first)
+	i=0
+	while [ ! -S "$TMP/ctl" ] && [ $i -lt 100 ]; do
+		sleep 0.1
+		i=$((i + 1))
+	done
 	sleep 1
-	"$BUILD/avatargw-ctl" -s "$TMP/ctl" status --json >"$TMP/s0.json"
+	if ! "$BUILD/avatargw-ctl" -s "$TMP/ctl" status --json >"$TMP/s0.json"; then
+		kill "$d" "$dump" 2>/dev/null || true
+		cat "$TMP/err" >&2
+		exit 1
+	fi
 	sleep "$2"
 	"$BUILD/avatargw-ctl" -s "$TMP/ctl" status --json >"$TMP/s1.json"
 	rss=$(awk '/VmRSS/ {print $2}' "/proc/$d/status")
@@ -76,15 +89,18 @@ kill "$d"
 wait "$d" 2>/dev/null || true
 echo "{\"set\":\"rss\",\"avatars\":1,\"rss_kib\":$rss,\"hwm_kib\":$hwm}" >>"$OUT"
 
-# 3. capacity: N avatars at 240 Hz, 4 s each
+# 3. capacity: N avatars at 240 Hz, 4 s each, three times (a shared or virtual machine's speed
+#    drifts by tens of percent from minute to minute: N is carried when two of the three runs carry it)
 for n in 250 500 750 1000 1250 1500; do
+for try in 1 2 3; do
 	rss=$(run "$n" 4)
 	c0=$(json 'd["loop"]["cycles"]' <"$TMP/s0.json")
 	o0=$(json 'd["loop"]["overruns"]' <"$TMP/s0.json")
 	c1=$(json 'd["loop"]["cycles"]' <"$TMP/s1.json")
 	o1=$(json 'd["loop"]["overruns"]' <"$TMP/s1.json")
 	w=$(json '"%.1f %.1f %.1f %.1f" % (d["loop"]["work_us"]["p50"], d["loop"]["work_us"]["p99"], d["loop"]["work_cpu_us"]["p50"], d["loop"]["work_cpu_us"]["p99"])' <"$TMP/s1.json")
-	echo "$n $((c1 - c0)) $((o1 - o0)) $w $rss" | awk '{printf "{\"set\":\"capacity\",\"avatars\":%s,\"rate_hz\":240,\"cycles\":%s,\"overruns\":%s,\"work_p50_us\":%s,\"work_p99_us\":%s,\"cpu_p50_us\":%s,\"cpu_p99_us\":%s,\"period_us\":4166.7,\"rss_kib\":%s}\n", $1,$2,$3,$4,$5,$6,$7,$8}' >>"$OUT"
+	echo "$n $((c1 - c0)) $((o1 - o0)) $w $rss $try" | awk '{printf "{\"set\":\"capacity\",\"avatars\":%s,\"rate_hz\":240,\"cycles\":%s,\"overruns\":%s,\"work_p50_us\":%s,\"work_p99_us\":%s,\"cpu_p50_us\":%s,\"cpu_p99_us\":%s,\"period_us\":4166.7,\"rss_kib\":%s,\"try\":%s}\n", $1,$2,$3,$4,$5,$6,$7,$8,$9}' >>"$OUT"
+done
 done
 
 printf '\n| measurement | result |\n|---|---|\n'
@@ -98,13 +114,22 @@ for r in rows:
     elif r["set"] == "rss":
         print("| RSS, demo (1 avatar) | %d KiB (peak %d KiB; goal <= 8192 KiB) |" % (r["rss_kib"], r["hwm_kib"]))
 best = 0
+cap = {}
 for r in rows:
     if r["set"] == "capacity":
+        cap.setdefault(r["avatars"], []).append(r)
+for n in sorted(cap):
+    runs = []
+    carried = 0
+    for r in cap[n]:
         ok = r["overruns"] == 0 and r["work_p99_us"] < r["period_us"]
-        best = r["avatars"] if ok else best
-        print("| %d avatars at 240 Hz | work p50 %.0f us, p99 %.0f us of 4167 us (CPU p50 %.0f, p99 %.0f; %.2f us per avatar); %d overruns in %d cycles; RSS %d KiB; %s |"
-              % (r["avatars"], r["work_p50_us"], r["work_p99_us"], r["cpu_p50_us"], r["cpu_p99_us"],
-                 r["cpu_p50_us"] / r["avatars"], r["overruns"], r["cycles"], r["rss_kib"],
-                 "carried" if ok else "NOT carried"))
-print("| avatars one core carries at 240 Hz | %d (goal >= 1000) |" % best)
+        carried += ok
+        runs.append("p50 %.0f, p99 %.0f us (%.2f us per avatar), %d overruns in %d cycles%s"
+                    % (r["work_p50_us"], r["work_p99_us"], r["cpu_p50_us"] / r["avatars"], r["overruns"],
+                       r["cycles"], "" if ok else " *"))
+    ok = 2 * carried > len(cap[n])
+    best = n if ok else best
+    print("| %d avatars at 240 Hz | work of 4167 us per cycle: %s; RSS %d KiB; carried in %d of %d runs: %s |"
+          % (n, "; ".join(runs), cap[n][-1]["rss_kib"], carried, len(cap[n]), "carried" if ok else "NOT carried"))
+print("| avatars one core carries at 240 Hz (two runs of three) | %d (goal >= 1000) |" % best)
 EOPY
