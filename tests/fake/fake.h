@@ -20,7 +20,9 @@
  * when the test releases it: deterministic checks of what comes out). Both
  * take faults from the test: unplug and replug, injected bytes, dropped
  * reports, stalls, halted endpoints. The test thread drives them while the
- * driver's device thread calls them: every entry point locks.
+ * driver's device thread calls them: every entry point locks. What the two
+ * share (the capture's play, its pace, the injected bytes, the lock) is
+ * player.c.
  */
 #ifndef AGW_TEST_FAKE_H
 #define AGW_TEST_FAKE_H

@@ -5,6 +5,7 @@
  * __wrap_NAME; the linker sends the driver's calls to these.
  */
 #include "fake/fake.h"
+#include "fake/player.h"
 
 #include "trackers/capture.h"
 
@@ -23,205 +24,129 @@ struct hid_device_ {
 	unsigned gen;
 };
 
-#define INJ_MAX 64
-
 static struct {
-	pthread_mutex_t mu;
-	pthread_cond_t cv;
-	bool init;
-	struct capture cap;
-	bool plugged, motion, ignore, stepped;
+	struct player p; /* the capture, its pace, injected reports, the lock */
+	bool plugged, motion, ignore;
 	unsigned gen;
 	int deny;
-	int period_us;
-	long released;
-	int idx, dir;
 	uint8_t seq;
-	uint64_t next_due, stall_until;
-	uint8_t inj[INJ_MAX][128];
-	size_t inj_len[INJ_MAX];
-	int inj_head, inj_n;
+	uint64_t stall_until;
 	struct fake_hid_stats st;
-} F = { .mu = PTHREAD_MUTEX_INITIALIZER };
-
-static uint64_t now_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
-
-static void wait_until(uint64_t t)
-{
-	struct timespec ts = { (time_t)(t / 1000000000ull), (long)(t % 1000000000ull) };
-
-	pthread_cond_timedwait(&F.cv, &F.mu, &ts);
-}
-
-static void wake(void)
-{
-	pthread_cond_broadcast(&F.cv);
-}
+} F = { .p = PLAYER_INIT };
 
 void fake_hid_reset(const char *capture)
 {
-	char err[256];
-
-	pthread_mutex_lock(&F.mu);
-	if (!F.init) {
-		pthread_condattr_t ca;
-
-		pthread_condattr_init(&ca);
-		pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
-		pthread_cond_init(&F.cv, &ca);
-		pthread_condattr_destroy(&ca);
-		F.init = true;
-	}
-	if (capture && !F.cap.n && capture_load(&F.cap, capture, err, sizeof(err))) {
-		fprintf(stderr, "fake_hid: %s\n", err);
-		abort();
-	}
-	F.plugged = F.motion = F.ignore = F.stepped = false;
+	pthread_mutex_lock(&F.p.mu);
+	player_reset_locked(&F.p, capture, "fake_hid", 4000);
+	F.plugged = F.motion = F.ignore = false;
 	F.gen++;
 	F.deny = 0;
-	F.period_us = 4000;
-	F.released = 0;
-	F.idx = 0;
-	F.dir = 1;
 	F.seq = 0x10;
-	F.next_due = F.stall_until = 0;
-	F.inj_head = F.inj_n = 0;
+	F.stall_until = 0;
 	memset(&F.st, 0, sizeof(F.st));
 	F.st.last_index = -1;
-	wake();
-	pthread_mutex_unlock(&F.mu);
+	player_wake_locked(&F.p);
+	pthread_mutex_unlock(&F.p.mu);
 }
 
 void fake_hid_plug(bool motion_mode)
 {
-	pthread_mutex_lock(&F.mu);
+	pthread_mutex_lock(&F.p.mu);
 	F.gen++;
 	F.plugged = true;
 	F.motion = motion_mode;
-	F.next_due = now_ns();
-	wake();
-	pthread_mutex_unlock(&F.mu);
+	F.p.next_due = player_now_ns();
+	player_wake_locked(&F.p);
+	pthread_mutex_unlock(&F.p.mu);
 }
 
 void fake_hid_unplug(void)
 {
-	pthread_mutex_lock(&F.mu);
+	pthread_mutex_lock(&F.p.mu);
 	F.plugged = false;
-	wake();
-	pthread_mutex_unlock(&F.mu);
+	player_wake_locked(&F.p);
+	pthread_mutex_unlock(&F.p.mu);
 }
 
 void fake_hid_ignore_requests(bool on)
 {
-	pthread_mutex_lock(&F.mu);
+	pthread_mutex_lock(&F.p.mu);
 	F.ignore = on;
-	pthread_mutex_unlock(&F.mu);
+	pthread_mutex_unlock(&F.p.mu);
 }
 
 void fake_hid_set_mode(bool motion)
 {
-	pthread_mutex_lock(&F.mu);
+	pthread_mutex_lock(&F.p.mu);
 	F.motion = motion;
-	F.next_due = now_ns();
-	wake();
-	pthread_mutex_unlock(&F.mu);
+	F.p.next_due = player_now_ns();
+	player_wake_locked(&F.p);
+	pthread_mutex_unlock(&F.p.mu);
 }
 
 void fake_hid_deny_open(int err)
 {
-	pthread_mutex_lock(&F.mu);
+	pthread_mutex_lock(&F.p.mu);
 	F.deny = err;
-	pthread_mutex_unlock(&F.mu);
+	pthread_mutex_unlock(&F.p.mu);
 }
 
 void fake_hid_period_us(int us)
 {
-	pthread_mutex_lock(&F.mu);
-	F.period_us = us;
-	pthread_mutex_unlock(&F.mu);
+	player_period_us(&F.p, us);
 }
 
 void fake_hid_stepped(bool on)
 {
-	pthread_mutex_lock(&F.mu);
-	F.stepped = on;
-	F.released = 0;
-	F.next_due = now_ns();
-	wake();
-	pthread_mutex_unlock(&F.mu);
+	player_stepped(&F.p, on);
 }
 
 void fake_hid_release(int n)
 {
-	pthread_mutex_lock(&F.mu);
-	F.released += n;
-	wake();
-	pthread_mutex_unlock(&F.mu);
+	player_release(&F.p, n);
 }
 
 void fake_hid_seek(int index)
 {
-	pthread_mutex_lock(&F.mu);
-	F.idx = index;
-	F.dir = 1;
-	pthread_mutex_unlock(&F.mu);
+	player_seek(&F.p, index);
 }
 
 void fake_hid_inject(const uint8_t *rep, size_t len)
 {
-	pthread_mutex_lock(&F.mu);
-	if (F.inj_n < INJ_MAX && len <= sizeof(F.inj[0])) {
-		int k = (F.inj_head + F.inj_n++) % INJ_MAX;
-
-		memcpy(F.inj[k], rep, len);
-		F.inj_len[k] = len;
-	}
-	wake();
-	pthread_mutex_unlock(&F.mu);
+	player_inject(&F.p, rep, len);
 }
 
 void fake_hid_skip(int n)
 {
-	pthread_mutex_lock(&F.mu);
+	pthread_mutex_lock(&F.p.mu);
 	F.seq = (uint8_t)(F.seq + n);
-	for (int i = 0; i < n; i++) {
-		/* the reports that were lost still moved the wands */
-		if (F.idx + F.dir < 0 || F.idx + F.dir >= F.cap.n)
-			F.dir = -F.dir;
-		F.idx += F.dir;
-	}
-	pthread_mutex_unlock(&F.mu);
+	for (int i = 0; i < n; i++)
+		player_advance_locked(&F.p); /* the reports that were lost still moved the wands */
+	pthread_mutex_unlock(&F.p.mu);
 }
 
 void fake_hid_stall(int ms)
 {
-	pthread_mutex_lock(&F.mu);
-	F.stall_until = now_ns() + (uint64_t)ms * 1000000ull;
-	pthread_mutex_unlock(&F.mu);
+	pthread_mutex_lock(&F.p.mu);
+	F.stall_until = player_now_ns() + (uint64_t)ms * 1000000ull;
+	pthread_mutex_unlock(&F.p.mu);
 }
 
 void fake_hid_stats(struct fake_hid_stats *s)
 {
-	pthread_mutex_lock(&F.mu);
+	pthread_mutex_lock(&F.p.mu);
 	*s = F.st;
-	pthread_mutex_unlock(&F.mu);
+	pthread_mutex_unlock(&F.p.mu);
 }
 
 const uint8_t *fake_hid_capture_report(int i, size_t *len)
 {
-	*len = F.cap.rep[i].len;
-	return F.cap.bytes + F.cap.rep[i].off;
+	return player_report(&F.p, i, len);
 }
 
 int fake_hid_capture_count(void)
 {
-	return F.cap.n;
+	return F.p.cap.n;
 }
 
 /* ---- hidapi ------------------------------------------------------------------------- */
@@ -256,7 +181,7 @@ struct hid_device_info *__wrap_hid_enumerate(unsigned short vid, unsigned short 
 {
 	struct hid_device_info *head = NULL;
 
-	pthread_mutex_lock(&F.mu);
+	pthread_mutex_lock(&F.p.mu);
 	F.st.enumerations++;
 	if (F.plugged && (!vid || vid == 0x1532) && (!pid || pid == 0x0300)) {
 		for (int iface = 1; iface >= 0; iface--) {
@@ -273,7 +198,7 @@ struct hid_device_info *__wrap_hid_enumerate(unsigned short vid, unsigned short 
 			head = i;
 		}
 	}
-	pthread_mutex_unlock(&F.mu);
+	pthread_mutex_unlock(&F.p.mu);
 	return head;
 }
 
@@ -292,7 +217,7 @@ hid_device *__wrap_hid_open_path(const char *path)
 {
 	hid_device *d = NULL;
 
-	pthread_mutex_lock(&F.mu);
+	pthread_mutex_lock(&F.p.mu);
 	for (int iface = 0; iface < 2 && F.plugged; iface++) {
 		char p[64];
 
@@ -313,15 +238,15 @@ hid_device *__wrap_hid_open_path(const char *path)
 		if (!F.deny)
 			errno = ENOENT;
 	}
-	pthread_mutex_unlock(&F.mu);
+	pthread_mutex_unlock(&F.p.mu);
 	return d;
 }
 
 void __wrap_hid_close(hid_device *dev)
 {
-	pthread_mutex_lock(&F.mu);
+	pthread_mutex_lock(&F.p.mu);
 	F.st.closes++;
-	pthread_mutex_unlock(&F.mu);
+	pthread_mutex_unlock(&F.p.mu);
 	free(dev);
 }
 
@@ -333,70 +258,50 @@ static bool alive(const hid_device *dev)
 /* the next capture report into data, with the device's own sequence number */
 static int deliver(unsigned char *data, size_t length)
 {
-	const struct capture_report *r = &F.cap.rep[F.idx];
+	const struct capture_report *r = &F.p.cap.rep[F.p.idx];
 	size_t n = r->len < length ? r->len : length;
 
-	memcpy(data, F.cap.bytes + r->off, n);
+	memcpy(data, F.p.cap.bytes + r->off, n);
 	if (n > 29) {
 		data[7] = F.seq;
 		data[29] = F.seq;
 	}
 	F.seq++;
 	F.st.delivered++;
-	F.st.last_index = F.idx;
-	/* forwards, then backwards: the wands never jump */
-	if (F.idx + F.dir < 0 || F.idx + F.dir >= F.cap.n)
-		F.dir = -F.dir;
-	F.idx += F.dir;
+	F.st.last_index = F.p.idx;
+	player_advance_locked(&F.p); /* forwards, then backwards: the wands never jump */
 	return (int)n;
 }
 
 int __wrap_hid_read_timeout(hid_device *dev, unsigned char *data, size_t length, int ms)
 {
-	uint64_t deadline = now_ns() + (uint64_t)(ms < 0 ? 3600000 : ms) * 1000000ull;
+	uint64_t deadline = player_now_ns() + (uint64_t)(ms < 0 ? 3600000 : ms) * 1000000ull;
 	int rc = 0;
 
-	pthread_mutex_lock(&F.mu);
+	pthread_mutex_lock(&F.p.mu);
 	for (;;) {
-		uint64_t now = now_ns(), wake_at = deadline;
+		uint64_t now = player_now_ns(), wake_at = deadline;
 
 		if (!alive(dev)) {
 			rc = -1;
 			break;
 		}
-		if (dev->iface == 0 && F.inj_n) {
-			size_t n = F.inj_len[F.inj_head] < length ? F.inj_len[F.inj_head] : length;
-
-			memcpy(data, F.inj[F.inj_head], n);
-			F.inj_head = (F.inj_head + 1) % INJ_MAX;
-			F.inj_n--;
-			rc = (int)n;
+		if (dev->iface == 0 && (rc = player_take_injected_locked(&F.p, data, length)) >= 0)
 			break;
-		}
-		if (dev->iface == 0 && F.motion && F.cap.n && now >= F.stall_until) {
-			if (F.stepped) {
-				if (F.released > 0) {
-					F.released--;
-					rc = deliver(data, length);
-					break;
-				}
-			} else if (now >= F.next_due) {
-				F.next_due += (uint64_t)F.period_us * 1000ull;
-				if (F.next_due + 100000000ull < now)
-					F.next_due = now; /* after a long pause: no burst */
+		rc = 0;
+		if (dev->iface == 0 && F.motion && F.p.cap.n && now >= F.stall_until) {
+			if (player_due_locked(&F.p, now, &wake_at)) {
 				rc = deliver(data, length);
 				break;
-			} else if (F.next_due < wake_at) {
-				wake_at = F.next_due;
 			}
 		} else if (dev->iface == 0 && F.motion && now < F.stall_until && F.stall_until < wake_at) {
 			wake_at = F.stall_until;
 		}
 		if (now >= deadline)
 			break;
-		wait_until(wake_at);
+		player_wait_until_locked(&F.p, wake_at);
 	}
-	pthread_mutex_unlock(&F.mu);
+	pthread_mutex_unlock(&F.p.mu);
 	return rc;
 }
 
@@ -418,7 +323,7 @@ int __wrap_hid_send_feature_report(hid_device *dev, const unsigned char *data, s
 {
 	int rc = (int)length, kind;
 
-	pthread_mutex_lock(&F.mu);
+	pthread_mutex_lock(&F.p.mu);
 	if (!alive(dev)) {
 		rc = -1;
 		goto out;
@@ -434,16 +339,16 @@ int __wrap_hid_send_feature_report(hid_device *dev, const unsigned char *data, s
 		F.st.motion_requests++;
 		if (!F.ignore && !F.motion) {
 			F.motion = true;
-			F.next_due = now_ns();
+			F.p.next_due = player_now_ns();
 		}
 	} else {
 		F.st.gamepad_requests++;
 		if (!F.ignore)
 			F.motion = false;
 	}
-	wake();
+	player_wake_locked(&F.p);
 out:
-	pthread_mutex_unlock(&F.mu);
+	pthread_mutex_unlock(&F.p.mu);
 	return rc;
 }
 
@@ -451,13 +356,13 @@ int __wrap_hid_get_feature_report(hid_device *dev, unsigned char *data, size_t l
 {
 	int rc = (int)length;
 
-	pthread_mutex_lock(&F.mu);
+	pthread_mutex_lock(&F.p.mu);
 	if (!alive(dev))
 		rc = -1;
 	else
 		memset(data + 1, 0, length - 1);
 	F.st.get_features++;
-	pthread_mutex_unlock(&F.mu);
+	pthread_mutex_unlock(&F.p.mu);
 	return rc;
 }
 

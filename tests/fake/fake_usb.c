@@ -13,6 +13,7 @@
  * for since it was plugged in: a driver that skips a step gets nothing.
  */
 #include "fake/fake.h"
+#include "fake/player.h"
 
 #include "trackers/capture.h"
 
@@ -26,7 +27,6 @@
 
 #define EP_OUT 0x04
 #define EP_IN 0x88
-#define INJ_MAX 16
 #define MAX_EVENTS 32
 
 struct libusb_context {
@@ -49,28 +49,18 @@ struct libusb_device_handle {
 };
 
 static struct {
-	pthread_mutex_t mu;
-	pthread_cond_t cv;
-	bool init;
-	struct capture cap;
-	bool plugged, hotplug_capable, stepped;
+	struct player p; /* the capture, its pace, injected transfers, the lock */
+	bool plugged, hotplug_capable;
 	unsigned gen;
 	uint16_t pid;
 	uint8_t addr;
 	int deny;
-	int period_us;
-	long released;
-	int idx, dir;
 	uint32_t frame;
-	uint64_t next_due;
 	/* the device's command state */
 	char line[128];
 	size_t line_len;
 	bool f1, u1, olist, streaming;
 	/* faults */
-	uint8_t inj[INJ_MAX][1024];
-	size_t inj_len[INJ_MAX];
-	int inj_head, inj_n;
 	int split_at;
 	uint8_t rest[4096];
 	size_t rest_len;
@@ -78,22 +68,7 @@ static struct {
 	const struct libusb_device_handle *claimed; /* the handle holding interface 0 */
 	struct fake_usb_stats st;
 	struct libusb_context *ctxs;
-} U = { .mu = PTHREAD_MUTEX_INITIALIZER };
-
-static uint64_t now_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
-
-static void wait_until(uint64_t t)
-{
-	struct timespec ts = { (time_t)(t / 1000000000ull), (long)(t % 1000000000ull) };
-
-	pthread_cond_timedwait(&U.cv, &U.mu, &ts);
-}
+} U = { .p = PLAYER_INIT };
 
 static void note_cmd(const char *c)
 {
@@ -107,52 +82,33 @@ static void queue_event(int ev)
 	for (struct libusb_context *c = U.ctxs; c; c = c->next)
 		if (c->cb && (c->events & ev) && c->n_pending < MAX_EVENTS)
 			c->pending[c->n_pending++] = ev;
-	pthread_cond_broadcast(&U.cv);
+	player_wake_locked(&U.p);
 }
 
 void fake_usb_reset(const char *capture)
 {
-	char err[256];
-
-	pthread_mutex_lock(&U.mu);
-	if (!U.init) {
-		pthread_condattr_t ca;
-
-		pthread_condattr_init(&ca);
-		pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
-		pthread_cond_init(&U.cv, &ca);
-		pthread_condattr_destroy(&ca);
-		U.init = true;
-	}
-	if (capture && !U.cap.n && capture_load(&U.cap, capture, err, sizeof(err))) {
-		fprintf(stderr, "fake_usb: %s\n", err);
-		abort();
-	}
-	U.plugged = U.stepped = false;
+	pthread_mutex_lock(&U.p.mu);
+	player_reset_locked(&U.p, capture, "fake_usb", 1000000 / 240);
+	U.plugged = false;
 	U.hotplug_capable = true;
 	U.gen++;
 	U.deny = 0;
-	U.period_us = 1000000 / 240;
-	U.released = 0;
-	U.idx = 0;
-	U.dir = 1;
 	U.frame = 5000;
 	U.line_len = 0;
 	U.f1 = U.u1 = U.olist = U.streaming = false;
-	U.inj_head = U.inj_n = 0;
 	U.split_at = 0;
 	U.rest_len = 0;
 	U.halt_count = 0;
 	U.claimed = NULL;
 	memset(&U.st, 0, sizeof(U.st));
 	U.st.last_index = -1;
-	pthread_cond_broadcast(&U.cv);
-	pthread_mutex_unlock(&U.mu);
+	player_wake_locked(&U.p);
+	pthread_mutex_unlock(&U.p.mu);
 }
 
 void fake_usb_plug(uint16_t pid)
 {
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	U.gen++;
 	U.addr = (uint8_t)(U.addr % 120 + 2);
 	U.pid = pid;
@@ -164,132 +120,104 @@ void fake_usb_plug(uint16_t pid)
 	U.rest_len = 0;
 	U.halt_count = 0;
 	queue_event(LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED);
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 }
 
 void fake_usb_unplug(void)
 {
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	U.plugged = false;
 	U.streaming = false;
 	queue_event(LIBUSB_HOTPLUG_EVENT_DEVICE_LEFT);
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 }
 
 void fake_usb_hotplug(bool capable)
 {
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	U.hotplug_capable = capable;
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 }
 
 void fake_usb_deny_open(int libusb_err)
 {
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	U.deny = libusb_err;
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 }
 
 void fake_usb_period_us(int us)
 {
-	pthread_mutex_lock(&U.mu);
-	U.period_us = us;
-	pthread_mutex_unlock(&U.mu);
+	player_period_us(&U.p, us);
 }
 
 void fake_usb_stepped(bool on)
 {
-	pthread_mutex_lock(&U.mu);
-	U.stepped = on;
-	U.released = 0;
-	U.next_due = now_ns();
-	pthread_cond_broadcast(&U.cv);
-	pthread_mutex_unlock(&U.mu);
+	player_stepped(&U.p, on);
 }
 
 void fake_usb_release(int n)
 {
-	pthread_mutex_lock(&U.mu);
-	U.released += n;
-	pthread_cond_broadcast(&U.cv);
-	pthread_mutex_unlock(&U.mu);
+	player_release(&U.p, n);
 }
 
 void fake_usb_seek(int index)
 {
-	pthread_mutex_lock(&U.mu);
-	U.idx = index;
-	U.dir = 1;
-	pthread_mutex_unlock(&U.mu);
+	player_seek(&U.p, index);
 }
 
 void fake_usb_inject(const uint8_t *bytes, size_t len)
 {
-	pthread_mutex_lock(&U.mu);
-	if (U.inj_n < INJ_MAX && len <= sizeof(U.inj[0])) {
-		int k = (U.inj_head + U.inj_n++) % INJ_MAX;
-
-		memcpy(U.inj[k], bytes, len);
-		U.inj_len[k] = len;
-	}
-	pthread_cond_broadcast(&U.cv);
-	pthread_mutex_unlock(&U.mu);
+	player_inject(&U.p, bytes, len);
 }
 
 void fake_usb_split(int at)
 {
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	U.split_at = at;
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 }
 
-static void advance(void)
-{
-	if (U.idx + U.dir < 0 || U.idx + U.dir >= U.cap.n)
-		U.dir = -U.dir;
-	U.idx += U.dir;
-}
 
 void fake_usb_skip(int n)
 {
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	U.frame += (uint32_t)n;
 	for (int i = 0; i < n; i++)
-		advance();
-	pthread_mutex_unlock(&U.mu);
+		player_advance_locked(&U.p);
+	pthread_mutex_unlock(&U.p.mu);
 }
 
 void fake_usb_stop_streaming(void)
 {
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	U.streaming = false;
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 }
 
 void fake_usb_halt(int times)
 {
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	U.halt_count = times;
-	pthread_cond_broadcast(&U.cv);
-	pthread_mutex_unlock(&U.mu);
+	player_wake_locked(&U.p);
+	pthread_mutex_unlock(&U.p.mu);
 }
 
 void fake_usb_stats(struct fake_usb_stats *s)
 {
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	*s = U.st;
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 }
 
 const uint8_t *fake_usb_capture_frame(int i, size_t *len)
 {
-	*len = U.cap.rep[i].len;
-	return U.cap.bytes + U.cap.rep[i].off;
+	return player_report(&U.p, i, len);
 }
 
 int fake_usb_capture_count(void)
 {
-	return U.cap.n;
+	return U.p.cap.n;
 }
 
 /* ---- the device's side of the wire ------------------------------------------------------------ */
@@ -309,9 +237,9 @@ static void command(const char *c)
 		U.olist = !strcmp(c, "O*,2,7,9,0");
 	else if (!strcmp(c, "C") && U.f1 && U.u1 && U.olist) {
 		U.streaming = true;
-		U.next_due = now_ns();
+		U.p.next_due = player_now_ns();
 		U.st.setups++;
-		pthread_cond_broadcast(&U.cv);
+		player_wake_locked(&U.p);
 	}
 }
 
@@ -338,11 +266,11 @@ static void device_out(const unsigned char *d, int len)
 /* the next frame (one transfer), its records' frame counts the device's own */
 static int next_frame(unsigned char *out, int len)
 {
-	const struct capture_report *r = &U.cap.rep[U.idx];
+	const struct capture_report *r = &U.p.cap.rep[U.p.idx];
 	uint8_t f[4096];
 	int n = r->len, first;
 
-	memcpy(f, U.cap.bytes + r->off, (size_t)n);
+	memcpy(f, U.p.cap.bytes + r->off, (size_t)n);
 	for (int k = 0; k + 41 <= n; k += 41) {
 		f[k + 36] = (uint8_t)U.frame;
 		f[k + 37] = (uint8_t)(U.frame >> 8);
@@ -351,8 +279,8 @@ static int next_frame(unsigned char *out, int len)
 	}
 	U.frame++;
 	U.st.frames++;
-	U.st.last_index = U.idx;
-	advance();
+	U.st.last_index = U.p.idx;
+	player_advance_locked(&U.p);
 	first = U.split_at > 0 && U.split_at < n ? U.split_at : n;
 	if (first > len)
 		first = len;
@@ -398,23 +326,23 @@ int __wrap_libusb_init(libusb_context **ctx)
 {
 	struct libusb_context *c = calloc(1, sizeof(*c));
 
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	c->next = U.ctxs;
 	U.ctxs = c;
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 	*ctx = c;
 	return 0;
 }
 
 void __wrap_libusb_exit(libusb_context *ctx)
 {
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	for (struct libusb_context **p = &U.ctxs; *p; p = &(*p)->next)
 		if (*p == ctx) {
 			*p = ctx->next;
 			break;
 		}
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 	free(ctx);
 }
 
@@ -422,9 +350,9 @@ int __wrap_libusb_has_capability(uint32_t cap)
 {
 	int rc;
 
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	rc = cap == LIBUSB_CAP_HAS_HOTPLUG ? U.hotplug_capable : 0;
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 	return rc;
 }
 
@@ -433,14 +361,14 @@ int __wrap_libusb_hotplug_register_callback(libusb_context *ctx, int events, int
 {
 	(void)flags;
 	(void)cls;
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	if (vid == 0x0f44 && pid == LIBUSB_HOTPLUG_MATCH_ANY) {
 		ctx->cb = cb;
 		ctx->ud = ud;
 		ctx->events = events;
 		U.st.hotplug_registered++;
 	}
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 	*h = 1;
 	return 0;
 }
@@ -448,28 +376,28 @@ int __wrap_libusb_hotplug_register_callback(libusb_context *ctx, int events, int
 void __wrap_libusb_hotplug_deregister_callback(libusb_context *ctx, libusb_hotplug_callback_handle h)
 {
 	(void)h;
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	ctx->cb = NULL;
 	ctx->n_pending = 0;
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 }
 
 int __wrap_libusb_handle_events_timeout_completed(libusb_context *ctx, struct timeval *tv, int *completed)
 {
-	uint64_t end = now_ns() + (uint64_t)tv->tv_sec * 1000000000ull + (uint64_t)tv->tv_usec * 1000ull;
+	uint64_t end = player_now_ns() + (uint64_t)tv->tv_sec * 1000000000ull + (uint64_t)tv->tv_usec * 1000ull;
 	int ev[MAX_EVENTS], n;
 	struct libusb_device dev;
 
 	(void)completed;
-	pthread_mutex_lock(&U.mu);
-	while (!ctx->n_pending && now_ns() < end)
-		wait_until(end);
+	pthread_mutex_lock(&U.p.mu);
+	while (!ctx->n_pending && player_now_ns() < end)
+		player_wait_until_locked(&U.p, end);
 	n = ctx->n_pending;
 	memcpy(ev, ctx->pending, sizeof(int) * (size_t)n);
 	ctx->n_pending = 0;
 	dev = (struct libusb_device){ U.gen, U.pid, U.addr };
 	U.st.hotplug_callbacks += n;
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 	/* as libusb does: callbacks run from the event handler, outside any lock of ours */
 	for (int i = 0; i < n; i++)
 		if (ctx->cb)
@@ -482,7 +410,7 @@ ssize_t __wrap_libusb_get_device_list(libusb_context *ctx, libusb_device ***list
 	ssize_t n = 0;
 
 	(void)ctx;
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	U.st.enumerations++;
 	*list = calloc(2, sizeof(**list));
 	if (U.plugged) {
@@ -491,7 +419,7 @@ ssize_t __wrap_libusb_get_device_list(libusb_context *ctx, libusb_device ***list
 		*d = (struct libusb_device){ U.gen, U.pid, U.addr };
 		(*list)[n++] = d;
 	}
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 	return n;
 }
 
@@ -580,7 +508,7 @@ int __wrap_libusb_open(libusb_device *dev, libusb_device_handle **h)
 {
 	int rc = 0;
 
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	if (!U.plugged || dev->gen != U.gen)
 		rc = LIBUSB_ERROR_NO_DEVICE;
 	else if (U.deny)
@@ -590,17 +518,17 @@ int __wrap_libusb_open(libusb_device *dev, libusb_device_handle **h)
 		(*h)->gen = U.gen;
 		U.st.opens++;
 	}
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 	return rc;
 }
 
 void __wrap_libusb_close(libusb_device_handle *h)
 {
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	U.st.closes++;
 	if (U.claimed == h)
 		U.claimed = NULL;
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 	free(h);
 }
 
@@ -615,9 +543,9 @@ int __wrap_libusb_set_configuration(libusb_device_handle *h, int c)
 {
 	int rc;
 
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	rc = !alive(h) ? LIBUSB_ERROR_NO_DEVICE : c == 1 ? 0 : LIBUSB_ERROR_NOT_FOUND;
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 	return rc;
 }
 
@@ -625,7 +553,7 @@ int __wrap_libusb_claim_interface(libusb_device_handle *h, int i)
 {
 	int rc;
 
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	rc = !alive(h) ? LIBUSB_ERROR_NO_DEVICE : i == 0 ? 0 : LIBUSB_ERROR_NOT_FOUND;
 	/* one claim at a time, as the kernel's usbfs does */
 	if (!rc && U.claimed && U.claimed != h)
@@ -634,17 +562,17 @@ int __wrap_libusb_claim_interface(libusb_device_handle *h, int i)
 		U.claimed = h;
 		U.st.claims++;
 	}
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 	return rc;
 }
 
 int __wrap_libusb_release_interface(libusb_device_handle *h, int i)
 {
 	(void)i;
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	if (U.claimed == h)
 		U.claimed = NULL;
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 	return 0;
 }
 
@@ -652,7 +580,7 @@ int __wrap_libusb_clear_halt(libusb_device_handle *h, unsigned char ep)
 {
 	int rc = 0;
 
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	if (!alive(h))
 		rc = LIBUSB_ERROR_NO_DEVICE;
 	else if (ep == EP_IN) {
@@ -660,18 +588,18 @@ int __wrap_libusb_clear_halt(libusb_device_handle *h, unsigned char ep)
 		if (U.halt_count > 0)
 			U.halt_count--;
 	}
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 	return rc;
 }
 
 int __wrap_libusb_bulk_transfer(libusb_device_handle *h, unsigned char ep, unsigned char *data, int len, int *got,
 				unsigned int timeout)
 {
-	uint64_t deadline = now_ns() + (uint64_t)timeout * 1000000ull;
+	uint64_t deadline = player_now_ns() + (uint64_t)timeout * 1000000ull;
 	int rc = LIBUSB_ERROR_TIMEOUT;
 
 	*got = 0;
-	pthread_mutex_lock(&U.mu);
+	pthread_mutex_lock(&U.p.mu);
 	if (!alive(h)) {
 		rc = LIBUSB_ERROR_NO_DEVICE;
 		goto out;
@@ -689,7 +617,7 @@ int __wrap_libusb_bulk_transfer(libusb_device_handle *h, unsigned char ep, unsig
 		goto out;
 	}
 	for (;;) {
-		uint64_t now = now_ns(), wake_at = deadline;
+		uint64_t now = player_now_ns(), wake_at = deadline;
 
 		if (!alive(h)) {
 			rc = LIBUSB_ERROR_NO_DEVICE;
@@ -709,40 +637,21 @@ int __wrap_libusb_bulk_transfer(libusb_device_handle *h, unsigned char ep, unsig
 			rc = 0;
 			break;
 		}
-		if (U.inj_n) {
-			size_t n = U.inj_len[U.inj_head] < (size_t)len ? U.inj_len[U.inj_head] : (size_t)len;
-
-			memcpy(data, U.inj[U.inj_head], n);
-			U.inj_head = (U.inj_head + 1) % INJ_MAX;
-			U.inj_n--;
-			*got = (int)n;
+		if ((*got = player_take_injected_locked(&U.p, data, (size_t)len)) >= 0) {
 			rc = 0;
 			break;
 		}
-		if (U.streaming && U.cap.n) {
-			if (U.stepped) {
-				if (U.released > 0) {
-					U.released--;
-					*got = next_frame(data, len);
-					rc = 0;
-					break;
-				}
-			} else if (now >= U.next_due) {
-				U.next_due += (uint64_t)U.period_us * 1000ull;
-				if (U.next_due + 100000000ull < now)
-					U.next_due = now;
-				*got = next_frame(data, len);
-				rc = 0;
-				break;
-			} else if (U.next_due < wake_at) {
-				wake_at = U.next_due;
-			}
+		*got = 0;
+		if (U.streaming && U.p.cap.n && player_due_locked(&U.p, now, &wake_at)) {
+			*got = next_frame(data, len);
+			rc = 0;
+			break;
 		}
 		if (now >= deadline)
 			break;
-		wait_until(wake_at);
+		player_wait_until_locked(&U.p, wake_at);
 	}
 out:
-	pthread_mutex_unlock(&U.mu);
+	pthread_mutex_unlock(&U.p.mu);
 	return rc;
 }
