@@ -753,7 +753,7 @@ static int poll_clocked(struct tracker *t, struct replay *rp, const struct track
 static int poll_stepped(struct tracker *t, struct replay *rp, const struct tracker_clock *now)
 {
 	uint64_t req = atomic_load_explicit(&rp->steps_req, memory_order_acquire);
-	uint64_t todo = req - rp->steps_done;
+	uint64_t steps = req - rp->steps_done;
 	int put = 0;
 
 	rp->steps_done = req;
@@ -764,9 +764,9 @@ static int poll_stepped(struct tracker *t, struct replay *rp, const struct track
 		while (k + 1 < rp->n_inst && rp->ev[rp->inst[k + 1]].t <= t->cfg->start)
 			k++;
 		rp->cur_inst = (int64_t)k - 1;
-		todo++;
+		steps++;
 	}
-	while (todo--) {
+	while (steps--) {
 		int64_t next = rp->cur_inst + 1;
 		size_t k = (size_t)(next % (int64_t)rp->n_inst);
 
