@@ -438,3 +438,25 @@ int device_take_note(struct device *d, int *level, char *buf, size_t len)
 	pthread_mutex_unlock(&d->mu);
 	return got;
 }
+
+/* ---- the drivers' table entries ------------------------------------------------------ */
+
+int device_drv_poll(struct tracker *t, const struct tracker_clock *now)
+{
+	return device_poll(t->priv, now);
+}
+
+int device_drv_fd(struct tracker *t)
+{
+	return device_fd(t->priv);
+}
+
+void device_drv_status(struct tracker *t, char *buf, size_t len)
+{
+	device_status(t->priv, buf, len);
+}
+
+int device_drv_note(struct tracker *t, int *level, char *buf, size_t len)
+{
+	return device_take_note(t->priv, level, buf, len);
+}

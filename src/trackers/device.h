@@ -185,6 +185,16 @@ void device_play(struct device *d, const struct capture *cap, double speed, bool
 void device_status(struct device *d, char *buf, size_t len);
 int device_take_note(struct device *d, int *level, char *buf, size_t len);
 
+/*
+ * The tracker_driver entries poll, fd, status and note of a driver whose
+ * private state (t->priv) begins with its struct device: the hardware
+ * drivers name these in their tables instead of each wrapping the four.
+ */
+int device_drv_poll(struct tracker *t, const struct tracker_clock *now);
+int device_drv_fd(struct tracker *t);
+void device_drv_status(struct tracker *t, char *buf, size_t len);
+int device_drv_note(struct tracker *t, int *level, char *buf, size_t len);
+
 /* ---- helpers of the drivers --------------------------------------------------------- */
 
 uint64_t device_mono_ns(void);

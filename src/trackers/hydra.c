@@ -47,6 +47,7 @@
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 #include <syslog.h>
@@ -738,25 +739,8 @@ static void hydra_close(struct tracker *t)
 	t->priv = NULL;
 }
 
-static int hydra_poll(struct tracker *t, const struct tracker_clock *now)
-{
-	return device_poll(&((struct hydra *)t->priv)->dev, now);
-}
-
-static int hydra_fd(struct tracker *t)
-{
-	return device_fd(&((struct hydra *)t->priv)->dev);
-}
-
-static void hydra_status(struct tracker *t, char *buf, size_t len)
-{
-	device_status(&((struct hydra *)t->priv)->dev, buf, len);
-}
-
-static int hydra_note(struct tracker *t, int *level, char *buf, size_t len)
-{
-	return device_take_note(&((struct hydra *)t->priv)->dev, level, buf, len);
-}
+/* the device comes first: the device_drv_* entries reach it through t->priv */
+_Static_assert(offsetof(struct hydra, dev) == 0, "struct hydra begins with its struct device");
 
 static int hydra_list(FILE *out)
 {
@@ -800,9 +784,9 @@ const struct tracker_driver hydra_driver = {
 	.check = hydra_check,
 	.open = hydra_open,
 	.close = hydra_close,
-	.poll = hydra_poll,
-	.fd = hydra_fd,
-	.status = hydra_status,
-	.note = hydra_note,
+	.poll = device_drv_poll,
+	.fd = device_drv_fd,
+	.status = device_drv_status,
+	.note = device_drv_note,
 	.list_devices = hydra_list,
 };

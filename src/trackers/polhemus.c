@@ -43,6 +43,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 #include <syslog.h>
@@ -844,25 +845,8 @@ static void polhemus_close(struct tracker *t)
 	t->priv = NULL;
 }
 
-static int polhemus_poll(struct tracker *t, const struct tracker_clock *now)
-{
-	return device_poll(&((struct polhemus *)t->priv)->dev, now);
-}
-
-static int polhemus_fd(struct tracker *t)
-{
-	return device_fd(&((struct polhemus *)t->priv)->dev);
-}
-
-static void polhemus_status(struct tracker *t, char *buf, size_t len)
-{
-	device_status(&((struct polhemus *)t->priv)->dev, buf, len);
-}
-
-static int polhemus_note(struct tracker *t, int *level, char *buf, size_t len)
-{
-	return device_take_note(&((struct polhemus *)t->priv)->dev, level, buf, len);
-}
+/* the device comes first: the device_drv_* entries reach it through t->priv */
+_Static_assert(offsetof(struct polhemus, dev) == 0, "struct polhemus begins with its struct device");
 
 static int polhemus_list(FILE *out)
 {
@@ -926,9 +910,9 @@ const struct tracker_driver polhemus_driver = {
 	.check = polhemus_check,
 	.open = polhemus_open,
 	.close = polhemus_close,
-	.poll = polhemus_poll,
-	.fd = polhemus_fd,
-	.status = polhemus_status,
-	.note = polhemus_note,
+	.poll = device_drv_poll,
+	.fd = device_drv_fd,
+	.status = device_drv_status,
+	.note = device_drv_note,
 	.list_devices = polhemus_list,
 };
