@@ -139,8 +139,14 @@ $(BUILD)/obj/tools/lib/%.q.o: tools/lib/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) $(SC_q) -Itools -c $< -o $@
 
-$(BUILD)/obj/tools/avatargw-ikcompare.o: ALL_CFLAGS += -Itools
-$(BUILD)/avatargw-ikcompare: $(BUILD)/obj/tools/avatargw-ikcompare.o $(IKX_OBJ) $(LIBGW) $(LIBIK)
+# tools/lib/benchfile.c: benchmark rows, joint limits and helpers of the IK tools
+BENCHFILE_OBJ = $(BUILD)/obj/tools/lib/benchfile.o
+$(BUILD)/obj/tools/avatargw-ikcompare.o $(BUILD)/obj/tools/avatargw-ikbench.o $(BUILD)/obj/tools/avatargw-eval.o: \
+	ALL_CFLAGS += -Itools
+$(BUILD)/avatargw-ikcompare: $(BUILD)/obj/tools/avatargw-ikcompare.o $(IKX_OBJ) $(BENCHFILE_OBJ) $(LIBGW) $(LIBIK)
+	$(CC) $(LDFLAGS) -o $@ $^ $(LIBS)
+$(BUILD)/avatargw-ikbench $(BUILD)/avatargw-eval: $(BUILD)/avatargw-%: $(BUILD)/obj/tools/avatargw-%.o $(BENCHFILE_OBJ) \
+	$(LIBGW) $(LIBIK)
 	$(CC) $(LDFLAGS) -o $@ $^ $(LIBS)
 
 $(BUILD)/obj/examples/%.o: tools/examples/%.cpp

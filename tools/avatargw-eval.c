@@ -46,6 +46,7 @@
 
 #include "ik/avatar.h"
 #include "record/keyframe.h"
+#include "lib/benchfile.h"
 #include "record/recload.h"
 
 #define RAD2DEG 57.29577951308232
@@ -300,34 +301,6 @@ out:
 }
 
 /* ---- the avatar ----------------------------------------------------------------------------- */
-
-static int load_limits(const char *path, struct arm_limits *lim)
-{
-	FILE *f = fopen(path, "r");
-	char line[256];
-	int j = 0;
-
-	if (!f) {
-		fprintf(stderr, "avatargw-eval: %s: %s\n", path, strerror(errno));
-		return -1;
-	}
-	while (j < ARM_DOF && fgets(line, sizeof(line), f)) {
-		double lo, hi;
-
-		line[strcspn(line, "#")] = 0;
-		if (sscanf(line, "%lf %lf", &lo, &hi) != 2)
-			continue;
-		lim->lo[j] = lo * DEG2RAD;
-		lim->hi[j] = hi * DEG2RAD;
-		j++;
-	}
-	fclose(f);
-	if (j != ARM_DOF) {
-		fprintf(stderr, "avatargw-eval: %s: want %d lines 'lo hi'\n", path, ARM_DOF);
-		return -1;
-	}
-	return 0;
-}
 
 static void pose_dq(const double s[7], struct dq *out)
 {
@@ -596,7 +569,7 @@ int main(int argc, char **argv)
 	}
 	path = argv[optind];
 	avatar_default_limits(&lim);
-	if (limits && load_limits(limits, &lim))
+	if (limits && bench_load_limits("avatargw-eval", limits, &lim))
 		return 1;
 
 	f = fopen(path, "r");

@@ -11,6 +11,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
+#include <stdint.h>
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -19,14 +20,9 @@
 #include <time.h>
 
 #include "ik/ik.h"
+#include "lib/benchfile.h"
 
 #define DEG2RAD 0.017453292519943295
-
-struct row {
-	double q[ARM_DOF]; /* generating angles */
-	double p[3];
-	double r[4];
-};
 
 static void usage(FILE *f)
 {
@@ -36,136 +32,19 @@ static void usage(FILE *f)
 		   "--limits FILE: 8 lines 'lo hi' in degrees (J1..J8); '#' starts a comment\n");
 }
 
-static int load_rows(const char *path, struct row **out, size_t *n)
-{
-	FILE *f = fopen(path, "r");
-	char line[1024];
-	size_t cap = 0, len = 0, lineno = 0;
-	struct row *rows = NULL;
-
-	if (!f) {
-		fprintf(stderr, "avatargw-ikbench: %s: %s\n", path, strerror(errno));
-		return -1;
-	}
-	while (fgets(line, sizeof(line), f)) {
-		struct row r;
-		double v[15];
-		char *s = line, *end;
-		int k;
-
-		lineno++;
-		if (lineno == 1 && strncmp(line, "q1,", 3) == 0)
-			continue;
-		for (k = 0; k < 15; k++) {
-			v[k] = strtod(s, &end);
-			if (end == s)
-				break;
-			s = end;
-			if (*s == ',')
-				s++;
-		}
-		if (k != 15) {
-			fprintf(stderr, "avatargw-ikbench: %s:%zu: expected 15 numbers\n", path, lineno);
-			fclose(f);
-			free(rows);
-			return -1;
-		}
-		memcpy(r.q, v, sizeof(r.q));
-		memcpy(r.p, v + 8, sizeof(r.p));
-		memcpy(r.r, v + 11, sizeof(r.r));
-		if (len == cap) {
-			struct row *nr;
-
-			cap = cap ? 2 * cap : 1024;
-			nr = realloc(rows, cap * sizeof(*rows));
-			if (!nr) {
-				fclose(f);
-				free(rows);
-				return -1;
-			}
-			rows = nr;
-		}
-		rows[len++] = r;
-	}
-	fclose(f);
-	*out = rows;
-	*n = len;
-	return 0;
-}
-
-static int load_limits(const char *path, struct arm_limits *lim)
-{
-	FILE *f = fopen(path, "r");
-	char line[256];
-	int j = 0, lineno = 0;
-
-	if (!f) {
-		fprintf(stderr, "avatargw-ikbench: %s: %s\n", path, strerror(errno));
-		return -1;
-	}
-	while (j < ARM_DOF && fgets(line, sizeof(line), f)) {
-		double lo, hi;
-		char *h = strchr(line, '#');
-
-		lineno++;
-		if (h)
-			*h = 0;
-		if (strspn(line, " \t\r\n") == strlen(line))
-			continue;
-		if (sscanf(line, "%lf %lf", &lo, &hi) != 2 || lo > hi || lo < -180 || hi > 180) {
-			fprintf(stderr, "avatargw-ikbench: %s:%d: expected 'lo hi' in degrees, lo <= hi, in [-180, 180]\n",
-				path, lineno);
-			fclose(f);
-			return -1;
-		}
-		lim->lo[j] = lo * DEG2RAD;
-		lim->hi[j] = hi * DEG2RAD;
-		j++;
-	}
-	fclose(f);
-	if (j != ARM_DOF) {
-		fprintf(stderr, "avatargw-ikbench: %s: %d joints, expected 8\n", path, j);
-		return -1;
-	}
-	return 0;
-}
-
-static double now_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return ts.tv_sec * 1e9 + ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-	double x = *(const double *)a, y = *(const double *)b;
-
-	return x < y ? -1 : x > y;
-}
-
-static double wrap_deg(double a)
-{
-	a = fmod(a + 180.0, 360.0);
-	if (a < 0)
-		a += 360.0;
-	return a - 180.0;
-}
-
 /*
  * The cost of one Newton iteration alone (kinematics, Jacobian, error twist
  * and the least-squares step) at the generating postures of the file, each
  * against the next row's target: the median of 21 passes, in ns.
  */
-static int iteration_cost(const struct arm *arm, const struct ik_kin *kin, const struct row *rows, size_t n)
+static int iteration_cost(const struct arm *arm, const struct ik_kin *kin, const struct bench_row *rows, size_t n)
 {
 	double pass_ns[21], sink = 0;
 	size_t i, m = n < 2000 ? n : 2000;
 	int p;
 
 	for (p = 0; p < 21; p++) {
-		double t0 = now_ns();
+		double t0 = bench_now_ns();
 
 		for (i = 0; i + 1 < m; i++) {
 			struct ik_target t;
@@ -179,9 +58,9 @@ static int iteration_cost(const struct arm *arm, const struct ik_kin *kin, const
 			ik_lsq_step((const double(*)[ARM_DOF])J, V, NULL, x);
 			sink += x[0] + err.pos;
 		}
-		pass_ns[p] = (now_ns() - t0) / (double)(m - 1);
+		pass_ns[p] = (bench_now_ns() - t0) / (double)(m - 1);
 	}
-	qsort(pass_ns, 21, sizeof(pass_ns[0]), cmp_double);
+	qsort(pass_ns, 21, sizeof(pass_ns[0]), bench_cmp_double);
 	printf("{\"kinematics\":\"%s\",\"iteration_ns\":%.1f,\"check\":%.3g}\n", kin->name, pass_ns[10], sink);
 	return 0;
 }
@@ -202,7 +81,7 @@ int main(int argc, char **argv)
 	struct arm arm;
 	struct ik_opts opts;
 	const struct ik_kin *kin;
-	struct row *rows;
+	struct bench_row *rows;
 	size_t n, i, strict = 0, loose = 0, inlim = 0, jumps = 0, reached = 0;
 	double *us, *ev, iters = 0, evals = 0, prev[ARM_DOF] = { 0 }, (*sol)[ARM_DOF];
 	bool warm, newton, quiet = false, iter_cost = false;
@@ -265,9 +144,9 @@ int main(int argc, char **argv)
 		fprintf(stderr, "avatargw-ikbench: --solver dq|matrix|newton-dq|newton-matrix\n");
 		return 2;
 	}
-	if (limits && load_limits(limits, &lim))
+	if (limits && bench_load_limits("avatargw-ikbench", limits, &lim))
 		return 1;
-	if (load_rows(targets, &rows, &n))
+	if (bench_load_rows("avatargw-ikbench", targets, SIZE_MAX, &rows, &n))
 		return 1;
 	if (n == 0) {
 		fprintf(stderr, "avatargw-ikbench: %s: no rows\n", targets);
@@ -299,13 +178,13 @@ int main(int argc, char **argv)
 			struct quat r = { rows[i].r[0], rows[i].r[1], rows[i].r[2], rows[i].r[3] };
 			double q[ARM_DOF], zero[ARM_DOF] = { 0 }, t0, t1;
 
-			t0 = now_ns();
+			t0 = bench_now_ns();
 			ik_target_set(&t, &p, &r);
 			if (newton)
 				ik_newton(&arm, kin, &t, warm ? prev : zero, &opts, q, &res);
 			else
 				ik_solve(&arm, kin, &t, warm && i > 0 ? prev : NULL, &opts, q, &res);
-			t1 = now_ns();
+			t1 = bench_now_ns();
 			memcpy(prev, q, sizeof(prev));
 			if (pass == 0)
 				continue;
@@ -338,7 +217,7 @@ int main(int argc, char **argv)
 		if (ep < 1e-3 && er < 0.1)
 			loose++;
 		for (j = 0; j < ARM_DOF; j++) {
-			double a = wrap_deg(sol[i][j] / DEG2RAD);
+			double a = bench_wrap_deg(sol[i][j] / DEG2RAD);
 
 			if (!(a >= lim.lo[j] / DEG2RAD - 1e-9 && a <= lim.hi[j] / DEG2RAD + 1e-9))
 				in = false;
@@ -347,7 +226,7 @@ int main(int argc, char **argv)
 			inlim++;
 		if (i > 0) {
 			for (j = 0; j < ARM_DOF; j++)
-				if (fabs(wrap_deg((sol[i][j] - sol[i - 1][j]) / DEG2RAD)) > 10.0)
+				if (fabs(bench_wrap_deg((sol[i][j] - sol[i - 1][j]) / DEG2RAD)) > 10.0)
 					break;
 			if (j < ARM_DOF)
 				jumps++;
@@ -380,7 +259,7 @@ int main(int argc, char **argv)
 		if (!sorted)
 			return 1;
 		memcpy(sorted, us, n * sizeof(*sorted));
-		qsort(sorted, n, sizeof(*sorted), cmp_double);
+		qsort(sorted, n, sizeof(*sorted), bench_cmp_double);
 		med = sorted[n / 2];
 		p99 = sorted[(size_t)((n - 1) * 0.99)];
 		max = sorted[n - 1];
@@ -398,7 +277,7 @@ int main(int argc, char **argv)
 			printf("reached      %.4f %% (solver's own flag)\n", 100.0 * reached / n);
 			printf("iterations   %.3f mean Newton, %.2f mean closed-form postures\n", iters / n, evals / n);
 			printf("time         median %.3f us, p99 %.3f us, max %.3f us\n", med, p99, max);
-			qsort(ev, n, sizeof(*ev), cmp_double);
+			qsort(ev, n, sizeof(*ev), bench_cmp_double);
 			printf("postures     p50 %.0f, p90 %.0f, p99 %.0f, max %.0f closed-form postures per solve\n",
 			       ev[n / 2], ev[(size_t)((n - 1) * 0.9)], ev[(size_t)((n - 1) * 0.99)], ev[n - 1]);
 		}

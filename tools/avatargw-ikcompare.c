@@ -21,13 +21,10 @@
 #include <time.h>
 
 #include "ik/ik.h"
+#include "lib/benchfile.h"
 #include "lib/ikx.h"
 
 #define RAD2DEG 57.29577951308232
-
-struct row {
-	double q[IKX_DOF], p[3], r[4];
-};
 
 struct backend {
 	const char *name;
@@ -43,85 +40,6 @@ static const struct backend backends[] = {
 };
 
 #define NB (sizeof(backends) / sizeof(backends[0]))
-
-static int load_rows(const char *path, struct row **out, size_t *n, size_t max)
-{
-	FILE *f = fopen(path, "r");
-	char line[1024];
-	size_t cap = 0, len = 0, lineno = 0;
-	struct row *rows = NULL;
-
-	if (!f) {
-		fprintf(stderr, "avatargw-ikcompare: %s: %s\n", path, strerror(errno));
-		return -1;
-	}
-	while (len < max && fgets(line, sizeof(line), f)) {
-		double v[15];
-		char *s = line, *end;
-		int k;
-
-		lineno++;
-		if (lineno == 1 && strncmp(line, "q1,", 3) == 0)
-			continue;
-		for (k = 0; k < 15; k++) {
-			v[k] = strtod(s, &end);
-			if (end == s)
-				break;
-			s = end;
-			if (*s == ',')
-				s++;
-		}
-		if (k != 15) {
-			fprintf(stderr, "avatargw-ikcompare: %s:%zu: expected 15 numbers\n", path, lineno);
-			fclose(f);
-			free(rows);
-			return -1;
-		}
-		if (len == cap) {
-			struct row *nr;
-
-			cap = cap ? 2 * cap : 1024;
-			nr = realloc(rows, cap * sizeof(*rows));
-			if (!nr) {
-				fclose(f);
-				free(rows);
-				return -1;
-			}
-			rows = nr;
-		}
-		memcpy(rows[len].q, v, sizeof(rows[len].q));
-		memcpy(rows[len].p, v + 8, sizeof(rows[len].p));
-		memcpy(rows[len].r, v + 11, sizeof(rows[len].r));
-		len++;
-	}
-	fclose(f);
-	*out = rows;
-	*n = len;
-	return 0;
-}
-
-static double now_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return ts.tv_sec * 1e9 + ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-	double x = *(const double *)a, y = *(const double *)b;
-
-	return x < y ? -1 : x > y;
-}
-
-static double wrap_deg(double a)
-{
-	a = fmod(a + 180.0, 360.0);
-	if (a < 0)
-		a += 360.0;
-	return a - 180.0;
-}
 
 /* angle of the rotation a* b, radians; insensitive to sign and to norms off 1 */
 static double rot_between(const double a[4], const double b[4])
@@ -155,7 +73,7 @@ struct judged {
  * them (the degrees of the table rounded to its type: a float or Q5.26
  * posture held at a limit sits on that rounded value).
  */
-static void run(const struct backend *be, const struct ikx_setup *setup, const struct row *rows, size_t n, bool warm,
+static void run(const struct backend *be, const struct ikx_setup *setup, const struct bench_row *rows, size_t n, bool warm,
 		struct judged *out)
 {
 	double lo[IKX_DOF], hi[IKX_DOF];
@@ -166,10 +84,10 @@ static void run(const struct backend *be, const struct ikx_setup *setup, const s
 	for (i = 0; i < n; i++) {
 		struct judged *j = &out[i];
 		struct ikx_result ir;
-		double t0 = now_ns();
+		double t0 = bench_now_ns();
 
 		be->solve(setup, rows[i].p, rows[i].r, warm && i > 0 ? out[i - 1].q : NULL, j->q, &ir);
-		j->us = (now_ns() - t0) / 1e3;
+		j->us = (bench_now_ns() - t0) / 1e3;
 		j->flags = ir.flags;
 		j->iters = ir.iters;
 		ikx_fk_d(setup, j->q, j->fk);
@@ -178,7 +96,7 @@ static void run(const struct backend *be, const struct ikx_setup *setup, const s
 		j->strict = j->ep < 1e-4 && j->er * RAD2DEG < 0.01;
 		j->in_limits = true;
 		for (k = 0; k < IKX_DOF; k++) {
-			double a = wrap_deg(j->q[k] * RAD2DEG);
+			double a = bench_wrap_deg(j->q[k] * RAD2DEG);
 
 			if (!(a >= lo[k] * RAD2DEG - 1e-9 && a <= hi[k] * RAD2DEG + 1e-9))
 				j->in_limits = false;
@@ -193,7 +111,7 @@ static double joint_diff(const double a[IKX_DOF], const double b[IKX_DOF])
 	int k;
 
 	for (k = 0; k < IKX_DOF; k++)
-		m = fmax(m, fabs(wrap_deg((a[k] - b[k]) * RAD2DEG)));
+		m = fmax(m, fabs(bench_wrap_deg((a[k] - b[k]) * RAD2DEG)));
 	return m;
 }
 
@@ -210,7 +128,7 @@ int main(int argc, char **argv)
 	};
 	const char *targets = NULL, *mode = "reset", *solver = "dq";
 	struct ikx_setup setup = { .dims = { 0.18, 0.30, 0.26, 0.08 } };
-	struct row *rows;
+	struct bench_row *rows;
 	struct judged *res[NB];
 	size_t n, i, b, max_rows = (size_t)-1;
 	bool warm, quiet = false;
@@ -254,7 +172,7 @@ int main(int argc, char **argv)
 		fprintf(stderr, "avatargw-ikcompare: --solver dq|matrix|newton-dq|newton-matrix\n");
 		return 2;
 	}
-	if (load_rows(targets, &rows, &n, max_rows))
+	if (bench_load_rows("avatargw-ikcompare", targets, max_rows, &rows, &n))
 		return 1;
 	if (n == 0) {
 		fprintf(stderr, "avatargw-ikcompare: %s: no rows\n", targets);
@@ -304,7 +222,7 @@ int main(int argc, char **argv)
 			same += joint_diff(j->q, d->q) < 0.01;
 			far += joint_diff(j->q, d->q) > 1.0;
 		}
-		qsort(us, n, sizeof(*us), cmp_double);
+		qsort(us, n, sizeof(*us), bench_cmp_double);
 		if (!quiet)
 			printf("| %s | %.2f | %.2f | %.2f | %zu | %.2f | %.3g | %.3g | %.3g | %.3g | %.2f | %.2f |\n",
 			       backends[b].name, 100.0 * strict / n, 100.0 * loose / n, 100.0 * inlim / n, jumps,
