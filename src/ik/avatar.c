@@ -665,6 +665,9 @@ static void posture_err(const struct arm *a, const struct ik_target *t, const sc
 	err->rot = quat_angle_between(&ee.r, &t->r);
 }
 
+/* closed-form postures tried per frame while tracking a target out of the limits' reach */
+#define TRACK_EVALS 48
+
 unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin *kin, const struct ik_opts *o,
 			  const struct ik_target *t, const struct avatar_pose *prev, struct avatar_pose *out)
 {
@@ -688,7 +691,22 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 		else
 			seed = pq;
 	}
-	flags = ik_solve_pose(a, kin, t, seed, o, q, res, &out->seg[side]);
+	if (prev && (prev->res[side].flags & IK_UNREACHABLE) && o->max_evals > TRACK_EVALS) {
+		/*
+		 * The last frame was already a compromise (the target out of the
+		 * limits' reach): a short look for an exact posture near the seed,
+		 * not the whole search again. A target out of reach stays so for
+		 * many frames (a hand frame the wrist cannot take, a hand beyond
+		 * the arm), and the whole search costs a hundred times an ordinary
+		 * solve in each of them; this bounds such an arm's frame.
+		 */
+		struct ik_opts to = *o;
+
+		to.max_evals = TRACK_EVALS;
+		flags = ik_solve_pose(a, kin, t, seed, &to, q, res, &out->seg[side]);
+	} else {
+		flags = ik_solve_pose(a, kin, t, seed, o, q, res, &out->seg[side]);
+	}
 	if ((av->body.model & AVATAR_REACH_FIRST) && t->valid && (flags & IK_UNREACHABLE) &&
 	    res->err.pos > o->tol_pos) {
 		/*

@@ -693,11 +693,13 @@ unsigned ik_newton(const struct arm *a, const struct ik_kin *kin, const struct i
  * least-squares one closest to z = -center (q - mid), x = z + J+ (V - J z),
  * so that tracking does not wander into a corner of the limits.
  */
+#define NEWTON_STALL SC_C(1e-4)
+
 static void newton_limited(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t,
 			   const struct ik_opts *o, sc_t center, sc_t q[ARM_DOF], struct ik_result *res,
 			   struct arm_chain *ch, bool *ch_at)
 {
-	sc_t J[6][ARM_DOF], V[6], W[6], x[ARM_DOF], z[ARM_DOF];
+	sc_t J[6][ARM_DOF], V[6], W[6], x[ARM_DOF], z[ARM_DOF], e, e_prev = 0;
 	bool free[ARM_DOF];
 	int i, j, it, round;
 
@@ -708,6 +710,16 @@ static void newton_limited(const struct arm *a, const struct ik_kin *kin, const 
 		/* every way out follows an evaluation at the final q */
 		if (kin_eval(kin, a, q, t, o, J, V, &res->err, ch, ch_at) || it >= o->max_iter)
 			break;
+		/*
+		 * Stalled: the error changed by under NEWTON_STALL of itself in the
+		 * last step. A target out of the limits' reach ends here, at the
+		 * compromise, instead of after max_iter steps that change nothing
+		 * (a converging solve divides its error at every step)
+		 */
+		e = res->err.pos + res->err.rot;
+		if (it > 0 && sc_abs(e - e_prev) <= sc_mul(NEWTON_STALL, e_prev))
+			break;
+		e_prev = e;
 		for (i = 0; i < ARM_DOF; i++)
 			free[i] = true;
 		for (round = 0; round < 3; round++) {
