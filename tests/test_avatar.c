@@ -374,6 +374,55 @@ static void test_reach_first(void **state)
 	assert_true(off_paper > unreachable / 2);
 }
 
+/*
+ * A target out of the limits' reach held for several frames: after the
+ * first compromise each frame gets a short closed-form look (48 postures,
+ * TRACK_EVALS in avatar.c), not the whole search, and gives the same
+ * compromise: the hand on its sensor, the orientation no farther off.
+ */
+static void test_track_compromise(void **state)
+{
+	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.0 };
+	const struct vec3 off = { 0, 0, 0.25 };
+	struct avatar av;
+	struct ik_opts o;
+	unsigned seed = 5;
+	int held = 0;
+
+	(void)state;
+	avatar_init(&av, &dims, &off, NULL);
+	ik_default_opts(&o);
+	for (int k = 0; k < 40; k++) {
+		sc_t q[ARM_DOF] = { 0 };
+		struct dq head, ee, lee;
+		struct avatar_pose p[3];
+
+		for (int j = 1; j < ARM_DOF; j++)
+			q[j] = av.arm[ARM_RIGHT].lim.lo[j] +
+			       (av.arm[ARM_RIGHT].lim.hi[j] - av.arm[ARM_RIGHT].lim.lo[j]) * (0.15 + 0.7 * rnd01(&seed));
+		q[6] = 1.05 + 0.4 * rnd01(&seed);
+		arm_fk(&av.arm[ARM_RIGHT], q, &ee);
+		arm_mirror_dq(&ee, &lee);
+		origin_head(&av, &head);
+		avatar_solve(&av, &ik_kin_dq, &o, &head, &lee, &ee, NULL, &p[0]);
+		if (!(p[0].res[ARM_RIGHT].flags & IK_UNREACHABLE))
+			continue;
+		held++;
+		for (int f = 1; f < 3; f++) {
+			const struct ik_result *r = &p[f].res[ARM_RIGHT];
+
+			avatar_solve(&av, &ik_kin_dq, &o, &head, &lee, &ee, &p[f - 1], &p[f]);
+			assert_true(arm_in_limits(&av.arm[ARM_RIGHT], p[f].q[ARM_RIGHT]));
+			assert_true(r->flags & IK_UNREACHABLE);
+			assert_true(r->evals <= 48);
+			assert_true(r->err.pos < 1e-6);
+			assert_true(r->err.rot <= p[0].res[ARM_RIGHT].err.rot + 1e-3);
+		}
+	}
+	print_message("targets held out of reach: %d of 40\n", held);
+	assert_true(held > 5);
+}
+
 /* AVATAR_YAW_HANDS: the chest turns toward the hands' line when it agrees with the head */
 static void test_yaw_hands(void **state)
 {
@@ -481,6 +530,7 @@ int main(void)
 		cmocka_unit_test(test_wave_clip),
 		cmocka_unit_test(test_hand_elbow),
 		cmocka_unit_test(test_reach_first),
+		cmocka_unit_test(test_track_compromise),
 		cmocka_unit_test(test_yaw_hands),
 		cmocka_unit_test(test_chest_heading_consistent),
 	};

@@ -391,6 +391,25 @@ static void test_unreachable(void **state)
 	arm_fk_pose(&a, q, &pose);
 	assert_true(pose.hand.y > 0.5);
 	assert_true(fabs(res.err.pos - (2.0 - pose.hand.y)) < 0.2);
+
+	/*
+	 * Newton's stall stop: clamped against the limits, the steps toward a
+	 * target this far out go back and forth between two postures; given
+	 * a hundred steps, Newton stops at the better of the two well before,
+	 * no farther off than after the default max_iter
+	 */
+	{
+		struct ik_opts lo = o;
+		struct ik_result r2;
+		double q2[ARM_DOF];
+
+		lo.max_iter = 100;
+		ik_solve(&a, &ik_kin_dq, &t, NULL, &lo, q2, &r2);
+		assert_true(r2.flags & IK_UNREACHABLE);
+		assert_true(r2.iters < 50);
+		assert_true(in_limits(&a, q2));
+		assert_true(r2.err.pos + r2.err.rot <= res.err.pos + res.err.rot + 1e-9);
+	}
 }
 
 static void test_bad_targets(void **state)

@@ -699,7 +699,7 @@ static void newton_limited(const struct arm *a, const struct ik_kin *kin, const 
 			   const struct ik_opts *o, sc_t center, sc_t q[ARM_DOF], struct ik_result *res,
 			   struct arm_chain *ch, bool *ch_at)
 {
-	sc_t J[6][ARM_DOF], V[6], W[6], x[ARM_DOF], z[ARM_DOF], e, e_prev = 0;
+	sc_t J[6][ARM_DOF], V[6], W[6], x[ARM_DOF], z[ARM_DOF], e, e_prev = 0, e_prev2 = 0;
 	bool free[ARM_DOF];
 	int i, j, it, round;
 
@@ -712,13 +712,19 @@ static void newton_limited(const struct arm *a, const struct ik_kin *kin, const 
 			break;
 		/*
 		 * Stalled: the error changed by under NEWTON_STALL of itself in the
-		 * last step. A target out of the limits' reach ends here, at the
-		 * compromise, instead of after max_iter steps that change nothing
-		 * (a converging solve divides its error at every step)
+		 * last step, or the steps go back and forth between two postures
+		 * (the limits' clamp against the step: a target far out of reach)
+		 * and this is the better of the two. A target out of the limits'
+		 * reach ends here, at its compromise, instead of after max_iter
+		 * steps that change nothing (a converging solve divides its error
+		 * at every step and never stops here).
 		 */
 		e = res->err.pos + res->err.rot;
 		if (it > 0 && sc_abs(e - e_prev) <= sc_mul(NEWTON_STALL, e_prev))
 			break;
+		if (it > 1 && e <= e_prev && sc_abs(e - e_prev2) <= sc_mul(NEWTON_STALL, e_prev2))
+			break;
+		e_prev2 = e_prev;
 		e_prev = e;
 		for (i = 0; i < ARM_DOF; i++)
 			free[i] = true;
