@@ -310,8 +310,15 @@ static void test_hand_elbow(void **state)
 	}
 	print_message("elbow found within 3 cm: paper %d, straight wrist %d, wrist cost %d of %d\n", found[0],
 		      straight, found[1], n);
-	/* random shoulders include unnatural elbows, where the pull toward a natural one misleads */
-	assert_true(found[1] >= n / 2);
+	/*
+	 * random shoulders include unnatural elbows, where the pull toward a
+	 * natural one misleads: an elbow held up beside a bent arm, which the
+	 * pull of gravity (avatar.c, goal_swivel) now declines on purpose (found
+	 * 116 of 200 before it, 98 with it; on the motion-capture arms it cut
+	 * the p95 of the waving elbows by 10 to 16 cm: docs/FIDELITY.md). Still
+	 * more than twice the paper's avatar and three times the straight wrist.
+	 */
+	assert_true(found[1] > 2 * found[0]);
 	assert_true(straight < found[1] / 3);
 	assert_true(found[0] < n / 2);
 }

@@ -376,9 +376,12 @@ static void print_frame(size_t i, const struct row *r, const struct avatar *av, 
  * clip (its position and full orientation, the chain origin at co in it)
  * instead of the chest the avatar places from the head.
  */
+enum chest_part { CHEST_ALL, CHEST_YAW, CHEST_UPRIGHT };
+
 static void solve_true_chest(const struct avatar *av, const struct ik_kin *kin, const struct ik_opts *o,
-			     const struct row *r, const double co[3], const struct dq *lhand, const struct dq *rhand,
-			     const struct avatar_pose *prev, struct avatar_pose *out)
+			     const struct row *r, const double co[3], enum chest_part part, const struct dq *head,
+			     const struct dq *lhand, const struct dq *rhand, const struct avatar_pose *prev,
+			     struct avatar_pose *out)
 {
 	struct quat q = { r->chest[3], r->chest[4], r->chest[5], r->chest[6] };
 	struct vec3 c = { co[0], co[1], co[2] }, rc, p;
@@ -387,13 +390,24 @@ static void solve_true_chest(const struct avatar *av, const struct ik_kin *kin, 
 	quat_normalize(&q, &q);
 	quat_rotate(&q, &c, &rc);
 	p = (struct vec3){ r->chest[0] + rc.x, r->chest[1] + rc.y, r->chest[2] + rc.z };
-	dq_from_rt(&q, &p, &out->chest);
 	{
 		struct vec3 x = { 1, 0, 0 }, xr;
 
 		quat_rotate(&q, &x, &xr);
 		out->head_yaw = atan2(xr.y, xr.x);
 	}
+	if (part != CHEST_ALL) {
+		/* upright, turned to the true heading; placed from the head (yaw) or at the true origin (upright) */
+		q = (struct quat){ cos(out->head_yaw / 2), 0, 0, sin(out->head_yaw / 2) };
+		if (part == CHEST_YAW) {
+			struct vec3 hp, off;
+
+			dq_translation(head, &hp);
+			quat_rotate(&q, &av->body.head_offset, &off);
+			p = (struct vec3){ hp.x - off.x, hp.y - off.y, hp.z - off.z };
+		}
+	}
+	dq_from_rt(&q, &p, &out->chest);
 	for (int side = 0; side < 2; side++) {
 		struct ik_target t;
 
@@ -460,12 +474,13 @@ int main(int argc, char **argv)
 		{ "reset", no_argument, NULL, 'r' },        { "keyframes", required_argument, NULL, 'k' },
 		{ "interp", required_argument, NULL, 'i' }, { "person", required_argument, NULL, 'p' },
 		{ "chest-truth", required_argument, NULL, 'c' }, { "model", required_argument, NULL, 'm' },
-		{ "left-arm", required_argument, NULL, 'L' },
+		{ "left-arm", required_argument, NULL, 'L' }, { "chest-part", required_argument, NULL, 'P' },
 		{ "help", no_argument, NULL, 'h' },         { NULL, 0, NULL, 0 },
 	};
 	double dims[4] = { 0.1732, 0.2886, 0.1955, 0.0 }, off[3] = { 0.008, -0.0386, 0.0967 }, kf_hz = 0;
 	double truth[3];
 	bool chest_truth = false;
+	enum chest_part part = CHEST_ALL;
 	int model = -1;
 	double left[3];
 	bool have_left = false;
@@ -555,6 +570,18 @@ int main(int argc, char **argv)
 			}
 			chest_truth = true;
 			break;
+		case 'P':
+			if (!strcmp(optarg, "yaw"))
+				part = CHEST_YAW;
+			else if (!strcmp(optarg, "upright"))
+				part = CHEST_UPRIGHT;
+			else if (!strcmp(optarg, "all"))
+				part = CHEST_ALL;
+			else {
+				fprintf(stderr, "avatargw-eval: --chest-part all, yaw or upright\n");
+				return 2;
+			}
+			break;
 		case 'h':
 			usage(stdout);
 			return 0;
@@ -614,7 +641,7 @@ int main(int argc, char **argv)
 		pose_dq(rows[i].s[1], &hand[ARM_LEFT]);
 		pose_dq(rows[i].s[2], &hand[ARM_RIGHT]);
 		if (chest_truth && rows[i].has_chest)
-			solve_true_chest(&av, kin, &o, &rows[i], truth, &hand[ARM_LEFT], &hand[ARM_RIGHT], prev, cur);
+			solve_true_chest(&av, kin, &o, &rows[i], truth, part, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], prev, cur);
 		else
 			avatar_solve(&av, kin, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], prev, cur);
 		print_frame(i, &rows[i], &av, cur, hand);

@@ -17,7 +17,9 @@
  *    orientation then asks for is most plausible: little deviation (J7),
  *    flexion or extension (J8) within a wide range, the forearm a little
  *    pronated (J6), with a pull toward the elbow's natural place (down,
- *    turned out). The hand frame: y along
+ *    turned out) as strong as lifting the arm there is tiring (the
+ *    elbow's circle's radius and the shoulder-wrist line's tilt from the
+ *    vertical). The hand frame: y along
  *    the hand, z toward the thumb. The IK starts from that posture instead
  *    of the previous frame's.
  *  - AVATAR_REACH_FIRST: when no posture inside the joint limits gives the
