@@ -366,11 +366,13 @@ class SlowSubscriberTest(unittest.TestCase):
                 self.assertEqual(tcp["closed"], 1)
                 # the loop kept its rate with the stalled reader there: a send that waited on it
                 # would cost whole periods (an overrun skips to the next boundary), so cycles
-                # would fall behind the clock; a loaded machine alone costs a few at most
+                # would fall behind the clock. A machine loaded by other work costs overruns too
+                # (seen: 20 in 523 cycles with a sanitizer build running beside), so the
+                # overruns' bound is loose; the cycle count is the test of blocking
                 cycles, overruns = st["loop"]["cycles"], st["loop"]["overruns"]
                 self.assertGreaterEqual(cycles, 0.9 * 240 * st["uptime_s"] - 240,
                                         "%d cycles in %.1f s" % (cycles, st["uptime_s"]))
-                self.assertLessEqual(overruns, max(2, cycles // 50), "%d overruns in %d cycles" % (overruns, cycles))
+                self.assertLessEqual(overruns, max(2, cycles // 10), "%d overruns in %d cycles" % (overruns, cycles))
                 # a new reader still gets a clean stream
                 fr = dump(["--tcp", "127.0.0.1:%d" % tport], 50)
                 self.assertEqual(len(fr), 50)
