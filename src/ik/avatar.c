@@ -689,6 +689,8 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 	sc_t pref[ARM_DOF], base[ARM_DOF], *q = out->q[side];
 	struct ik_result *res = &out->res[side];
 	const sc_t *seed = pq;
+	const struct ik_opts *so = o;
+	struct ik_opts track;
 	unsigned flags;
 
 	out->hand_misfit[side] = prev ? prev->hand_misfit[side] : SC_C(0);
@@ -713,13 +715,11 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 		 * the arm), and the whole search costs a hundred times an ordinary
 		 * solve in each of them; this bounds such an arm's frame.
 		 */
-		struct ik_opts to = *o;
-
-		to.max_evals = TRACK_EVALS;
-		flags = ik_solve_pose(a, kin, t, seed, &to, q, res, &out->seg[side]);
-	} else {
-		flags = ik_solve_pose(a, kin, t, seed, o, q, res, &out->seg[side]);
+		track = *o;
+		track.max_evals = TRACK_EVALS;
+		so = &track;
 	}
+	flags = ik_solve_pose(a, kin, t, seed, so, q, res, &out->seg[side]);
 	if ((av->body.model & AVATAR_REACH_FIRST) && t->valid && (flags & IK_UNREACHABLE) &&
 	    res->err.pos > o->tol_pos) {
 		/*
