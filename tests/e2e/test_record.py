@@ -106,6 +106,24 @@ def rows_match(got, clip, tol=1e-5):
     return k0
 
 
+def rows_in_order(got, clip, tol=1e-5, most=4):
+    """got are rows of the (looping) clip in its order, each at most `most`
+    rows after the one before: the steps between them, or None"""
+    k = min(range(len(clip)), key=lambda j: td.dist(clip[j]["head"], got[0]["head"]))
+    steps = []
+    for i, r in enumerate(got):
+        for step in ([0] if i == 0 else range(1, most + 1)):
+            c = clip[(k + step) % len(clip)]
+            if all(td.dist(c[key], r[key]) <= tol for key in ("head", "lhand", "rhand")):
+                break
+        else:
+            return None
+        k += step
+        if i:
+            steps.append(step)
+    return steps
+
+
 class RecordReplayTest(unittest.TestCase):
     """record, read back, replay"""
 
@@ -152,9 +170,14 @@ class RecordReplayTest(unittest.TestCase):
             row = {"head": sens["head"], "lhand": sens["left_hand"], "rhand": sens["right_hand"]}
             if not seen or row != seen[-1]:
                 seen.append(row)
-        # float32 storage: a few micrometres
+        # float32 storage: a few micrometres. A cycle that comes late releases
+        # every instant it owes and publishes the newest, so a loaded host may
+        # skip a row: the rows seen are clip rows, in the clip's order, mostly
+        # one after the other.
         self.assertGreater(len(seen), 20)
-        self.assertGreaterEqual(rows_match(seen, clip, 1e-5), 0)
+        steps = rows_in_order(seen, clip, 1e-5)
+        self.assertIsNotNone(steps, "a published row is not the clip's next rows")
+        self.assertGreaterEqual(steps.count(1), len(steps) // 2, steps)
 
 
 class DamageTest(unittest.TestCase):
