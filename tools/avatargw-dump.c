@@ -235,13 +235,14 @@ static void dump_json_flags(uint16_t flags)
 	putchar(']');
 }
 
-static void dump_print_frame(const struct wire_frame *f)
+/* rx_ns: when the message arrived (the kernel's receive time on UDP), CLOCK_REALTIME */
+static void dump_print_frame(const struct wire_frame *f, int64_t rx_ns)
 {
 	const struct wire_header *h = &f->h;
 
 	printf("{\"type\":\"frame\",\"source\":%" PRIu32 ",\"avatar\":%u,\"seq\":%" PRIu32 ",\"t_ns\":%" PRIu64
-	       ",\"rev\":%" PRIu32 ",\"flags\":",
-	       h->source_id, h->avatar_id, h->seq, h->sample_time_ns, h->describe_rev);
+	       ",\"rx_ns\":%" PRId64 ",\"rev\":%" PRIu32 ",\"flags\":",
+	       h->source_id, h->avatar_id, h->seq, h->sample_time_ns, rx_ns, h->describe_rev);
 	dump_json_flags(h->flags);
 	fputs(",\"sensors\":[", stdout);
 	for (int i = 0; i < WIRE_SENSORS; i++) {
@@ -562,7 +563,7 @@ static void dump_message(struct dump *d, const uint8_t *buf, size_t len, int64_t
 		if (d->o.stats)
 			dump_stats_frame(d, &f, rx_ns);
 		else
-			dump_print_frame(&f);
+			dump_print_frame(&f, rx_ns);
 		break;
 	case WIRE_DESCRIBE:
 		ret = wire_decode_describe(buf, len, &desc);
@@ -933,7 +934,9 @@ static void dump_usage(FILE *f)
 		"usage: avatargw-dump [--udp [ADDR:]PORT [--interface IF] | --tcp HOST:PORT | --unix PATH]\n"
 		"                     [--count N] [--timeout SECONDS] [--stats] [--describe] [--avatar ID]\n"
 		"\n"
-		"Prints avatargw's messages (docs/PROTOCOL.md) as JSON lines.\n"
+		"Prints avatargw's messages (docs/PROTOCOL.md) as JSON lines; a frame's t_ns is its\n"
+		"sample time, rx_ns when it arrived (the kernel's receive time on UDP), both in\n"
+		"nanoseconds of CLOCK_REALTIME.\n"
 		"\n"
 		"  --udp [ADDR:]PORT   listen for datagrams (default 0.0.0.0:%d); a multicast ADDR joins\n"
 		"                      the group (239.255.77.70:7770, [ff15::7770]:7770)\n"

@@ -165,11 +165,21 @@ class DemoTest(unittest.TestCase):
         return [(t, m) for t, m in self.frames if m["type"] == kind]
 
     def test_rate(self):
+        """the frames leave one period apart, by the kernel's receive times (loopback delivers in
+        the sender's time, so neither this process nor the dump's scheduling shows); a cycle the
+        host took the CPU from is skipped, not made up (DAEMON.md), so the test looks at the
+        intervals, not at the count over the whole capture"""
         fr = self.only("frame")
         self.assertGreaterEqual(len(fr), 700)
-        dt = fr[-1][0] - fr[0][0]
-        rate = (len(fr) - 1) / dt
-        self.assertAlmostEqual(rate, 240, delta=240 * 0.05, msg="frame rate %.1f Hz" % rate)
+        rx = [m["rx_ns"] for _, m in fr]
+        iv = sorted(b - a for a, b in zip(rx, rx[1:]))
+        period = 1e9 / 240
+        rate = 1e9 / iv[len(iv) // 2]
+        self.assertAlmostEqual(rate, 240, delta=240 * 0.03, msg="frame rate %.1f Hz (median interval)" % rate)
+        on_time = sum(1 for x in iv if 0.5 * period < x < 1.5 * period)
+        self.assertGreater(on_time, 0.75 * len(iv), "%d of %d intervals within half a period of it" % (on_time, len(iv)))
+        # the whole capture: at most a quarter of its cycles skipped
+        self.assertGreater((len(rx) - 1) / ((rx[-1] - rx[0]) / 1e9), 0.75 * 240)
 
     def test_sequence_continuity(self):
         fr = [m for _, m in self.only("frame")]
