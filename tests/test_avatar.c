@@ -155,6 +155,7 @@ static void test_chest_from_head(void **state)
 
 	(void)state;
 	avatar_init(&av, &dims, &off, NULL);
+	av.body.model &= ~(unsigned)AVATAR_NECK; /* the paper's placement */
 	quat_from_axis_angle(&(struct vec3){ 0, 0, 1 }, 0.7, &yaw);
 	quat_from_axis_angle(&(struct vec3){ 1, 0, 0 }, -0.4, &pitch); /* looking down */
 	quat_mul(&yaw, &pitch, &r);
@@ -174,6 +175,84 @@ static void test_chest_from_head(void **state)
 	/* a NaN head: no chest, previous frame kept */
 	head.r.w = NAN;
 	assert_false(avatar_chest(&av, &head, &chest, &y));
+}
+
+/*
+ * AVATAR_NECK (the default): a head that nods or tilts turns its offset
+ * about the chest origin by half of its tilt, the chest keeps the head's
+ * yaw and stays upright; built independently here: the head pitched by a
+ * about the chest's x axis and rolled by b about its y axis, the offset by
+ * half of that tilt, taken as the least rotation from up to the head's
+ * halfway up axis (axis and angle from the cross and dot products).
+ */
+static void test_neck_bends(void **state)
+{
+	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.08 };
+	const struct vec3 off = { 0.01, 0.06, 0.24 }, up = { 0, 0, 1 };
+	const struct vec3 t = { -0.5, 1.5, 1.55 };
+	const double tilts[][2] = { { -0.6, 0 }, { 0.5, 0 }, { 0, 0.4 }, { -0.9, -0.3 }, { 0, 0 } };
+	struct avatar av;
+
+	(void)state;
+	avatar_init(&av, &dims, &off, NULL);
+	assert_true(av.body.model & AVATAR_NECK);
+	for (size_t i = 0; i < sizeof(tilts) / sizeof(tilts[0]); i++) {
+		struct quat yaw, pitch, roll, tilt, r, bend;
+		struct vec3 hu, hv, axis, bent, expect, co;
+		struct dq head, chest;
+		sc_t y, n;
+
+		quat_from_axis_angle(&(struct vec3){ 0, 0, 1 }, -1.1, &yaw);
+		quat_from_axis_angle(&(struct vec3){ 1, 0, 0 }, tilts[i][0], &pitch);
+		quat_from_axis_angle(&(struct vec3){ 0, 1, 0 }, tilts[i][1], &roll);
+		quat_mul(&pitch, &roll, &tilt);
+		quat_mul(&yaw, &tilt, &r);
+		dq_from_rt(&r, &t, &head);
+		assert_true(avatar_chest(&av, &head, &chest, &y));
+		/* the chest: the head's yaw, upright */
+		assert_true(fabs(y - avatar_head_yaw(&r)) < 1e-12);
+		assert_true(quat_angle_between(&chest.r, &(struct quat){ cos(y / 2), 0, 0, sin(y / 2) }) < 1e-12);
+		/* the head's up axis in the chest's (yawed) frame, and the halfway one */
+		{
+			struct quat ci = { chest.r.w, -chest.r.x, -chest.r.y, -chest.r.z }, rel;
+
+			quat_mul(&ci, &r, &rel);
+			quat_rotate(&rel, &up, &hu);
+		}
+		hv = (struct vec3){ hu.x, hu.y, hu.z + 1 };
+		n = v3_norm(&hv);
+		hv = (struct vec3){ hv.x / n, hv.y / n, hv.z / n };
+		v3_cross(&up, &hv, &axis);
+		n = v3_norm(&axis);
+		if (n > 1e-12) {
+			quat_from_axis_angle(&(struct vec3){ axis.x / n, axis.y / n, axis.z / n }, atan2(n, hv.z), &bend);
+			quat_rotate(&bend, &off, &bent);
+		} else {
+			bent = off;
+		}
+		quat_rotate(&chest.r, &bent, &expect);
+		dq_translation(&chest, &co);
+		assert_true(fabs(co.x - (t.x - expect.x)) < 1e-12);
+		assert_true(fabs(co.y - (t.y - expect.y)) < 1e-12);
+		assert_true(fabs(co.z - (t.z - expect.z)) < 1e-12);
+		/* a nod forward (negative pitch: looking down) leaves the chest behind the upright placement */
+		if (tilts[i][0] < 0 && tilts[i][1] == 0) {
+			struct vec3 upright, fwd;
+
+			quat_rotate(&chest.r, &off, &upright);
+			quat_rotate(&chest.r, &(struct vec3){ 0, 1, 0 }, &fwd);
+			assert_true((co.x - (t.x - upright.x)) * fwd.x + (co.y - (t.y - upright.y)) * fwd.y < -0.05);
+		}
+	}
+	/* upside down: no halfway axis, the offset unbent, still a chest */
+	{
+		struct dq head, chest;
+		sc_t y;
+
+		dq_from_rt(&(struct quat){ 0, 1, 0, 0 }, &t, &head);
+		assert_true(avatar_chest(&av, &head, &chest, &y));
+		assert_true(dq_is_finite(&chest));
+	}
 }
 
 /* a hand sensor lost (NaN): that arm keeps its posture, flagged; the other arm is solved */
@@ -548,6 +627,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_chest_from_head),
+		cmocka_unit_test(test_neck_bends),
 		cmocka_unit_test(test_lost_hand),
 		cmocka_unit_test(test_wave_clip),
 		cmocka_unit_test(test_hand_elbow),

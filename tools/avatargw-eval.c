@@ -423,7 +423,8 @@ static int parse_model(const char *s)
 		const char *name;
 		unsigned bit;
 	} names[] = { { "hand-elbow", AVATAR_HAND_ELBOW }, { "reach-first", AVATAR_REACH_FIRST },
-		      { "yaw-hands", AVATAR_YAW_HANDS }, { "reach-chest", AVATAR_REACH_CHEST } };
+		      { "yaw-hands", AVATAR_YAW_HANDS }, { "reach-chest", AVATAR_REACH_CHEST },
+		      { "neck", AVATAR_NECK } };
 	unsigned m = 0;
 
 	if (!strcmp(s, "paper"))
@@ -559,7 +560,7 @@ int main(int argc, char **argv)
 			model = parse_model(optarg);
 			if (model < 0) {
 				fprintf(stderr, "avatargw-eval: --model paper, default, or names joined by '+': "
-						"hand-elbow, reach-first, yaw-hands\n");
+						"hand-elbow, reach-first, yaw-hands, reach-chest, neck\n");
 				return 2;
 			}
 			break;

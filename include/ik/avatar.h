@@ -8,7 +8,8 @@
  * added to J1) and stays upright; its origin, the midpoint of the shoulder
  * line, lies at a fixed offset below the head sensor, expressed in that
  * yawed frame: origin = head - Rz(yaw) head_offset. The paper's offset is
- * (0, 0, Neck). Pitch and roll of the head do not move the chest.
+ * (0, 0, Neck). Pitch and roll of the head do not move the chest (in the
+ * paper; AVATAR_NECK below bends the offset).
  *
  * What avatargw adds to the paper (struct avatar_body.model, each measured
  * on motion capture in docs/FIDELITY.md):
@@ -33,6 +34,10 @@
  *  - AVATAR_REACH_CHEST: a hand sensor beyond the straight arm's reach
  *    moves the chest toward it, at most 8 cm (the trunk leans, the
  *    shoulder girdle protracts), before the arms are solved.
+ *  - AVATAR_NECK: the neck bends: head_offset turns about the chest origin
+ *    by half of the head's tilt (its pitch and roll, the rest of a nod being
+ *    the head's own joint), so a nod or a bow leaves the chest behind
+ *    instead of carrying it forward and down with the head.
  */
 #ifndef IK_AVATAR_H
 #define IK_AVATAR_H
@@ -49,7 +54,8 @@ extern "C" {
 #define AVATAR_REACH_FIRST 0x2
 #define AVATAR_YAW_HANDS 0x4
 #define AVATAR_REACH_CHEST 0x8
-#define AVATAR_MODEL_DEFAULT (AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST)
+#define AVATAR_NECK 0x10
+#define AVATAR_MODEL_DEFAULT (AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_NECK)
 
 struct avatar_body {
 	struct arm_dims dims;     /* the right arm (and the left one unless avatar_set_left_arm() says otherwise) */

@@ -89,6 +89,43 @@ static sc_t hands_heading(const struct dq *lhand, const struct dq *rhand, sc_t c
 }
 
 /*
+ * AVATAR_NECK: the head sensor's offset from the chest, bent by half of the
+ * head's tilt. A nod or a bow is shared between the joint of the head on the
+ * neck and the neck itself; the neck's share turns the offset about the
+ * chest origin. u is the head's up axis in the chest frame (yawed, upright),
+ * v the unit vector halfway between the chest's up axis ez and u, and the
+ * offset turns by the least rotation from ez to v, half the angle from ez to
+ * u: R x = x + c x x + c x (c x x) / (1 + v.z), c = ez x v (no angle
+ * computed; 1 + v.z >= 1 while the head is less than upside down). A head
+ * upside down (u = -ez) has no halfway vector: the offset stays unbent.
+ */
+static void neck_offset(const struct vec3 *off, const struct quat *yaw, const struct quat *head, struct vec3 *out)
+{
+	const struct quat yc = { yaw->w, -yaw->x, -yaw->y, -yaw->z };
+	const struct vec3 ez = { 0, 0, SC_C(1) };
+	struct quat rel;
+	struct vec3 u, v, c, cx, ccx;
+	sc_t n, k;
+
+	quat_mul(&yc, head, &rel);
+	quat_rotate(&rel, &ez, &u);
+	v = (struct vec3){ u.x, u.y, u.z + SC_C(1) };
+	n = v3_norm(&v);
+	if (!(n > SC_C(1e-3))) {
+		*out = *off;
+		return;
+	}
+	k = sc_div(SC_C(1), n);
+	v = (struct vec3){ sc_mul(v.x, k), sc_mul(v.y, k), sc_mul(v.z, k) };
+	c = (struct vec3){ -v.y, v.x, 0 };
+	v3_cross(&c, off, &cx);
+	v3_cross(&c, &cx, &ccx);
+	k = sc_div(SC_C(1), SC_C(1) + v.z);
+	*out = (struct vec3){ off->x + cx.x + sc_mul(ccx.x, k), off->y + cx.y + sc_mul(ccx.y, k),
+			      off->z + cx.z + sc_mul(ccx.z, k) };
+}
+
+/*
  * The chest's heading without an angle until the last: the head's twist
  * about z, (w, z) normalised, is the half-angle rotation itself; the hands'
  * heading is averaged in as unit vectors, and the mean's half-angle
@@ -97,8 +134,8 @@ static sc_t hands_heading(const struct dq *lhand, const struct dq *rhand, sc_t c
 bool avatar_chest_hands(const struct avatar *av, const struct dq *head, const struct dq *lhand, const struct dq *rhand,
 			struct dq *chest, sc_t *yaw)
 {
-	struct quat r;
-	struct vec3 hp, off, o;
+	struct quat r, hr;
+	struct vec3 hp, off, o, bent;
 	sc_t w, z, n, cy, sy, hx = 0, hy = 0, wt;
 
 	if (!dq_is_finite(head) || !quat_normalize(&head->r, &r)) {
@@ -106,6 +143,7 @@ bool avatar_chest_hands(const struct avatar *av, const struct dq *head, const st
 		*yaw = 0;
 		return false;
 	}
+	hr = r;
 	w = r.w;
 	z = r.z;
 	if (w < 0) {
@@ -145,7 +183,12 @@ bool avatar_chest_hands(const struct avatar *av, const struct dq *head, const st
 	*yaw = 2 * sc_atan2(z, w);
 	r = (struct quat){ w, 0, 0, z };
 	dq_translation(head, &hp);
-	quat_rotate(&r, &av->body.head_offset, &off);
+	if (av->body.model & AVATAR_NECK) {
+		neck_offset(&av->body.head_offset, &r, &hr, &bent);
+		quat_rotate(&r, &bent, &off);
+	} else {
+		quat_rotate(&r, &av->body.head_offset, &off);
+	}
 	o = (struct vec3){ hp.x - off.x, hp.y - off.y, hp.z - off.z };
 	dq_from_rt(&r, &o, chest);
 	return true;
