@@ -214,8 +214,9 @@ static void test_neck_bends(void **state)
 		assert_true(quat_angle_between(&chest.r, &(struct quat){ cos(y / 2), 0, 0, sin(y / 2) }) < 1e-12);
 		/* the head's up axis in the chest's (yawed) frame, and the halfway one */
 		{
-			struct quat ci = { chest.r.w, -chest.r.x, -chest.r.y, -chest.r.z }, rel;
+			struct quat ci, rel;
 
+			quat_conj(&chest.r, &ci);
 			quat_mul(&ci, &r, &rel);
 			quat_rotate(&rel, &up, &hu);
 		}

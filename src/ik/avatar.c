@@ -101,12 +101,12 @@ static sc_t hands_heading(const struct dq *lhand, const struct dq *rhand, sc_t c
  */
 static void neck_offset(const struct vec3 *off, const struct quat *yaw, const struct quat *head, struct vec3 *out)
 {
-	const struct quat yc = { yaw->w, -yaw->x, -yaw->y, -yaw->z };
 	const struct vec3 ez = { 0, 0, SC_C(1) };
-	struct quat rel;
+	struct quat yc, rel;
 	struct vec3 u, v, c, cx, ccx;
 	sc_t n, k;
 
+	quat_conj(yaw, &yc);
 	quat_mul(&yc, head, &rel);
 	quat_rotate(&rel, &ez, &u);
 	v = (struct vec3){ u.x, u.y, u.z + SC_C(1) };
