@@ -256,6 +256,67 @@ static void test_neck_bends(void **state)
 	}
 }
 
+/*
+ * A bow at the waist: the trunk pitched 75 degrees forward, the arms along
+ * it, the head (on its sensor) upright. From an upright chest the hands are
+ * past the shoulder's extension limit; AVATAR_BOW finds the bow, puts both
+ * hands on their sensors and the chest where it was.
+ */
+static void test_bow(void **state)
+{
+	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.08 };
+	const struct vec3 off = { 0, 0, 0.25 }, hp = { 0.3, -0.2, 1.6 };
+	const double pitch = 75 * M_PI / 180;
+	/* each arm in the bowed chest's frame: along the trunk, a little out, the elbow a little bent */
+	const sc_t q[ARM_DOF] = { 0, -0.15, 0, 0, -1.35, 0, 0, 0 };
+	struct avatar av;
+	struct ik_opts o;
+	struct avatar_pose p;
+	struct quat yaw, bowq, cr;
+	struct vec3 d, co, cz;
+	struct dq head, chest, hand[2];
+
+	(void)state;
+	avatar_init(&av, &dims, &off, NULL);
+	assert_true(av.body.model & AVATAR_BOW);
+	ik_default_opts(&o);
+	quat_from_axis_angle(&(struct vec3){ 0, 0, 1 }, 0.7, &yaw);
+	quat_from_axis_angle(&(struct vec3){ 1, 0, 0 }, -pitch, &bowq);
+	quat_mul(&yaw, &bowq, &cr);
+	/* the head upright on its sensor, the chest hanging from it by the whole offset, turned with the trunk */
+	dq_from_rt(&yaw, &hp, &head);
+	quat_rotate(&cr, &off, &d);
+	dq_from_rt(&cr, &(struct vec3){ hp.x - d.x, hp.y - d.y, hp.z - d.z }, &chest);
+	for (int side = 0; side < 2; side++) {
+		struct dq ee;
+
+		arm_fk(&av.arm[side], q, &ee);
+		dq_mul(&chest, &ee, &hand[side]);
+	}
+	/* without the bow the upright chest leaves the hands off their sensors */
+	av.body.model = AVATAR_MODEL_DEFAULT & ~(unsigned)AVATAR_BOW;
+	avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
+	assert_true(p.res[ARM_RIGHT].err.pos > 0.02 && p.res[ARM_LEFT].err.pos > 0.02);
+	/* with it: both on, the chest pitched as it was, where it was */
+	av.body.model = AVATAR_MODEL_DEFAULT;
+	avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
+	assert_true(p.res[ARM_RIGHT].err.pos < 1e-3 && p.res[ARM_LEFT].err.pos < 1e-3);
+	quat_rotate(&p.chest.r, &(struct vec3){ 0, 0, 1 }, &cz);
+	assert_true(fabs(acos(cz.z) - pitch) < 1e-6);
+	assert_true(quat_angle_between(&p.chest.r, &cr) < 1e-6);
+	dq_translation(&p.chest, &co);
+	dq_translation(&chest, &d);
+	assert_true(fabs(co.x - d.x) < 1e-9 && fabs(co.y - d.y) < 1e-9 && fabs(co.z - d.z) < 1e-9);
+	/* and a frame later, tracked from it, still there */
+	{
+		struct avatar_pose p2;
+
+		avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], &p, &p2);
+		assert_true(p2.res[ARM_RIGHT].err.pos < 1e-3 && p2.res[ARM_LEFT].err.pos < 1e-3);
+		assert_true(quat_angle_between(&p2.chest.r, &cr) < 1e-6);
+	}
+}
+
 /* a hand sensor lost (NaN): that arm keeps its posture, flagged; the other arm is solved */
 static void test_lost_hand(void **state)
 {
@@ -629,6 +690,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_chest_from_head),
 		cmocka_unit_test(test_neck_bends),
+		cmocka_unit_test(test_bow),
 		cmocka_unit_test(test_lost_hand),
 		cmocka_unit_test(test_wave_clip),
 		cmocka_unit_test(test_hand_elbow),

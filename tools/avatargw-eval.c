@@ -424,7 +424,7 @@ static int parse_model(const char *s)
 		unsigned bit;
 	} names[] = { { "hand-elbow", AVATAR_HAND_ELBOW }, { "reach-first", AVATAR_REACH_FIRST },
 		      { "yaw-hands", AVATAR_YAW_HANDS }, { "reach-chest", AVATAR_REACH_CHEST },
-		      { "neck", AVATAR_NECK } };
+		      { "neck", AVATAR_NECK }, { "bow", AVATAR_BOW } };
 	unsigned m = 0;
 
 	if (!strcmp(s, "paper"))

@@ -55,7 +55,9 @@ extern "C" {
 #define AVATAR_YAW_HANDS 0x4
 #define AVATAR_REACH_CHEST 0x8
 #define AVATAR_NECK 0x10
-#define AVATAR_MODEL_DEFAULT (AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_NECK)
+#define AVATAR_BOW 0x20
+#define AVATAR_MODEL_DEFAULT \
+	(AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_NECK | AVATAR_BOW)
 
 struct avatar_body {
 	struct arm_dims dims;     /* the right arm (and the left one unless avatar_set_left_arm() says otherwise) */

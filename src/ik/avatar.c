@@ -821,12 +821,31 @@ static bool wrist_in_reach(const struct arm *a, const struct ik_target *t)
 	return v3_norm(&d) < reach - SC_C(0.001);
 }
 
+/* the chest moved by d (chest frame, capped at REACH_SHIFT), both arms' targets rewritten */
+static void chest_shift(struct vec3 d, const struct dq *const hand[2], struct dq *chest, struct ik_target t[2])
+{
+	struct vec3 dw, c;
+	struct quat r = chest->r;
+	sc_t n = v3_norm(&d);
+	int side;
+
+	if (n > REACH_SHIFT) {
+		sc_t k = sc_div(REACH_SHIFT, n);
+
+		d = (struct vec3){ sc_mul(d.x, k), sc_mul(d.y, k), sc_mul(d.z, k) };
+	}
+	quat_rotate(&r, &d, &dw);
+	dq_translation(chest, &c);
+	c = (struct vec3){ c.x + dw.x, c.y + dw.y, c.z + dw.z };
+	dq_from_rt(&r, &c, chest);
+	for (side = 0; side < 2; side++)
+		avatar_arm_target(chest, hand[side], &t[side]);
+}
+
 static bool reach_chest(const struct avatar *av, const struct dq *const hand[2], struct dq *chest,
 			struct ik_target t[2])
 {
-	struct vec3 d = { 0, 0, 0 }, dw, c;
-	struct quat r;
-	sc_t n;
+	struct vec3 d = { 0, 0, 0 };
 	int side;
 
 	for (side = 0; side < 2; side++) {
@@ -847,22 +866,152 @@ static bool reach_chest(const struct avatar *av, const struct dq *const hand[2],
 		d.y += sc_mul(excess, g.ax.y);
 		d.z += sc_mul(excess, g.ax.z);
 	}
-	n = v3_norm(&d);
-	if (!(n > 0))
+	if (!(v3_norm(&d) > 0))
 		return false;
-	if (n > REACH_SHIFT) {
-		sc_t k = sc_div(REACH_SHIFT, n);
-
-		d = (struct vec3){ sc_mul(d.x, k), sc_mul(d.y, k), sc_mul(d.z, k) };
-	}
-	r = chest->r;
-	quat_rotate(&r, &d, &dw);
-	dq_translation(chest, &c);
-	c = (struct vec3){ c.x + dw.x, c.y + dw.y, c.z + dw.z };
-	dq_from_rt(&r, &c, chest);
-	for (side = 0; side < 2; side++)
-		avatar_arm_target(chest, hand[side], &t[side]);
+	chest_shift(d, hand, chest, t);
 	return true;
+}
+
+/*
+ * AVATAR_BOW: a hand the upright chest leaves off its sensor (a joint
+ * limit in the way, after AVATAR_REACH_CHEST has mended the arm's length)
+ * may be a bow at the waist: the trunk pitched forward carries the shoulders
+ * and sweeps the arms back along it, while the head, on its sensor, stays
+ * up. The chest is tried pitched forward by 15, 30 ... 75 degrees about
+ * its x axis, turning with the neck and head about the head sensor
+ * (origin = head - Rz Rx(pitch) B head_offset, B the neck's bend as
+ * upright), both arms solved at each; the bow kept is the one with both
+ * hands on their sensors whose upper arms lie nearest along the trunk (the
+ * posture a bow explains; the least bow that reaches them leaves the arms
+ * at their limits, behind an upright trunk), the upright chest if none
+ * does better. Costs up to BOW_TRIES times both arms' solves, in the frames
+ * it runs.
+ */
+#define BOW_TRIES 5
+/* the half angles of 15, 30, 45, 60, 75 degrees: Rx(-pitch) = (cos, -sin, 0, 0) */
+static const sc_t bow_c[BOW_TRIES] = { SC_C(0.9914448613738104), SC_C(0.9659258262890683), SC_C(0.9238795325112867),
+				       SC_C(0.8660254037844387), SC_C(0.7933533402912352) };
+static const sc_t bow_s[BOW_TRIES] = { SC_C(0.13052619222005157), SC_C(0.25881904510252074),
+				       SC_C(0.3826834323650898), SC_C(0.5), SC_C(0.6087614290087207) };
+
+static bool hand_off(const struct ik_opts *o, const struct ik_target t[2], const struct avatar_pose *p, int side)
+{
+	return t[side].valid && p->res[side].err.pos > o->tol_pos;
+}
+
+/* how far a pose's upper arms are from lying along the trunk (0: both straight down the chest's -z), 100 a hand off */
+static sc_t bow_cost(const struct ik_opts *o, const struct ik_target t[2], const struct avatar_pose *p)
+{
+	sc_t cost = 0;
+	int side;
+
+	for (side = 0; side < 2; side++) {
+		const struct arm_pose *sg = &p->seg[side];
+		struct vec3 ua = { sg->elbow.x - sg->shoulder.x, sg->elbow.y - sg->shoulder.y, sg->elbow.z - sg->shoulder.z };
+		sc_t n = v3_norm(&ua);
+
+		if (n > 0)
+			cost += SC_C(1) + sc_div(ua.z, n);
+		if (hand_off(o, t, p, side))
+			cost += SC_C(100);
+	}
+	return cost;
+}
+
+/* a chest pitched (or rolled) by more than half the least bow: its z axis's z below cos 7.5 degrees */
+static bool bowed(const struct dq *chest)
+{
+	const struct quat *r = &chest->r;
+
+	return 2 * (sc_mul(r->x, r->x) + sc_mul(r->y, r->y)) > SC_C(0.008555139301011035);
+}
+
+/* the chest `up` (upright) pitched forward by bow k about the head sensor */
+static void bowed_chest(const struct avatar *av, const struct dq *head, const struct dq *up, int k, struct dq *chest)
+{
+	const struct quat px = { bow_c[k], -bow_s[k], 0, 0 };
+	struct quat hr, rb;
+	struct vec3 hp, bent, off, o;
+
+	quat_mul(&up->r, &px, &rb);
+	dq_translation(head, &hp);
+	if ((av->body.model & AVATAR_NECK) && quat_normalize(&head->r, &hr)) {
+		neck_offset(&av->body.head_offset, &up->r, &hr, &bent);
+		quat_rotate(&rb, &bent, &off);
+	} else {
+		quat_rotate(&rb, &av->body.head_offset, &off);
+	}
+	o = (struct vec3){ hp.x - off.x, hp.y - off.y, hp.z - off.z };
+	dq_from_rt(&rb, &o, chest);
+}
+
+/* the bow_cost of the shoulder-wrist lines alone, before any solve: which bows to try first */
+static sc_t bow_line_cost(const struct avatar *av, const struct ik_target t[2])
+{
+	sc_t cost = 0;
+	int side;
+
+	for (side = 0; side < 2; side++) {
+		sc_t sx = side == ARM_LEFT ? -av->arm[side].dims.shoulder : av->arm[side].dims.shoulder;
+		struct vec3 l = { t[side].p.x - sx, t[side].p.y, t[side].p.z };
+		sc_t n = v3_norm(&l);
+
+		if (t[side].valid && n > 0)
+			cost += SC_C(1) + sc_div(l.z, n);
+	}
+	return cost;
+}
+
+static unsigned bow(const struct avatar *av, const struct ik_kin *kin, const struct ik_opts *o, const struct dq *head,
+		    const struct dq *const hand[2], const struct avatar_pose *prev, struct avatar_pose *out,
+		    unsigned flags)
+{
+	struct avatar_pose tmp;
+	struct ik_target t[2];
+	struct ik_opts short_o = *o;
+	struct dq chest[BOW_TRIES];
+	sc_t line[BOW_TRIES], best;
+	const struct dq up = out->chest;
+	int k, n, side;
+
+	/* each bow's solve as short as tracking a target out of reach */
+	if (short_o.max_evals > TRACK_EVALS)
+		short_o.max_evals = TRACK_EVALS;
+	for (side = 0; side < 2; side++)
+		avatar_arm_target(&up, hand[side], &t[side]);
+	best = bow_cost(o, t, out);
+	for (k = 0; k < BOW_TRIES; k++) {
+		bowed_chest(av, head, &up, k, &chest[k]);
+		for (side = 0; side < 2; side++)
+			avatar_arm_target(&chest[k], hand[side], &t[side]);
+		line[k] = bow_line_cost(av, t);
+	}
+	/* the bows in the order of their lines; the first that puts both hands on is kept */
+	for (n = 0; n < BOW_TRIES; n++) {
+		unsigned f = 0;
+		sc_t cost;
+		int kb = -1;
+
+		for (k = 0; k < BOW_TRIES; k++)
+			if (line[k] >= 0 && (kb < 0 || line[k] < line[kb]))
+				kb = k;
+		line[kb] = SC_C(-1);
+		tmp.chest = chest[kb];
+		tmp.head_yaw = out->head_yaw;
+		for (side = 0; side < 2; side++) {
+			avatar_arm_target(&tmp.chest, hand[side], &t[side]);
+			f |= avatar_arm_solve(av, side, kin, &short_o, &t[side], prev, &tmp);
+		}
+		cost = bow_cost(o, t, &tmp);
+		if (cost < best) {
+			best = cost;
+			*out = tmp;
+			flags = f;
+		}
+		if (!hand_off(o, t, &tmp, 0) && !hand_off(o, t, &tmp, 1))
+			break;
+	}
+	return flags;
 }
 
 unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const struct ik_opts *o,
@@ -870,6 +1019,8 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 		      const struct avatar_pose *prev, struct avatar_pose *out)
 {
 	const struct dq *hand[2] = { rhand, lhand };
+	const struct ik_opts *o1 = o;
+	struct ik_opts short_o;
 	struct ik_target t[2];
 	unsigned flags = 0;
 	int side;
@@ -898,7 +1049,15 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 		avatar_arm_target(&out->chest, hand[side], &t[side]);
 	if (av->body.model & AVATAR_REACH_CHEST)
 		reach_chest(av, hand, &out->chest, t);
+	if ((av->body.model & AVATAR_BOW) && prev && bowed(&prev->chest) && o->max_evals > TRACK_EVALS) {
+		/* out of a bow the upright chest is likely still short: its search as short as the bow's */
+		short_o = *o;
+		short_o.max_evals = TRACK_EVALS;
+		o1 = &short_o;
+	}
 	for (side = 0; side < 2; side++)
-		flags |= avatar_arm_solve(av, side, kin, o, &t[side], prev, out);
+		flags |= avatar_arm_solve(av, side, kin, o1, &t[side], prev, out);
+	if ((av->body.model & AVATAR_BOW) && (hand_off(o, t, out, 0) || hand_off(o, t, out, 1)))
+		flags = bow(av, kin, o, head, hand, prev, out, flags);
 	return flags;
 }
