@@ -117,6 +117,8 @@ static void test_wave_clip(void **state)
 		pose_dq(frames[i].rhand, &hand[ARM_RIGHT]);
 		pose_dq(frames[i].lhand, &hand[ARM_LEFT]);
 		avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], prev, cur);
+		/* the person stands and waves: never a bow, the chest upright */
+		assert_true(fabs(cur->chest.r.x) < 1e-12 && fabs(cur->chest.r.y) < 1e-12);
 		for (int side = 0; side < 2; side++) {
 			struct dq fk, world;
 			struct vec3 p, s;
@@ -315,6 +317,16 @@ static void test_bow(void **state)
 		assert_true(p2.res[ARM_RIGHT].err.pos < 1e-3 && p2.res[ARM_LEFT].err.pos < 1e-3);
 		assert_true(quat_angle_between(&p2.chest.r, &cr) < 1e-6);
 	}
+	/* hands overhead beyond reach: no bow brings them nearer, the chest stays upright */
+	for (int side = 0; side < 2; side++) {
+		struct quat id = { 1, 0, 0, 0 };
+
+		dq_from_rt(&id, &(struct vec3){ hp.x + (side == ARM_RIGHT ? 0.2 : -0.2), hp.y, hp.z + 0.9 }, &hand[side]);
+	}
+	avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
+	assert_true(p.res[ARM_RIGHT].err.pos > 0.05 && p.res[ARM_LEFT].err.pos > 0.05);
+	quat_rotate(&p.chest.r, &(struct vec3){ 0, 0, 1 }, &cz);
+	assert_true(cz.z > 1 - 1e-9);
 }
 
 /* a hand sensor lost (NaN): that arm keeps its posture, flagged; the other arm is solved */

@@ -38,6 +38,12 @@
  *    by half of the head's tilt (its pitch and roll, the rest of a nod being
  *    the head's own joint), so a nod or a bow leaves the chest behind
  *    instead of carrying it forward and down with the head.
+ *  - AVATAR_BOW: a hand the upright chest still leaves off its sensor (a
+ *    joint limit in the way) tries the chest bowed forward at the waist, 15
+ *    to 75 degrees about its x axis, turned with the neck and head about the
+ *    head sensor; the bow that lays the arms nearest along the trunk and
+ *    reaches both hands is kept. The chest is then no longer upright; its
+ *    yaw (the twist about world z) is still the published chest_yaw.
  */
 #ifndef IK_AVATAR_H
 #define IK_AVATAR_H

@@ -880,12 +880,14 @@ static bool reach_chest(const struct avatar *av, const struct dq *const hand[2],
  * up. The chest is tried pitched forward by 15, 30 ... 75 degrees about
  * its x axis, turning with the neck and head about the head sensor
  * (origin = head - Rz Rx(pitch) B head_offset, B the neck's bend as
- * upright), both arms solved at each; the bow kept is the one with both
- * hands on their sensors whose upper arms lie nearest along the trunk (the
- * posture a bow explains; the least bow that reaches them leaves the arms
- * at their limits, behind an upright trunk), the upright chest if none
- * does better. Costs up to BOW_TRIES times both arms' solves, in the frames
- * it runs.
+ * upright), both arms solved at each, in the order of how nearly each bow
+ * lays the shoulder-wrist lines along the trunk (the posture a bow
+ * explains; the least bow that reaches the hands leaves the arms at their
+ * limits, behind an upright trunk). The first that puts both hands on
+ * their sensors is kept; else the one that puts the most on, its upper
+ * arms nearest along the trunk; none if none puts more on than the
+ * upright chest.
+ * Costs up to BOW_TRIES times both arms' solves, in the frames it runs.
  */
 #define BOW_TRIES 5
 /* the half angles of 15, 30, 45, 60, 75 degrees: Rx(-pitch) = (cos, -sin, 0, 0) */
@@ -977,9 +979,12 @@ static unsigned bow(const struct avatar *av, const struct ik_kin *kin, const str
 	/* each bow's solve as short as tracking a target out of reach */
 	if (short_o.max_evals > TRACK_EVALS)
 		short_o.max_evals = TRACK_EVALS;
+	/* a bow is kept only if it puts more hands on their sensors than the upright chest */
 	for (side = 0; side < 2; side++)
 		avatar_arm_target(&up, hand[side], &t[side]);
-	best = bow_cost(o, t, out);
+	best = hand_off(o, t, out, 0) ? SC_C(100) : 0;
+	if (hand_off(o, t, out, 1))
+		best += SC_C(100);
 	for (k = 0; k < BOW_TRIES; k++) {
 		bowed_chest(av, head, &up, k, &chest[k]);
 		for (side = 0; side < 2; side++)

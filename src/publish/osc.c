@@ -175,8 +175,8 @@ struct body {
 static bool body_of(const struct wire_frame *f, double torso, struct body *b)
 {
 	const double h = M_PI / 2;
-	struct v3 p[B_COUNT], c;
-	struct qd q[B_COUNT], qc;
+	struct v3 p[B_COUNT], c, zc;
+	struct qd q[B_COUNT], qc, qy;
 	/* the segment, then the correction that makes the T-pose the identity */
 	static const struct {
 		int bone, seg;
@@ -196,12 +196,24 @@ static bool body_of(const struct wire_frame *f, double torso, struct body *b)
 		return false;
 	c = pose_p(&f->segment[WIRE_SEG_CHEST]);
 	qc = pose_q(&f->segment[WIRE_SEG_CHEST]);
-	/* the trunk: hips below the chest, the spine bones evenly between, all turned by the chest's yaw */
+	{
+		/* the chest's heading alone (its twist about z): a bow leaves the hips upright */
+		double n = sqrt(qc.w * qc.w + qc.z * qc.z);
+
+		qy = n > 1e-9 ? (struct qd){ qc.w / n, 0, 0, qc.z / n } : (struct qd){ 1, 0, 0, 0 };
+	}
+	/*
+	 * The trunk: the hips a torso down the chest's own axis (below it when
+	 * upright, behind it in a bow), upright and turned by the chest's yaw;
+	 * the spine bones evenly between, turned as the chest.
+	 */
+	zc = q_rot(qc, (struct v3){ 0, 0, 1 });
 	for (int k = B_HIPS; k <= B_NECK; k++) {
 		double frac = (double)(k - B_HIPS) / (B_NECK - B_HIPS);
 
-		p[k] = (struct v3){ c.x, c.y, c.z - torso * (1 - frac) };
-		q[k] = qc;
+		p[k] = (struct v3){ c.x - torso * (1 - frac) * zc.x, c.y - torso * (1 - frac) * zc.y,
+				    c.z - torso * (1 - frac) * zc.z };
+		q[k] = k == B_HIPS ? qy : qc;
 	}
 	if (pose_ok(&f->segment[WIRE_SEG_HEAD])) {
 		p[B_HEAD] = pose_p(&f->segment[WIRE_SEG_HEAD]);
@@ -218,9 +230,9 @@ static bool body_of(const struct wire_frame *f, double torso, struct body *b)
 		p[arm[i].bone] = pose_p(&f->segment[arm[i].seg]);
 		q[arm[i].bone] = q_mul(pose_q(&f->segment[arm[i].seg]), q_axis(arm[i].ax, arm[i].ay, arm[i].az, arm[i].angle * h));
 	}
-	/* the root stands on the floor (z = 0) under the chest, facing its way */
-	b->root_p = unity_p((struct v3){ c.x, c.y, 0 });
-	b->root_q = unity_q(qc);
+	/* the root stands on the floor (z = 0) under the hips, facing the chest's way */
+	b->root_p = unity_p((struct v3){ p[B_HIPS].x, p[B_HIPS].y, 0 });
+	b->root_q = unity_q(qy);
 	for (int k = 0; k < B_COUNT; k++) {
 		b->p[k] = unity_p(p[k]);
 		b->q[k] = unity_q(q[k]);

@@ -318,14 +318,28 @@ void check_frame(const options &o, const wire_describe &desc, const wire_frame &
 	glm::mat4 chest = to_mat4(chest_pose);
 
 	/*
-	 * The chest itself: upright, turned by chest_yaw about the DESCRIBE's
-	 * axis (world z). Its position comes from the head sensor, not from a
-	 * joint, so only its rotation is really checked.
+	 * The chest itself: turned by chest_yaw about the DESCRIBE's axis (world
+	 * z), and pitched forward when the person bows (no joint carries the
+	 * bow in version 1: it is the rest of the segment's rotation, its swing
+	 * away from the axis). So the rebuilt chest is the published one with
+	 * its twist about the axis replaced by chest_yaw: what is compared is
+	 * the heading. Its position comes from the head sensor, not from a joint.
 	 */
 	if (std::isfinite(f.joint[0])) {
-		glm::quat yaw = glm::angleAxis(f.joint[0], glm::normalize(to_vec3(desc.joint[0].axis)));
+		glm::vec3 axis = glm::normalize(to_vec3(desc.joint[0].axis));
+		glm::quat yaw = glm::angleAxis(f.joint[0], axis);
+		glm::quat q = glm::quat_cast(glm::mat3(chest));
+		glm::vec3 along = glm::dot(glm::vec3(q.x, q.y, q.z), axis) * axis;
+		glm::quat twist(q.w, along.x, along.y, along.z);
 
-		bone[WIRE_SEG_CHEST] = glm::translate(glm::mat4(1.0f), to_vec3(chest_pose.p)) * glm::mat4_cast(yaw);
+		if (glm::length(twist) > 1e-6f)
+			twist = glm::normalize(twist);
+		else
+			twist = glm::quat(1.0f, 0.0f, 0.0f, 0.0f); /* upside down: no heading */
+		glm::quat swing = q * glm::inverse(twist);
+
+		bone[WIRE_SEG_CHEST] =
+			glm::translate(glm::mat4(1.0f), to_vec3(chest_pose.p)) * glm::mat4_cast(swing * yaw);
 		have[WIRE_SEG_CHEST] = true;
 	}
 	for (int first : { 1, 9 }) {
