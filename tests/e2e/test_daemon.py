@@ -108,6 +108,24 @@ def dump(args, count, timeout=10):
     return out
 
 
+def assert_frame_rate(tc, frames, rate):
+    """the frames leave one period apart, by the kernel's receive times (loopback delivers in the
+    sender's time, so neither this process nor the dump's scheduling shows); a cycle the host took
+    the CPU from is skipped, not made up (DAEMON.md), so the intervals are judged, not the count
+    over the whole capture"""
+    rx = [m["rx_ns"] for m in frames]
+    iv = sorted(b - a for a, b in zip(rx, rx[1:]))
+    period = 1e9 / rate
+    got = 1e9 / iv[len(iv) // 2]
+    tc.assertAlmostEqual(got, rate, delta=rate * 0.03, msg="frame rate %.1f Hz (median interval)" % got)
+    on_time = sum(1 for x in iv if 0.5 * period < x < 1.5 * period)
+    tc.assertGreater(on_time, 0.75 * len(iv), "%d of %d intervals within half a period of it" % (on_time, len(iv)))
+    # the whole capture: at most a quarter of its cycles skipped, and none made up
+    overall = (len(rx) - 1) / ((rx[-1] - rx[0]) / 1e9)
+    tc.assertGreater(overall, 0.75 * rate)
+    tc.assertLess(overall, 1.03 * rate)
+
+
 def load_clip():
     rows = []
     with open(CLIP) as f:
@@ -165,21 +183,10 @@ class DemoTest(unittest.TestCase):
         return [(t, m) for t, m in self.frames if m["type"] == kind]
 
     def test_rate(self):
-        """the frames leave one period apart, by the kernel's receive times (loopback delivers in
-        the sender's time, so neither this process nor the dump's scheduling shows); a cycle the
-        host took the CPU from is skipped, not made up (DAEMON.md), so the test looks at the
-        intervals, not at the count over the whole capture"""
+        """240 frames a second (assert_frame_rate)"""
         fr = self.only("frame")
         self.assertGreaterEqual(len(fr), 700)
-        rx = [m["rx_ns"] for _, m in fr]
-        iv = sorted(b - a for a, b in zip(rx, rx[1:]))
-        period = 1e9 / 240
-        rate = 1e9 / iv[len(iv) // 2]
-        self.assertAlmostEqual(rate, 240, delta=240 * 0.03, msg="frame rate %.1f Hz (median interval)" % rate)
-        on_time = sum(1 for x in iv if 0.5 * period < x < 1.5 * period)
-        self.assertGreater(on_time, 0.75 * len(iv), "%d of %d intervals within half a period of it" % (on_time, len(iv)))
-        # the whole capture: at most a quarter of its cycles skipped
-        self.assertGreater((len(rx) - 1) / ((rx[-1] - rx[0]) / 1e9), 0.75 * 240)
+        assert_frame_rate(self, [m for _, m in fr], 240)
 
     def test_sequence_continuity(self):
         fr = [m for _, m in self.only("frame")]
@@ -541,10 +548,14 @@ class BusyWaitTest(unittest.TestCase):
                 fr = [m for _, m in dump(["--udp", "127.0.0.1:%d" % port], 300)]
                 c1, st1, w1 = cpu_s(), d.status(), time.monotonic()
                 self.assertEqual(len(fr), 300)
+                # the cycles come at the rate (a cycle a stalled host took is skipped: assert_frame_rate)
+                assert_frame_rate(self, [m for m in fr if m["type"] == "frame"], 200)
                 cycles = st1["loop"]["cycles"] - st0["loop"]["cycles"]
                 dt = st1["uptime_s"] - st0["uptime_s"]
-                self.assertAlmostEqual(cycles / dt, 200, delta=20)
-                self.assertGreater(c1 - c0, 0.5 * (w1 - w0), "the loop slept: %.2f s of CPU in %.2f s"
+                self.assertLess(cycles / dt, 1.03 * 200, "cycles made up")
+                # a sleeping loop at this rate takes a few per cent of a CPU; a spinning one all the
+                # host gives it (a third is allowed for a host that takes the vCPU away for a while)
+                self.assertGreater(c1 - c0, 0.3 * (w1 - w0), "the loop slept: %.2f s of CPU in %.2f s"
                                    % (c1 - c0, w1 - w0))
                 t0 = time.monotonic()
                 d.proc.send_signal(signal.SIGTERM)
