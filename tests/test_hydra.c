@@ -363,6 +363,17 @@ static void test_jump_restart(void **state)
 	assert_int_equal(feed(&k, r, 52, &g), 2);
 	pose_of(&g.s[0], p, q);
 	assert_float_equal(p[0], -3.0, 1e-9);
+	/* the 25 rejected reports came in sequence: received (malformed), not lost as well */
+	assert_int_equal(k.c->malformed, 25);
+	assert_int_equal(k.c->lost, 0);
+	/* one rejected in line, then one lost, then a good one: 1 malformed, 1 lost */
+	simple_report(r, seq++, -3000, 100, -80, 2000, 120, -60);
+	assert_true(feed(&k, r, 52, &g) < 0);
+	seq++;
+	simple_report(r, seq++, -3000, 101, -80, 200, 121, -60);
+	assert_int_equal(feed(&k, r, 52, &g), 2);
+	assert_int_equal(k.c->malformed, 26);
+	assert_int_equal(k.c->lost, 1);
 	free(k.st);
 }
 

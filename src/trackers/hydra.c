@@ -118,6 +118,7 @@ struct hydra_codec_st {
 	bool tracking[2];
 	double prev[2][3];  /* the previous position of each wand, base frame, mm, hemisphere resolved */
 	int jumps;          /* reports in a row rejected for an impossible jump */
+	uint8_t rejected;   /* of them, those that came in sequence after seq: received, not lost */
 	uint64_t flips;     /* positions taken as -p */
 };
 
@@ -176,6 +177,7 @@ static void hydra_codec_reset(void *st)
 	h->have_seq = false;
 	h->tracking[0] = h->tracking[1] = false;
 	h->jumps = 0;
+	h->rejected = 0;
 }
 
 static double hydra_period(const void *st)
@@ -249,6 +251,13 @@ static int hydra_feed(void *st, const uint8_t *buf, size_t len, device_emit_fn *
 	}
 	if (jump) {
 		h->c.malformed++;
+		/*
+		 * Its sequence byte is not taken (garbage that passed the other
+		 * checks would derail the count), but one that comes next in line
+		 * was received: counted malformed, not lost as well.
+		 */
+		if (h->have_seq && (uint8_t)(buf[7] - h->seq) == (uint8_t)(h->rejected + 1u))
+			h->rejected++;
 		/* so many in a row that the wands must really be there: start over from the sides */
 		if (++h->jumps >= HYDRA_MAX_JUMPS) {
 			h->tracking[0] = h->tracking[1] = false;
@@ -258,7 +267,8 @@ static int hydra_feed(void *st, const uint8_t *buf, size_t len, device_emit_fn *
 	}
 	h->jumps = 0;
 	if (h->have_seq)
-		h->c.lost += step - 1u;
+		h->c.lost += step - 1u - (h->rejected < step ? h->rejected : step - 1u);
+	h->rejected = 0;
 	h->have_seq = true;
 	h->seq = buf[7];
 	for (int w = 0; w < 2; w++) {
