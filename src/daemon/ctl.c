@@ -4,6 +4,7 @@
  * take its time; it reads the loop's counters with relaxed atomic loads.
  */
 #include "daemon/ctl.h"
+#include "daemon/seqlock.h"
 
 #include "record/recorder.h"
 #include "trackers/replay.h"
@@ -321,6 +322,61 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 }
 
 /* "step [N] [SOURCE]": N more instants of every stepped replay source, or of SOURCE */
+/*
+ * `sensors NAME`: the avatar's head, left and right hand as the loop gathered
+ * them in its next cycle (struct gw_probe), one JSON line; for a calibration.
+ * Waits for that cycle, at most 250 ms.
+ */
+static void ctl_sensors(FILE *out, const struct ctl_info *info, const char *name)
+{
+	static const char *const roles[FRAME_SENSORS] = { "head", "left_hand", "right_hand" };
+	static const char *const states[] = { "ok", "stale", "missing" };
+	struct gateway *g = info->g;
+	uint32_t w[GW_PROBE_WORDS], s0;
+	uint64_t t;
+	int idx = -1;
+
+	while (*name == ' ')
+		name++;
+	for (int i = 0; i < g->n_avatars && idx < 0; i++)
+		if (!strcmp(g->av[i].cfg->name, name))
+			idx = i;
+	if (idx < 0) {
+		fprintf(out, "error: no avatar '%s'\n", name);
+		return;
+	}
+	s0 = seqlock_peek(&g->probe.seq);
+	atomic_store_explicit(&g->probe.want, idx + 1, memory_order_relaxed);
+	for (int k = 0;; k++) {
+		uint32_t s = seqlock_peek(&g->probe.seq);
+
+		/* two writes on: the first may have been of the avatar asked for before */
+		if (!(s & 1) && s - s0 >= 4)
+			break;
+		if (k >= 250) {
+			fprintf(out, "error: the loop has not run for 250 ms\n");
+			return;
+		}
+		usleep(1000);
+	}
+	seqlock_read(&g->probe.seq, g->probe.words, w, GW_PROBE_WORDS);
+	t = (uint64_t)w[0] | (uint64_t)w[1] << 32;
+	fprintf(out, "{\"avatar\":\"%s\",\"id\":%u,\"mono_ns\":%llu,\"sensors\":[", name, g->av[idx].cfg->id,
+		(unsigned long long)t);
+	for (int r = 0; r < FRAME_SENSORS; r++) {
+		const uint32_t *o = w + 2 + r * GW_PROBE_SENSOR_WORDS;
+		float v[7];
+
+		memcpy(v, o + 1, sizeof(v));
+		fprintf(out, "%s{\"role\":\"%s\",\"state\":\"%s\"", r ? "," : "", roles[r], states[o[0] % 3]);
+		if (o[0] != WIRE_SENSOR_MISSING)
+			fprintf(out, ",\"p\":[%.6f,%.6f,%.6f],\"q\":[%.6f,%.6f,%.6f,%.6f]", v[0], v[1], v[2], v[3], v[4], v[5],
+				v[6]);
+		fputc('}', out);
+	}
+	fputs("]}\n", out);
+}
+
 static void ctl_step(FILE *out, const struct ctl_info *info, const char *args)
 {
 	struct gateway *g = info->g;
@@ -411,8 +467,11 @@ void ctl_serve(int lfd, const struct ctl_info *info, bool *want_reload)
 		fputs("reloading\n", out);
 	} else if (!strcmp(req, "step") || !strncmp(req, "step ", 5))
 		ctl_step(out, info, req + 4);
+	else if (!strncmp(req, "sensors ", 8))
+		ctl_sensors(out, info, req + 8);
 	else
-		fprintf(out, "error: unknown request '%s' (status, status json, reload, step [N] [SOURCE])\n", req);
+		fprintf(out, "error: unknown request '%s' (status, status json, reload, step [N] [SOURCE], sensors AVATAR)\n",
+			req);
 	fclose(out);
 	for (size_t off = 0; off < len;) {
 		ssize_t n = send(fd, text + off, len - off, MSG_NOSIGNAL);

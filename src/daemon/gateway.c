@@ -4,6 +4,7 @@
  */
 #include "daemon/gateway.h"
 
+#include "daemon/seqlock.h"
 #include "publish/encode.h"
 #include "record/recorder.h"
 
@@ -280,10 +281,36 @@ static void prefetch_ahead(const struct gateway *g, int i)
 	}
 }
 
+/* the probed avatar's sensors, for the control thread (struct gw_probe) */
+static void probe_write(struct gateway *g, const struct pose_frame *pf, uint64_t mono_ns)
+{
+	uint32_t w[GW_PROBE_WORDS];
+
+	w[0] = (uint32_t)mono_ns;
+	w[1] = (uint32_t)(mono_ns >> 32);
+	for (int r = 0; r < FRAME_SENSORS; r++) {
+		uint32_t *o = w + 2 + r * GW_PROBE_SENSOR_WORDS;
+		struct vec3 p;
+		float v[7];
+
+		dq_translation(&pf->sensor[r], &p);
+		v[0] = (float)p.x;
+		v[1] = (float)p.y;
+		v[2] = (float)p.z;
+		v[3] = (float)pf->sensor[r].r.w;
+		v[4] = (float)pf->sensor[r].r.x;
+		v[5] = (float)pf->sensor[r].r.y;
+		v[6] = (float)pf->sensor[r].r.z;
+		o[0] = pf->state[r];
+		memcpy(o + 1, v, sizeof(v));
+	}
+	seqlock_write(&g->probe.seq, g->probe.words, w, GW_PROBE_WORDS);
+}
+
 int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 {
 	static const struct dq nan_dq = { { NAN, NAN, NAN, NAN }, { NAN, NAN, NAN, NAN } };
-	int n = 0, frames = 0;
+	int n = 0, frames = 0, probed = atomic_load_explicit(&g->probe.want, memory_order_relaxed) - 1;
 	uint64_t sent_ns;
 
 	poll_trackers(g, now);
@@ -297,6 +324,8 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 
 		prefetch_ahead(g, i);
 		frame_gather(&a->fs, now->mono_ns, g->stale_ns, pf);
+		if (i == probed)
+			probe_write(g, pf, now->mono_ns);
 		{
 			uint32_t worst = 0;
 

@@ -64,6 +64,22 @@ struct gw_stats {
 	struct hist wake;              /* lateness of the wake-up after the deadline */
 };
 
+/*
+ * The sensors of one avatar as the loop gathered them, for the control
+ * socket's `sensors` request (a calibration takes its readings from it).
+ * The control thread names the avatar in want; the loop, the only writer,
+ * copies that avatar's three sensors each cycle under the sequence lock:
+ * one comparison per cycle otherwise, never a wait.
+ */
+#define GW_PROBE_SENSOR_WORDS 8 /* state, then x y z, qw qx qy qz as float bits */
+#define GW_PROBE_WORDS (2 + FRAME_SENSORS * GW_PROBE_SENSOR_WORDS) /* the cycle's time (2 words) first */
+
+struct gw_probe {
+	_Atomic int want; /* 1 + the avatar's index, 0: none */
+	_Atomic uint32_t seq;
+	_Atomic uint32_t words[GW_PROBE_WORDS];
+};
+
 struct gateway {
 	struct config cfg;
 	int n_trackers;
@@ -84,6 +100,7 @@ struct gateway {
 	uint64_t describe_ns;
 	struct gw_stats st;
 	struct recorder *rec;     /* recording this gateway (record/recorder.h), or NULL */
+	struct gw_probe probe;
 };
 
 /*

@@ -565,5 +565,148 @@ class BusyWaitTest(unittest.TestCase):
                 d.stop()
 
 
+class CalibrateTest(unittest.TestCase):
+    """avatargw-ctl calibrate against a person who holds the standard poses: a replayed CSV, stepped
+    from pose to pose; the fitted body, written as a drop-in, is what the configuration then says"""
+
+    S, A, F = 0.19, 0.31, 0.27
+    HEAD = (0.012, -0.035, 0.105)  # the head sensor from the chain origin: right, forward, up
+    ORIGIN, YAW = (0.6, -0.4, 1.38), 35 * DEG  # where the person stands, which way they face
+    POSES = ("initial", "down", "forward")
+
+    def hand(self, pose, side):
+        x = self.S if side == "r" else -self.S
+        return {"initial": (x, self.F, -self.A), "down": (x, 0, -(self.A + self.F)),
+                "forward": (x, self.A + self.F, 0)}[pose]
+
+    def world(self, p):
+        c, s = math.cos(self.YAW), math.sin(self.YAW)
+        return (self.ORIGIN[0] + c * p[0] - s * p[1], self.ORIGIN[1] + s * p[0] + c * p[1], self.ORIGIN[2] + p[2])
+
+    def write_clip(self, path):
+        """two rounds of the three poses, a row each"""
+        qw, qz = math.cos(self.YAW / 2), math.sin(self.YAW / 2)
+        cols = ["frame", "t"] + ["%s_%s" % (w, k) for w in ("head", "lhand", "rhand")
+                                 for k in ("x", "y", "z", "qw", "qx", "qy", "qz")]
+        with open(path, "w") as f:
+            f.write(",".join(cols) + "\n")
+            for i, pose in enumerate(self.POSES * 2):
+                row = [i, i / 60]
+                for p in (self.HEAD, self.hand(pose, "l"), self.hand(pose, "r")):
+                    row += list(self.world(p)) + [qw, 0, 0, qz]
+                f.write(",".join("%.6f" % v if isinstance(v, float) else str(v) for v in row) + "\n")
+
+    def test_calibrate_writes_the_body(self):
+        port = free_port()
+        with tempfile.TemporaryDirectory() as tmp:
+            clip = os.path.join(tmp, "poses.csv")
+            self.write_clip(clip)
+            conf = ("[daemon]\nrate = 120\nstale_ms = 60000\n[source rp]\ntype = replay\nfile = %s\nstep = yes\n"
+                    "[avatar tester]\nperson = rp\n[output u]\ntype = udp\naddress = 127.0.0.1\nport = %d\n"
+                    % (clip, port))
+            d = Daemon(tmp, conf)
+            try:
+                # the sensors, as the loop has them: the first row
+                out = subprocess.run([CTL, "-s", d.ctl, "sensors", "tester"], capture_output=True, text=True, timeout=5)
+                self.assertEqual(out.returncode, 0, out.stderr)
+                got = json.loads(out.stdout)
+                self.assertEqual([x["role"] for x in got["sensors"]], ["head", "left_hand", "right_hand"])
+                self.assertTrue(all(x["state"] == "ok" for x in got["sensors"]))
+                self.assertLess(math.dist(got["sensors"][0]["p"], self.world(self.HEAD)), 1e-5)
+                self.assertLess(math.dist(got["sensors"][2]["p"], self.world(self.hand("initial", "r"))), 1e-5)
+                # a name that is not an avatar's: refused, and the exit status says so
+                out = subprocess.run([CTL, "-s", d.ctl, "sensors", "nobody"], capture_output=True, text=True, timeout=5)
+                self.assertEqual(out.returncode, 65)
+                self.assertIn("no avatar 'nobody'", out.stderr)
+                # the calibration: Enter at each pose, the replay stepped to the next between them
+                dropin = os.path.join(tmp, "conf.d", "60-tester.conf")
+                os.mkdir(os.path.dirname(dropin))
+                cal = subprocess.Popen([CTL, "-s", d.ctl, "calibrate", "tester", "--samples", "5", "--write", dropin],
+                                       stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                err = b""
+                for k in range(6):
+                    # its prompt: the pose before has been read
+                    while ("[%d/6]" % (k + 1)).encode() not in err:
+                        b = cal.stderr.read1(4096)
+                        self.assertTrue(b, "calibrate ended early: %s" % err.decode())
+                        err += b
+                    self.assertIn(self.POSES[k % 3].encode() + b":", err.rsplit(b"[", 1)[1])
+                    self.assertNotIn(b"moved", err)
+                    if k:
+                        # the person takes the next pose: the replay's next row, in the loop before Enter
+                        subprocess.run([CTL, "-s", d.ctl, "step", "1"], check=True, capture_output=True, timeout=5)
+                        want = self.world(self.hand(self.POSES[k % 3], "r"))
+                        for _ in range(100):
+                            out = subprocess.run([CTL, "-s", d.ctl, "sensors", "tester"], capture_output=True,
+                                                 text=True, timeout=5)
+                            if math.dist(json.loads(out.stdout)["sensors"][2]["p"], want) < 1e-5:
+                                break
+                        else:
+                            self.fail("the replay did not step to pose %d" % k)
+                    cal.stdin.write(b"\n")
+                    cal.stdin.flush()
+                out_text, rest = cal.communicate(timeout=20)
+                err += rest
+                self.assertEqual(cal.returncode, 0, err.decode())
+                text = out_text.decode()
+                self.assertIn("[avatar tester]", text)
+                with open(dropin) as f:
+                    self.assertEqual(f.read(), text)
+                # the drop-in is what the configuration now says, to a tenth of a millimetre
+                chk = subprocess.run([DAEMON, "--check-config", "-c", d.conf], capture_output=True, text=True,
+                                     timeout=10)
+                self.assertEqual(chk.returncode, 0, chk.stderr)
+                sect = chk.stdout.split("[avatar tester]", 1)[1]
+                vals = {}
+                for line in sect.splitlines()[1:8]:
+                    k, v = line.split(";")[0].split("=")
+                    vals[k.strip()] = [float(x) for x in v.split()]
+                self.assertAlmostEqual(vals["shoulder"][0], self.S, delta=1e-4)
+                self.assertAlmostEqual(vals["upper_arm"][0], self.A, delta=1e-4)
+                self.assertAlmostEqual(vals["forearm"][0], self.F, delta=1e-4)
+                self.assertAlmostEqual(vals["hand"][0], 0, delta=1e-4)
+                for got_h, want_h in zip(vals["head_offset"], self.HEAD):
+                    self.assertAlmostEqual(got_h, want_h, delta=1e-4)
+                # and the daemon takes it in
+                out = subprocess.run([CTL, "-s", d.ctl, "reload"], capture_output=True, text=True, timeout=5)
+                self.assertEqual(out.returncode, 0, out.stderr)
+            finally:
+                d.stop()
+
+    def test_a_pose_not_held_is_asked_again(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            clip = os.path.join(tmp, "poses.csv")
+            self.write_clip(clip)
+            conf = ("[daemon]\nrate = 120\nstale_ms = 60000\n[source rp]\ntype = replay\nfile = %s\nstep = yes\n"
+                    "[avatar tester]\nperson = rp\n" % clip)
+            d = Daemon(tmp, conf)
+            try:
+                # 100 readings take 2 s: the person moves (the replay steps) while they are taken
+                cal = subprocess.Popen([CTL, "-s", d.ctl, "calibrate", "tester", "--samples", "100"],
+                                       stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                err = b""
+                while b"[1/6]" not in err:
+                    b = cal.stderr.read1(4096)
+                    self.assertTrue(b, err.decode())
+                    err += b
+                cal.stdin.write(b"\n")
+                cal.stdin.flush()
+                subprocess.run([CTL, "-s", d.ctl, "step", "1"], check=True, capture_output=True, timeout=5)
+                while err.count(b"[1/6]") < 2:
+                    b = cal.stderr.read1(4096)
+                    self.assertTrue(b, err.decode())
+                    err += b
+                # the right hand went from the initial pose to hanging (38 cm): far beyond the 2 cm allowed
+                moved = float(err.split(b"moved by ", 1)[1].split(b" cm", 1)[0])
+                self.assertGreater(moved, 5)
+                # the person gives up: no body written
+                out, rest = cal.communicate(b"", timeout=10)
+                self.assertEqual(cal.returncode, 1)
+                self.assertIn(b"calibration abandoned", rest)
+                self.assertEqual(out, b"")
+            finally:
+                d.stop()
+
+
 if __name__ == "__main__":
     unittest.main()
