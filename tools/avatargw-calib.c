@@ -5,7 +5,7 @@
  * method estimates. tools/calib_eval.py turns the output of all clips into
  * docs/CALIBRATION.md.
  *
- *   avatargw-calib [--trials N] [--pose-deg D] [--noise-mm M] [--seed S] CLIP.csv
+ *   avatargw-calib [--trials N] [--rounds R] [--pose-deg D] [--noise-mm M] [--seed S] CLIP.csv
  *
  * The clips hold no calibration poses, so the readings are made as follows
  * (the condition column says which):
@@ -20,6 +20,10 @@
  *   noisy      as frames, every arm segment off its pose direction by a
  *              Gaussian angle (--pose-deg per axis) and every sensor
  *              coordinate by Gaussian noise (--noise-mm).
+ * With --rounds R the frames and noisy conditions take the three poses R
+ * times round per trial (3 R readings, each from its own frame and with its
+ * own noise), as `avatargw-ctl calibrate` asks (twice by default); the
+ * paper's methods use the first reading.
  *   closest    the real sensor readings of the frames whose ground-truth arm
  *              posture is closest to each pose (info = the mean angle between
  *              the true arm segments and the pose's, degrees).
@@ -381,12 +385,13 @@ static void print_est(const char *cond, const char *method, int trial, int rc, c
 }
 
 static const enum calib_pose poses3[3] = { CALIB_POSE_INITIAL, CALIB_POSE_DOWN, CALIB_POSE_FORWARD };
+#define MAX_ROUNDS 10
 
 /*
  * All methods on three readings (initial, down, forward). head_q: the head
  * sensor orientation at the initial reading; h: the chest heading then.
  */
-static void run_methods(const char *cond, int trial, const struct calib_obs o[3], const struct heading *h,
+static void run_methods(const char *cond, int trial, const struct calib_obs *o, size_t n_obs, const struct heading *h,
 			const double head_q[4], double info)
 {
 	struct quat hq = heading_quat(h), sq = { head_q[0], head_q[1], head_q[2], head_q[3] };
@@ -399,7 +404,7 @@ static void run_methods(const char *cond, int trial, const struct calib_obs o[3]
 	print_est(cond, "paper-wrist", trial, rc, &b, info);
 	rc = calib_paper(&o[0].head, &o[0].rhand, &sq, CALIB_HAND_WRIST, &b);
 	print_est(cond, "paper-wrist-headyaw", trial, rc, &b, info);
-	rc = calib_poses(o, 3, 0, &b);
+	rc = calib_poses(o, n_obs, 0, &b);
 	print_est(cond, "poses", trial, rc, &b, info);
 }
 
@@ -500,8 +505,9 @@ static size_t closest_frame(const struct frame *fr, size_t n, enum calib_pose p,
 
 static void usage(FILE *f)
 {
-	fprintf(f, "usage: avatargw-calib [--trials N] [--pose-deg D] [--noise-mm M] [--seed S] CLIP.csv\n"
+	fprintf(f, "usage: avatargw-calib [--trials N] [--rounds R] [--pose-deg D] [--noise-mm M] [--seed S] CLIP.csv\n"
 		   "  --trials N     trials of the frames and noisy conditions (default 200)\n"
+		   "  --rounds R     frames, noisy: times round the three poses per trial (default 1)\n"
 		   "  --pose-deg D   noisy: sd of each arm segment's direction per axis, degrees (default 5)\n"
 		   "  --noise-mm M   noisy: sd of each sensor coordinate, millimetres (default 2)\n"
 		   "  --seed S       random seed (default 1)\n");
@@ -512,17 +518,18 @@ int main(int argc, char **argv)
 	static const struct option longopts[] = {
 		{ "trials", required_argument, NULL, 't' },   { "pose-deg", required_argument, NULL, 'p' },
 		{ "noise-mm", required_argument, NULL, 'n' }, { "seed", required_argument, NULL, 's' },
-		{ "help", no_argument, NULL, 'h' },	      { NULL, 0, NULL, 0 },
+		{ "rounds", required_argument, NULL, 'r' },   { "help", no_argument, NULL, 'h' },
+		{ NULL, 0, NULL, 0 },
 	};
 	struct noise none = { 0, 0 }, noisy = { 5 * DEG2RAD, 0.002 };
 	struct frame *fr = NULL;
 	struct skel sk;
 	size_t n = 0;
-	long trials = 200;
+	long trials = 200, rounds = 1;
 	unsigned long long seed = 1;
 	int c, t, s, k;
 
-	while ((c = getopt_long(argc, argv, "t:p:n:s:h", longopts, NULL)) != -1) {
+	while ((c = getopt_long(argc, argv, "t:r:p:n:s:h", longopts, NULL)) != -1) {
 		char *end;
 
 		switch (c) {
@@ -530,6 +537,13 @@ int main(int argc, char **argv)
 			trials = strtol(optarg, &end, 10);
 			if (*end || trials < 1 || trials > 1000000) {
 				fprintf(stderr, "avatargw-calib: bad --trials %s\n", optarg);
+				return 2;
+			}
+			break;
+		case 'r':
+			rounds = strtol(optarg, &end, 10);
+			if (*end || rounds < 1 || rounds > MAX_ROUNDS) {
+				fprintf(stderr, "avatargw-calib: bad --rounds %s (1 to %d)\n", optarg, MAX_ROUNDS);
 				return 2;
 			}
 			break;
@@ -602,8 +616,8 @@ int main(int argc, char **argv)
 			free(yaw);
 		}
 	}
-	printf("# noisy: pose sd %.2f deg per axis, sensor sd %.2f mm; trials %ld, seed %llu\n",
-	       noisy.pose_rad * RAD2DEG, noisy.sensor_m * 1e3, trials, seed);
+	printf("# noisy: pose sd %.2f deg per axis, sensor sd %.2f mm; trials %ld, rounds %ld, seed %llu\n",
+	       noisy.pose_rad * RAD2DEG, noisy.sensor_m * 1e3, trials, rounds, seed);
 	printf("condition,method,trial,rc,S,neck,A,F,H,head_right,head_fwd,rms,info\n");
 
 	/* canonical: the median skeleton, chest frame = world, upright */
@@ -618,7 +632,7 @@ int main(int argc, char **argv)
 		chest_heading(&f0, &h);
 		for (k = 0; k < 3; k++)
 			synth_obs(poses3[k], &sk, sk.sh_c, sk.head_c, &h, &none, &o[k]);
-		run_methods("canonical", 0, o, &h, q_id, 0);
+		run_methods("canonical", 0, o, 3, &h, q_id, 0);
 	}
 
 	/* frames and noisy: the real trunk and head of three random frames */
@@ -626,22 +640,22 @@ int main(int argc, char **argv)
 		const char *cond = s ? "noisy" : "frames";
 
 		for (t = 0; t < trials; t++) {
-			struct calib_obs o[3];
+			struct calib_obs o[3 * MAX_ROUNDS];
 			struct heading h0;
 			size_t f0 = 0;
 
-			for (k = 0; k < 3; k++) {
+			for (k = 0; k < 3 * rounds; k++) {
 				size_t fi = rnd_index(n);
 				struct heading h;
 
 				chest_heading(&fr[fi], &h);
-				synth_obs(poses3[k], &sk, fr[fi].sh, fr[fi].head, &h, s ? &noisy : &none, &o[k]);
+				synth_obs(poses3[k % 3], &sk, fr[fi].sh, fr[fi].head, &h, s ? &noisy : &none, &o[k]);
 				if (k == 0) {
 					f0 = fi;
 					h0 = h;
 				}
 			}
-			run_methods(cond, t, o, &h0, fr[f0].head_q, 0);
+			run_methods(cond, t, o, 3 * (size_t)rounds, &h0, fr[f0].head_q, 0);
 		}
 	}
 
