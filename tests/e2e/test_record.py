@@ -269,7 +269,9 @@ class StepTest(unittest.TestCase):
                 fr = [m for _, m in td.dump(["--udp", "127.0.0.1:%d" % port], 3)]
                 out = subprocess.run([td.CTL, "-s", d.ctl, "step", "1", "nope"], capture_output=True, text=True,
                                      timeout=5)
-                self.assertIn("error", out.stdout)
+                # refused: the daemon's answer on stderr, and a failure status
+                self.assertEqual(out.returncode, 65)
+                self.assertIn("error", out.stderr)
             finally:
                 self.assertEqual(d.stop(), 0)
             # what is published is row 7 of the clip (the 8th instant), held
