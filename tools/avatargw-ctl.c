@@ -88,10 +88,17 @@ static int open_socket(char *path, size_t len)
 	return fd;
 }
 
-/* one request, its whole answer into reply (NUL-terminated); 0, or an exit status with a message */
-static int ask(char *path, size_t plen, const char *req, char *reply, size_t rlen)
+/*
+ * One request. The answer goes to out as it comes (to stderr instead when
+ * the daemon refused the request: it starts with "error:"), or, with out
+ * NULL, into reply (NUL-terminated, cut at rlen - 1). Returns 0, 65 for a
+ * refusal written to out, or an exit status with a message.
+ */
+static int converse(char *path, size_t plen, const char *req, FILE *out, char *reply, size_t rlen)
 {
+	char buf[4096];
 	size_t got = 0;
+	bool refused = false;
 	int fd = open_socket(path, plen);
 
 	if (fd < 0) {
@@ -104,7 +111,7 @@ static int ask(char *path, size_t plen, const char *req, char *reply, size_t rle
 		close(fd);
 		return 74;
 	}
-	for (;;) {
+	for (bool first = true;; first = false) {
 		struct pollfd p = { fd, POLLIN, 0 };
 		ssize_t n;
 
@@ -113,16 +120,30 @@ static int ask(char *path, size_t plen, const char *req, char *reply, size_t rle
 			close(fd);
 			return 75;
 		}
-		n = read(fd, reply + got, rlen - 1 - got);
+		n = read(fd, buf, sizeof(buf));
 		if (n <= 0)
 			break;
-		got += (size_t)n;
-		if (got == rlen - 1)
-			break;
+		if (first && n >= 6 && !memcmp(buf, "error:", 6))
+			refused = true;
+		if (out) {
+			fwrite(buf, 1, (size_t)n, refused ? stderr : out);
+		} else {
+			size_t k = (size_t)n < rlen - 1 - got ? (size_t)n : rlen - 1 - got;
+
+			memcpy(reply + got, buf, k);
+			got += k;
+		}
 	}
-	reply[got] = '\0';
+	if (!out)
+		reply[got] = '\0';
 	close(fd);
-	return 0;
+	return out && refused ? 65 : 0; /* EX_DATAERR */
+}
+
+/* one request, its whole answer into reply */
+static int ask(char *path, size_t plen, const char *req, char *reply, size_t rlen)
+{
+	return converse(path, plen, req, NULL, reply, rlen);
 }
 
 /* ---- calibrate ----------------------------------------------------------------------- */
@@ -344,9 +365,9 @@ int main(int argc, char **argv)
 		{ "help", no_argument, NULL, 'h' },
 		{ NULL, 0, NULL, 0 },
 	};
-	char path[CFG_PATH_MAX] = "", req[128], buf[4096];
-	bool json = false, failed = false;
-	int opt, fd;
+	char path[CFG_PATH_MAX] = "", req[128];
+	bool json = false;
+	int opt;
 	const char *cmd;
 
 	/* the command's own options follow it: stop at the first non-option */
@@ -412,34 +433,5 @@ int main(int argc, char **argv)
 		return 64;
 	}
 send:
-	fd = open_socket(path, sizeof(path));
-	if (fd < 0) {
-		fprintf(stderr, "avatargw-ctl: %s: %s (is avatargw running? -s names its control socket)\n", path,
-			strerror(-fd));
-		return 69; /* EX_UNAVAILABLE */
-	}
-	if (send(fd, req, strlen(req), MSG_NOSIGNAL) < 0) {
-		fprintf(stderr, "avatargw-ctl: send: %s\n", strerror(errno));
-		close(fd);
-		return 74;
-	}
-	for (bool first = true;; first = false) {
-		struct pollfd p = { fd, POLLIN, 0 };
-		ssize_t n;
-
-		if (poll(&p, 1, 5000) <= 0) {
-			fprintf(stderr, "avatargw-ctl: no answer within 5 s\n");
-			close(fd);
-			return 75;
-		}
-		n = read(fd, buf, sizeof(buf));
-		if (n <= 0)
-			break;
-		/* the daemon refused the request: its answer, and a failure status */
-		if (first && n >= 6 && !memcmp(buf, "error:", 6))
-			failed = true;
-		fwrite(buf, 1, (size_t)n, failed ? stderr : stdout);
-	}
-	close(fd);
-	return failed ? 65 : 0; /* EX_DATAERR */
+	return converse(path, sizeof(path), req, stdout, NULL, 0);
 }
