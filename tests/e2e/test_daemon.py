@@ -565,6 +565,76 @@ class BusyWaitTest(unittest.TestCase):
                 d.stop()
 
 
+def qmul(a, b):
+    return (a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3], a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+            a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1], a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0])
+
+
+def qrot(q, v):
+    w, x, y, z = q
+    r = qmul(qmul(q, (0, v[0], v[1], v[2])), (w, -x, -y, -z))
+    return r[1:]
+
+
+class BowTest(unittest.TestCase):
+    """a person bowing 70 degrees at the waist, the arms swept back along the trunk (10 degrees behind
+    it), face up: from an upright chest the hands are 3 cm past the shoulders' limits (measured with
+    avatargw-eval without AVATAR_BOW). Through the whole daemon the chest is published bowed, the
+    hands on their sensors, and the GLM client rebuilds every segment from the chest and the joints"""
+
+    def test_bowed_chest_published(self):
+        # the default body (config/avatargw.conf)
+        S, A, F, head_off = 0.1732, 0.2886, 0.1955, (0.008, -0.0386, 0.0967)
+        yaw, pitch, sweep = 20 * DEG, 70 * DEG, 10 * DEG
+        qy = (math.cos(yaw / 2), 0, 0, math.sin(yaw / 2))
+        qc = qmul(qy, (math.cos(pitch / 2), -math.sin(pitch / 2), 0, 0))  # pitched forward about its x axis
+        head = (0.3, 0.2, 1.45)
+        hoff = qrot(qc, head_off)
+        chest = tuple(h - o for h, o in zip(head, hoff))
+        # the arms down the trunk and swept back, a little out, the elbows a little bent; hand y down the trunk
+        qh = qmul(qc, (math.cos(-math.pi / 4), math.sin(-math.pi / 4), 0, 0))
+        hands = {}
+        reach = (A + F) * 0.97
+        for side, sx in (("l", -1), ("r", 1)):
+            v = qrot(qc, (sx * (S + 0.03), -reach * math.sin(sweep), -reach * math.cos(sweep)))
+            hands[side] = tuple(c + d for c, d in zip(chest, v))
+        cols = ["frame", "t"] + ["%s_%s" % (w, k) for w in ("head", "lhand", "rhand")
+                                 for k in ("x", "y", "z", "qw", "qx", "qy", "qz")]
+        port = free_port()
+        with tempfile.TemporaryDirectory() as tmp:
+            clip = os.path.join(tmp, "bow.csv")
+            with open(clip, "w") as f:
+                f.write(",".join(cols) + "\n")
+                for i in range(120):
+                    row = [i, i / 60] + list(head) + list(qy) + list(hands["l"]) + list(qh) + list(hands["r"]) + list(qh)
+                    f.write(",".join("%.6f" % v if isinstance(v, float) else str(v) for v in row) + "\n")
+            conf = ("[daemon]\nrate = 120\n[source rp]\ntype = replay\nfile = %s\n[avatar bow]\nperson = rp\n"
+                    "[output u]\ntype = udp\naddress = 127.0.0.1\nport = %d\n" % (clip, port))
+            d = Daemon(tmp, conf)
+            try:
+                fr = [m for _, m in dump(["--udp", "127.0.0.1:%d" % port], 40) if m["type"] == "frame"]
+                self.assertGreater(len(fr), 30)
+                for m in fr:
+                    seg = m["segments"]
+                    z = qrot(seg["chest"]["q"], (0, 0, 1))
+                    bow = math.degrees(math.acos(max(-1, min(1, z[2]))))
+                    self.assertGreater(bow, 55, "the chest is not bowed: %.1f degrees" % bow)
+                    self.assertLess(bow, 76)
+                    # its heading is still chest_yaw
+                    w, x, y, zq = seg["chest"]["q"]
+                    n = math.hypot(w, zq)
+                    cy = 2 * math.atan2(zq / n, w / n)
+                    self.assertAlmostEqual(math.remainder(cy - m["joints"]["chest_yaw"], 2 * math.pi), 0, delta=1e-4)
+                    # both hands on their sensors
+                    self.assertLess(math.dist(seg["r_hand"]["p"], hands["r"]), 1e-3)
+                    self.assertLess(math.dist(seg["l_hand"]["p"], hands["l"]), 1e-3)
+                out = subprocess.run([CLIENT, "--port", str(port), "--count", "60"], capture_output=True, text=True,
+                                     timeout=20)
+                self.assertEqual(out.returncode, 0, out.stdout + out.stderr)
+            finally:
+                d.stop()
+
+
 class CalibrateTest(unittest.TestCase):
     """avatargw-ctl calibrate against a person who holds the standard poses: a replayed CSV, stepped
     from pose to pose; the fitted body, written as a drop-in, is what the configuration then says"""
