@@ -106,7 +106,9 @@ struct avatar_pose {
  * The avatar's default joint limits: the benchmark's (arm_default_limits)
  * but J2 from -120 degrees, so that an arm raised sideways above the
  * shoulder (a wave overhead, a thrust up) stays reachable: -90 cut the
- * motion-capture clips' overhead frames (docs/FIDELITY.md); and J7 -30..30,
+ * motion-capture clips' overhead frames (docs/FIDELITY.md), to 10: more
+ * adduction swings the hanging upper arm into the trunk (across the body
+ * in front of it is J3's and J1's); and J7 -30..30,
  * J8 -80..80: with the hand's z toward the thumb, J7 (about x, across the
  * palm) is the wrist's deviation and J8 (about z) its flexion and extension
  * (the benchmark's -70..70 and -30..30 fit a hand frame whose z is the

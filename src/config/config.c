@@ -241,7 +241,7 @@ static const struct key_def keys[] = {
 	  "head sensor from the chest centre, in the chest frame (x right, y forward, z up; the paper: 0 0 Neck)" },
 	{ S_AVATAR, "j1", K_RANGE, AV(lo[0]), AV(hi[0]), -180, 180, "-30 30", "deg", NULL, NULL,
 	  "limits of J1, shoulder girdle / chest yaw" },
-	{ S_AVATAR, "j2", K_RANGE, AV(lo[1]), AV(hi[1]), -180, 180, "-120 30", "deg", NULL, NULL,
+	{ S_AVATAR, "j2", K_RANGE, AV(lo[1]), AV(hi[1]), -180, 180, "-120 10", "deg", NULL, NULL,
 	  "limits of J2, shoulder abduction (-) / adduction (+)" },
 	{ S_AVATAR, "j3", K_RANGE, AV(lo[2]), AV(hi[2]), -180, 180, "-60 120", "deg", NULL, NULL,
 	  "limits of J3, shoulder extension (-) / flexion (+)" },
