@@ -345,12 +345,16 @@ static void ctl_sensors(FILE *out, const struct ctl_info *info, const char *name
 		fprintf(out, "error: no avatar '%s'\n", name);
 		return;
 	}
-	s0 = seqlock_peek(&g->probe.seq);
-	atomic_store_explicit(&g->probe.want, idx + 1, memory_order_relaxed);
+	/*
+	 * Named first, then the count taken: the second write after it comes
+	 * from a cycle that began after the first one ended, so after this
+	 * store; the first may be of the avatar asked for before.
+	 */
+	atomic_store_explicit(&g->probe.want, idx + 1, memory_order_seq_cst);
+	s0 = seqlock_peek(&g->probe.seq) & ~1u;
 	for (int k = 0;; k++) {
 		uint32_t s = seqlock_peek(&g->probe.seq);
 
-		/* two writes on: the first may have been of the avatar asked for before */
 		if (!(s & 1) && s - s0 >= 4)
 			break;
 		if (k >= 250) {
