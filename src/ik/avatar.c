@@ -903,7 +903,13 @@ static bool hand_off(const struct ik_opts *o, const struct ik_target t[2], const
 	return t[side].valid && p->res[side].err.pos > o->tol_pos;
 }
 
-/* how far a pose's upper arms are from lying along the trunk (0: both straight down the chest's -z), 100 a hand off */
+/*
+ * A hand off its sensor weighs more than any lie of the arms (each at most
+ * 2), and stays inside the fixed-point range (Q5.26: below 32).
+ */
+#define BOW_OFF SC_C(8)
+
+/* how far a pose's upper arms are from lying along the trunk (0: both straight down the chest's -z), BOW_OFF a hand off */
 static sc_t bow_cost(const struct ik_opts *o, const struct ik_target t[2], const struct avatar_pose *p)
 {
 	sc_t cost = 0;
@@ -917,7 +923,7 @@ static sc_t bow_cost(const struct ik_opts *o, const struct ik_target t[2], const
 		if (n > 0)
 			cost += SC_C(1) + sc_div(ua.z, n);
 		if (hand_off(o, t, p, side))
-			cost += SC_C(100);
+			cost += BOW_OFF;
 	}
 	return cost;
 }
@@ -984,9 +990,9 @@ static unsigned bow(const struct avatar *av, const struct ik_kin *kin, const str
 	/* a bow is kept only if it puts more hands on their sensors than the upright chest */
 	for (side = 0; side < 2; side++)
 		avatar_arm_target(&up, hand[side], &t[side]);
-	best = hand_off(o, t, out, 0) ? SC_C(100) : 0;
+	best = hand_off(o, t, out, 0) ? BOW_OFF : 0;
 	if (hand_off(o, t, out, 1))
-		best += SC_C(100);
+		best += BOW_OFF;
 	for (k = 0; k < BOW_TRIES; k++) {
 		bowed_chest(av, head, &up, k, &chest[k]);
 		for (side = 0; side < 2; side++)
