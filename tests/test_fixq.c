@@ -20,6 +20,7 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "ik/avatar.h"
 #include "ik/ik.h"
 #include "lib/ikx.h"
 #include "testutil.h"
@@ -518,9 +519,56 @@ static void test_hopeless_input(void **state)
 	}
 }
 
+/*
+ * The avatar's bow at the waist in fixed point (test_avatar's test_bow in
+ * double): a trunk pitched 75 degrees, the arms along it, the head upright.
+ * The bow is found, both hands are on their sensors, nothing saturates
+ * (the SAN build's UBSan sees any overflow).
+ */
+static void test_avatar_bow(void **state)
+{
+	const struct arm_dims dims = { sc_from_double(0.18), sc_from_double(0.30), sc_from_double(0.26),
+				       sc_from_double(0.08) };
+	const struct vec3 off = { 0, 0, sc_from_double(0.25) };
+	const struct vec3 hp = { sc_from_double(0.3), sc_from_double(-0.2), sc_from_double(1.6) };
+	const double q_arm[ARM_DOF] = { 0, -0.15, 0, 0, -1.35, 0, 0, 0 };
+	struct avatar av;
+	struct ik_opts o;
+	struct avatar_pose p;
+	struct quat yaw, bowq, cr;
+	struct vec3 d, z;
+	struct dq head, chest, hand[2];
+	sc_t q[ARM_DOF];
+
+	(void)state;
+	avatar_init(&av, &dims, &off, NULL);
+	ik_default_opts(&o);
+	quat_from_axis_angle(&(struct vec3){ 0, 0, sc_from_double(1) }, sc_from_double(0.7), &yaw);
+	quat_from_axis_angle(&(struct vec3){ sc_from_double(1), 0, 0 }, sc_from_double(-75 * DEG), &bowq);
+	quat_mul(&yaw, &bowq, &cr);
+	dq_from_rt(&yaw, &hp, &head);
+	quat_rotate(&cr, &off, &d);
+	dq_from_rt(&cr, &(struct vec3){ hp.x - d.x, hp.y - d.y, hp.z - d.z }, &chest);
+	for (int j = 0; j < ARM_DOF; j++)
+		q[j] = sc_from_double(q_arm[j]);
+	for (int side = 0; side < 2; side++) {
+		struct dq ee;
+
+		arm_fk(&av.arm[side], q, &ee);
+		dq_mul(&chest, &ee, &hand[side]);
+	}
+	avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
+	assert_true(sc_to_double(p.res[ARM_RIGHT].err.pos) < 1e-3);
+	assert_true(sc_to_double(p.res[ARM_LEFT].err.pos) < 1e-3);
+	quat_rotate(&p.chest.r, &(struct vec3){ 0, 0, sc_from_double(1) }, &z);
+	print_message("fixed point: the bow found %.4f degrees\n", acos(sc_to_double(z.z)) * RAD2DEG);
+	assert_true(fabs(acos(sc_to_double(z.z)) * RAD2DEG - 75) < 0.01);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_avatar_bow),
 		cmocka_unit_test(test_mul_div_sqrt),	cmocka_unit_test(test_trig),
 		cmocka_unit_test(test_fk_jacobian),	cmocka_unit_test(test_lsq),
 		cmocka_unit_test(test_random_reset),	cmocka_unit_test(test_trajectory_warm),

@@ -152,6 +152,8 @@ struct reading {
 	bool ok[3];
 	double p[3][3]; /* head, left hand, right hand */
 	char state[3][16];
+	char section[64]; /* the [avatar SECTION] the avatar comes from */
+	int shared;       /* the avatars that section makes (count = N) */
 };
 
 /* a `sensors` answer: the three sensors' states and positions; false if it is not one */
@@ -159,6 +161,10 @@ static bool parse_sensors(const char *s, struct reading *r)
 {
 	static const char *const roles[3] = { "\"role\":\"head\"", "\"role\":\"left_hand\"", "\"role\":\"right_hand\"" };
 
+	const char *sec = strstr(s, "\"section\":\""), *sh = strstr(s, "\"section_avatars\":");
+
+	if (!sec || sscanf(sec + 11, "%63[^\"]", r->section) != 1 || !sh || sscanf(sh + 18, "%d", &r->shared) != 1)
+		return false;
 	for (int k = 0; k < 3; k++) {
 		const char *at = strstr(s, roles[k]), *st, *p;
 
@@ -237,16 +243,27 @@ static int read_pose(char *path, size_t plen, const char *avatar, int samples, d
 	return 0;
 }
 
+/* text into file, whole or not at all (a temporary file, synced, renamed over it); 0 or 73 with a message */
 static int write_file(const char *file, const char *text)
 {
 	char tmp[CFG_PATH_MAX + 8];
 	FILE *f;
+	int bad;
 
-	snprintf(tmp, sizeof(tmp), "%s.tmp", file);
+	if ((size_t)snprintf(tmp, sizeof(tmp), "%s.tmp", file) >= sizeof(tmp)) {
+		fprintf(stderr, "avatargw-ctl: %s: name too long\n", file);
+		return 73;
+	}
 	f = fopen(tmp, "w");
-	if (!f || fputs(text, f) < 0 || fclose(f)) {
+	if (!f) {
 		fprintf(stderr, "avatargw-ctl: %s: %s\n", tmp, strerror(errno));
 		return 73; /* EX_CANTCREAT */
+	}
+	bad = fputs(text, f) < 0 || fflush(f) || fsync(fileno(f));
+	if (fclose(f) || bad) {
+		fprintf(stderr, "avatargw-ctl: %s: %s\n", tmp, strerror(errno));
+		unlink(tmp);
+		return 73;
 	}
 	if (rename(tmp, file)) {
 		fprintf(stderr, "avatargw-ctl: %s: %s\n", file, strerror(errno));
@@ -264,9 +281,11 @@ static int calibrate(char *path, size_t plen, int argc, char **argv)
 		{ "still", required_argument, NULL, 't' },  { "write", required_argument, NULL, 'w' },
 		{ NULL, 0, NULL, 0 },
 	};
-	int rounds = 2, samples = 25, n_poses, n = 0, opt, rc;
+	long rounds = 2, samples = 25;
+	int n_poses, n = 0, opt, rc;
 	double hand = 0, still = 0.02;
-	bool side = false;
+	bool side = false, hand_given = false;
+	struct reading first;
 	const char *avatar, *file = NULL;
 	struct calib_obs obs[4 * 10];
 	struct calib_body b;
@@ -279,16 +298,17 @@ static int calibrate(char *path, size_t plen, int argc, char **argv)
 
 		switch (opt) {
 		case 'r':
-			rounds = (int)strtol(optarg, &end, 10);
+			rounds = strtol(optarg, &end, 10);
 			break;
 		case 'S':
 			side = true;
 			break;
 		case 'H':
 			hand = strtod(optarg, &end);
+			hand_given = true;
 			break;
 		case 'n':
-			samples = (int)strtol(optarg, &end, 10);
+			samples = strtol(optarg, &end, 10);
 			break;
 		case 't':
 			still = strtod(optarg, &end) / 100;
@@ -312,19 +332,56 @@ static int calibrate(char *path, size_t plen, int argc, char **argv)
 	}
 	avatar = argv[optind];
 	n_poses = side ? 4 : 3;
-	fprintf(stderr, "Calibrating %s: %d poses, %d time%s round. Hold each pose, then press Enter.\n", avatar, n_poses,
+	/* before any posing: the avatar is there, and its keys can be written where asked */
+	{
+		char req[160], reply[2048];
+
+		snprintf(req, sizeof(req), "sensors %s\n", avatar);
+		rc = ask(path, plen, req, reply, sizeof(reply));
+		if (rc)
+			return rc;
+		if (!strncmp(reply, "error:", 6)) {
+			fprintf(stderr, "avatargw-ctl: %s", reply);
+			return 65;
+		}
+		if (!parse_sensors(reply, &first)) {
+			fprintf(stderr, "avatargw-ctl: not an answer to sensors: %s\n", reply);
+			return 76; /* EX_PROTOCOL */
+		}
+	}
+	if (file && first.shared > 1) {
+		fprintf(stderr, "avatargw-ctl: %s is one of the %d avatars of [avatar %s] (count = %d), which share one body: "
+				"not written (the keys are printed; put them in that section by hand if they fit them all)\n",
+			avatar, first.shared, first.section, first.shared);
+		file = NULL;
+	}
+	if (file) {
+		/* the temporary file can be made next to it (the file itself stays as it is until the end) */
+		char tmp[CFG_PATH_MAX + 8];
+		FILE *f;
+
+		snprintf(tmp, sizeof(tmp), "%s.tmp", file);
+		f = fopen(tmp, "w");
+		if (!f) {
+			fprintf(stderr, "avatargw-ctl: %s: %s\n", tmp, strerror(errno));
+			return 73;
+		}
+		fclose(f);
+		unlink(tmp);
+	}
+	fprintf(stderr, "Calibrating %s: %d poses, %ld time%s round. Hold each pose, then press Enter.\n", avatar, n_poses,
 		rounds, rounds > 1 ? "s" : "");
-	for (int round = 0; round < rounds; round++)
+	for (long round = 0; round < rounds; round++)
 		for (int k = 0; k < n_poses; k++) {
 			for (;;) {
-				fprintf(stderr, "[%d/%d] %s: %s. Enter when held: ", round * n_poses + k + 1,
+				fprintf(stderr, "[%ld/%ld] %s: %s. Enter when held: ", round * n_poses + k + 1,
 					rounds * n_poses, pose_text[k].name, pose_text[k].how);
 				if (!fgets(line, sizeof(line), stdin)) {
 					fprintf(stderr, "\navatargw-ctl: calibration abandoned (end of input)\n");
 					return 1;
 				}
 				obs[n].pose = pose_text[k].pose;
-				rc = read_pose(path, plen, avatar, samples, still, &obs[n]);
+				rc = read_pose(path, plen, avatar, (int)samples, still, &obs[n]);
 				if (rc > 0)
 					return rc;
 				if (rc == 0)
@@ -341,12 +398,15 @@ static int calibrate(char *path, size_t plen, int argc, char **argv)
 	if (b.rms > 0.02)
 		fprintf(stderr, "avatargw-ctl: the readings fit the poses only to %.1f cm (rms): a pose was not held as "
 				"asked; consider calibrating again\n", b.rms * 100);
+	/* the hand's length only when given: a drop-in would otherwise reset the configured one */
 	len = (size_t)snprintf(text, sizeof(text),
 			       "; avatargw-ctl calibrate %s: %d readings, the fit's rms %.1f mm\n"
-			       "[avatar %s]\nshoulder = %.4f\nupper_arm = %.4f\nforearm = %.4f\nhand = %.4f\n"
-			       "head_offset = %.4f %.4f %.4f\n",
-			       avatar, n, b.rms * 1000, avatar, b.dims.shoulder, b.dims.arm, b.dims.forearm, b.dims.hand,
-			       b.head_offset.x, b.head_offset.y, b.head_offset.z);
+			       "[avatar %s]\nshoulder = %.4f\nupper_arm = %.4f\nforearm = %.4f\n",
+			       avatar, n, b.rms * 1000, first.section, b.dims.shoulder, b.dims.arm, b.dims.forearm);
+	if (hand_given)
+		len += (size_t)snprintf(text + len, sizeof(text) - len, "hand = %.4f\n", b.dims.hand);
+	len += (size_t)snprintf(text + len, sizeof(text) - len, "head_offset = %.4f %.4f %.4f\n", b.head_offset.x,
+				b.head_offset.y, b.head_offset.z);
 	fwrite(text, 1, len, stdout);
 	if (file) {
 		rc = write_file(file, text);
@@ -415,11 +475,13 @@ int main(int argc, char **argv)
 		req[n + 1] = '\0';
 		goto send;
 	}
-	/* "status --json" with the option after the command */
+	/* "status --json" (and -s SOCKET) with the option after the command */
 	for (int i = optind + 1; i < argc; i++) {
-		if (!strcmp(argv[i], "--json"))
+		if (!strcmp(argv[i], "--json")) {
 			json = true;
-		else {
+		} else if ((!strcmp(argv[i], "-s") || !strcmp(argv[i], "--socket")) && i + 1 < argc) {
+			snprintf(path, sizeof(path), "%s", argv[++i]);
+		} else {
 			usage(stderr);
 			return 64;
 		}

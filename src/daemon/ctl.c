@@ -321,11 +321,12 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 	}
 }
 
-/* "step [N] [SOURCE]": N more instants of every stepped replay source, or of SOURCE */
 /*
  * `sensors NAME`: the avatar's head, left and right hand as the loop gathered
- * them in its next cycle (struct gw_probe), one JSON line; for a calibration.
- * Waits for that cycle, at most 250 ms.
+ * them in a cycle after the request (struct gw_probe), one JSON line, with
+ * the [avatar SECTION] it comes from and how many avatars that section
+ * makes (count = N); for a calibration. Waits for such a cycle: 250 ms or
+ * three periods, whichever is longer.
  */
 static void ctl_sensors(FILE *out, const struct ctl_info *info, const char *name)
 {
@@ -334,7 +335,7 @@ static void ctl_sensors(FILE *out, const struct ctl_info *info, const char *name
 	struct gateway *g = info->g;
 	uint32_t w[GW_PROBE_WORDS], s0;
 	uint64_t t;
-	int idx = -1;
+	int idx = -1, shared = 0, wait_ms = (int)(3000.0 / g->cfg.daemon.rate);
 
 	while (*name == ' ')
 		name++;
@@ -345,30 +346,37 @@ static void ctl_sensors(FILE *out, const struct ctl_info *info, const char *name
 		fprintf(out, "error: no avatar '%s'\n", name);
 		return;
 	}
+	for (int i = 0; i < g->n_avatars; i++)
+		shared += !strcmp(g->av[i].cfg->section, g->av[idx].cfg->section);
+	if (wait_ms < 250)
+		wait_ms = 250;
 	/*
-	 * Named first, then the count taken: the second write after it comes
-	 * from a cycle that began after the first one ended, so after this
-	 * store; the first may be of the avatar asked for before.
+	 * A copy written after the request (the write count moved on by two:
+	 * one whole write after the request) of the avatar named (its index in
+	 * the copy: a cycle that read want before the request wrote another).
 	 */
-	atomic_store_explicit(&g->probe.want, idx + 1, memory_order_seq_cst);
+	atomic_store_explicit(&g->probe.want, idx + 1, memory_order_relaxed);
 	s0 = seqlock_peek(&g->probe.seq) & ~1u;
 	for (int k = 0;; k++) {
 		uint32_t s = seqlock_peek(&g->probe.seq);
 
-		if (!(s & 1) && s - s0 >= 4)
+		if (!(s & 1) && s - s0 >= 4 && (seqlock_read(&g->probe.seq, g->probe.words, w, GW_PROBE_WORDS), w[2]) ==
+							   (uint32_t)idx)
 			break;
-		if (k >= 250) {
-			fprintf(out, "error: the loop has not run for 250 ms\n");
+		if (k >= wait_ms) {
+			atomic_store_explicit(&g->probe.want, 0, memory_order_relaxed);
+			fprintf(out, "error: the loop has not run for %d ms\n", wait_ms);
 			return;
 		}
 		usleep(1000);
 	}
-	seqlock_read(&g->probe.seq, g->probe.words, w, GW_PROBE_WORDS);
+	atomic_store_explicit(&g->probe.want, 0, memory_order_relaxed);
 	t = (uint64_t)w[0] | (uint64_t)w[1] << 32;
-	fprintf(out, "{\"avatar\":\"%s\",\"id\":%u,\"mono_ns\":%llu,\"sensors\":[", name, g->av[idx].cfg->id,
-		(unsigned long long)t);
+	fprintf(out, "{\"avatar\":\"%s\",\"id\":%u,\"section\":\"%s\",\"section_avatars\":%d,\"mono_ns\":%llu,"
+		     "\"sensors\":[",
+		name, g->av[idx].cfg->id, g->av[idx].cfg->section, shared, (unsigned long long)t);
 	for (int r = 0; r < FRAME_SENSORS; r++) {
-		const uint32_t *o = w + 2 + r * GW_PROBE_SENSOR_WORDS;
+		const uint32_t *o = w + GW_PROBE_HEAD + r * GW_PROBE_SENSOR_WORDS;
 		float v[7];
 
 		memcpy(v, o + 1, sizeof(v));
@@ -381,6 +389,7 @@ static void ctl_sensors(FILE *out, const struct ctl_info *info, const char *name
 	fputs("]}\n", out);
 }
 
+/* "step [N] [SOURCE]": N more instants of every stepped replay source, or of SOURCE */
 static void ctl_step(FILE *out, const struct ctl_info *info, const char *args)
 {
 	struct gateway *g = info->g;

@@ -282,14 +282,15 @@ static void prefetch_ahead(const struct gateway *g, int i)
 }
 
 /* the probed avatar's sensors, for the control thread (struct gw_probe) */
-static void probe_write(struct gateway *g, const struct pose_frame *pf, uint64_t mono_ns)
+static void probe_write(struct gateway *g, int idx, const struct pose_frame *pf, uint64_t mono_ns)
 {
 	uint32_t w[GW_PROBE_WORDS];
 
 	w[0] = (uint32_t)mono_ns;
 	w[1] = (uint32_t)(mono_ns >> 32);
+	w[2] = (uint32_t)idx;
 	for (int r = 0; r < FRAME_SENSORS; r++) {
-		uint32_t *o = w + 2 + r * GW_PROBE_SENSOR_WORDS;
+		uint32_t *o = w + GW_PROBE_HEAD + r * GW_PROBE_SENSOR_WORDS;
 		struct vec3 p;
 		float v[7];
 
@@ -325,7 +326,7 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		prefetch_ahead(g, i);
 		frame_gather(&a->fs, now->mono_ns, g->stale_ns, pf);
 		if (i == probed)
-			probe_write(g, pf, now->mono_ns);
+			probe_write(g, i, pf, now->mono_ns);
 		{
 			uint32_t worst = 0;
 

@@ -68,11 +68,14 @@ struct gw_stats {
  * The sensors of one avatar as the loop gathered them, for the control
  * socket's `sensors` request (a calibration takes its readings from it).
  * The control thread names the avatar in want; the loop, the only writer,
- * copies that avatar's three sensors each cycle under the sequence lock:
- * one comparison per cycle otherwise, never a wait.
+ * copies that avatar's three sensors each cycle under the sequence lock,
+ * with the avatar's index (the reader takes only a copy of the avatar it
+ * named); the control thread clears want when it has its copy. One
+ * comparison per cycle otherwise, never a wait.
  */
 #define GW_PROBE_SENSOR_WORDS 8 /* state, then x y z, qw qx qy qz as float bits */
-#define GW_PROBE_WORDS (2 + FRAME_SENSORS * GW_PROBE_SENSOR_WORDS) /* the cycle's time (2 words) first */
+#define GW_PROBE_HEAD 3         /* the cycle's time (2 words), the avatar's index */
+#define GW_PROBE_WORDS (GW_PROBE_HEAD + FRAME_SENSORS * GW_PROBE_SENSOR_WORDS)
 
 struct gw_probe {
 	_Atomic int want; /* 1 + the avatar's index, 0: none */

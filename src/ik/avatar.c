@@ -875,8 +875,9 @@ static bool reach_chest(const struct avatar *av, const struct dq *const hand[2],
 }
 
 /*
- * AVATAR_BOW: a hand the upright chest leaves off its sensor (a joint
- * limit in the way, after AVATAR_REACH_CHEST has mended the arm's length)
+ * AVATAR_BOW: a hand the upright chest leaves more than a millimetre off its
+ * sensor (a joint limit in the way, after AVATAR_REACH_CHEST has mended the
+ * arm's length)
  * may be a bow at the waist: the trunk pitched forward carries the shoulders
  * and sweeps the arms back along it, while the head, on its sensor, stays
  * up. The chest is tried pitched forward by 15, 30 ... 75 degrees about
@@ -898,34 +899,36 @@ static const sc_t bow_c[BOW_TRIES] = { SC_C(0.9914448613738104), SC_C(0.96592582
 static const sc_t bow_s[BOW_TRIES] = { SC_C(0.13052619222005157), SC_C(0.25881904510252074),
 				       SC_C(0.3826834323650898), SC_C(0.5), SC_C(0.6087614290087207) };
 
-static bool hand_off(const struct ik_opts *o, const struct ik_target t[2], const struct avatar_pose *p, int side)
+/* more than BOW_MISS: a millimetre, what the fidelity goals call a hand on its sensor */
+#define BOW_MISS SC_C(0.001)
+
+static bool hand_off(const struct ik_target t[2], const struct avatar_pose *p, int side)
 {
-	return t[side].valid && p->res[side].err.pos > o->tol_pos;
+	return t[side].valid && p->res[side].err.pos > BOW_MISS;
 }
 
 /*
- * A hand off its sensor weighs more than any lie of the arms (each at most
- * 2), and stays inside the fixed-point range (Q5.26: below 32).
+ * How a pose does as a bow: its hands off their sensors (returned), and how
+ * far its upper arms are from lying along the trunk (*lie: 0 for both
+ * straight down the chest's -z, 2 at most per arm; the arms with a target).
  */
-#define BOW_OFF SC_C(8)
-
-/* how far a pose's upper arms are from lying along the trunk (0: both straight down the chest's -z), BOW_OFF a hand off */
-static sc_t bow_cost(const struct ik_opts *o, const struct ik_target t[2], const struct avatar_pose *p)
+static int bow_eval(const struct ik_target t[2], const struct avatar_pose *p, sc_t *lie)
 {
-	sc_t cost = 0;
-	int side;
+	int side, off = 0;
 
+	*lie = 0;
 	for (side = 0; side < 2; side++) {
 		const struct arm_pose *sg = &p->seg[side];
 		struct vec3 ua = { sg->elbow.x - sg->shoulder.x, sg->elbow.y - sg->shoulder.y, sg->elbow.z - sg->shoulder.z };
 		sc_t n = v3_norm(&ua);
 
+		if (!t[side].valid)
+			continue;
 		if (n > 0)
-			cost += SC_C(1) + sc_div(ua.z, n);
-		if (hand_off(o, t, p, side))
-			cost += BOW_OFF;
+			*lie += SC_C(1) + sc_div(ua.z, n);
+		off += hand_off(t, p, side);
 	}
-	return cost;
+	return off;
 }
 
 /* a chest pitched (or rolled) by more than half the least bow: its z axis's z below cos 7.5 degrees */
@@ -980,9 +983,10 @@ static unsigned bow(const struct avatar *av, const struct ik_kin *kin, const str
 	struct ik_target t[2];
 	struct ik_opts short_o = *o;
 	struct dq chest[BOW_TRIES];
-	sc_t line[BOW_TRIES], best;
+	sc_t line[BOW_TRIES], best_lie = 0;
+	bool tried[BOW_TRIES] = { false }, kept = false;
 	const struct dq up = out->chest;
-	int k, n, side;
+	int k, n, side, best_off;
 
 	/* each bow's solve as short as tracking a target out of reach */
 	if (short_o.max_evals > TRACK_EVALS)
@@ -990,9 +994,7 @@ static unsigned bow(const struct avatar *av, const struct ik_kin *kin, const str
 	/* a bow is kept only if it puts more hands on their sensors than the upright chest */
 	for (side = 0; side < 2; side++)
 		avatar_arm_target(&up, hand[side], &t[side]);
-	best = hand_off(o, t, out, 0) ? BOW_OFF : 0;
-	if (hand_off(o, t, out, 1))
-		best += BOW_OFF;
+	best_off = hand_off(t, out, 0) + hand_off(t, out, 1);
 	for (k = 0; k < BOW_TRIES; k++) {
 		bowed_chest(av, head, &up, k, &chest[k]);
 		for (side = 0; side < 2; side++)
@@ -1002,26 +1004,29 @@ static unsigned bow(const struct avatar *av, const struct ik_kin *kin, const str
 	/* the bows in the order of their lines; the first that puts both hands on is kept */
 	for (n = 0; n < BOW_TRIES; n++) {
 		unsigned f = 0;
-		sc_t cost;
-		int kb = -1;
+		sc_t lie;
+		int kb = -1, off;
 
 		for (k = 0; k < BOW_TRIES; k++)
-			if (line[k] >= 0 && (kb < 0 || line[k] < line[kb]))
+			if (!tried[k] && (kb < 0 || line[k] < line[kb]))
 				kb = k;
-		line[kb] = SC_C(-1);
+		tried[kb] = true;
 		tmp.chest = chest[kb];
 		tmp.head_yaw = out->head_yaw;
 		for (side = 0; side < 2; side++) {
 			avatar_arm_target(&tmp.chest, hand[side], &t[side]);
 			f |= avatar_arm_solve(av, side, kin, &short_o, &t[side], prev, &tmp);
 		}
-		cost = bow_cost(o, t, &tmp);
-		if (cost < best) {
-			best = cost;
+		off = bow_eval(t, &tmp, &lie);
+		/* fewer hands off; among bows as many, the arms nearer along the trunk */
+		if (off < best_off || (kept && off == best_off && lie < best_lie)) {
+			kept = true;
+			best_off = off;
+			best_lie = lie;
 			*out = tmp;
 			flags = f;
 		}
-		if (!hand_off(o, t, &tmp, 0) && !hand_off(o, t, &tmp, 1))
+		if (!off)
 			break;
 	}
 	return flags;
@@ -1070,7 +1075,7 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 	}
 	for (side = 0; side < 2; side++)
 		flags |= avatar_arm_solve(av, side, kin, o1, &t[side], prev, out);
-	if ((av->body.model & AVATAR_BOW) && (hand_off(o, t, out, 0) || hand_off(o, t, out, 1)))
+	if ((av->body.model & AVATAR_BOW) && (hand_off(t, out, 0) || hand_off(t, out, 1)))
 		flags = bow(av, kin, o, head, hand, prev, out, flags);
 	return flags;
 }
