@@ -45,7 +45,7 @@ static void usage(FILE *out)
 		     "calibrate: the person holds the standard poses in turn, Enter when each is held;\n"
 		     "  --rounds N   times round the poses (default 2: posing errors average out)\n"
 		     "  --side       the arms-out T-pose too (needs room to the sides)\n"
-		     "  --hand M     wrist centre to hand sensor along the hand, m (default 0: at the wrist)\n"
+		     "  --hand M     wrist centre to hand sensor along the hand, m (default: the configured one)\n"
 		     "  --samples N  readings averaged per pose, 20 ms apart (default 25)\n"
 		     "  --still CM   the most a sensor may move while a pose is read (default 2)\n"
 		     "  --write FILE the avatar's keys as a drop-in (e.g. /etc/avatargw/conf.d/60-NAME.conf);\n"
@@ -154,6 +154,7 @@ struct reading {
 	char state[3][16];
 	char section[64]; /* the [avatar SECTION] the avatar comes from */
 	int shared;       /* the avatars that section makes (count = N) */
+	double hand;      /* its configured hand length */
 };
 
 /* a `sensors` answer: the three sensors' states and positions; false if it is not one */
@@ -162,8 +163,10 @@ static bool parse_sensors(const char *s, struct reading *r)
 	static const char *const roles[3] = { "\"role\":\"head\"", "\"role\":\"left_hand\"", "\"role\":\"right_hand\"" };
 
 	const char *sec = strstr(s, "\"section\":\""), *sh = strstr(s, "\"section_avatars\":");
+	const char *hd = strstr(s, "\"hand\":");
 
-	if (!sec || sscanf(sec + 11, "%63[^\"]", r->section) != 1 || !sh || sscanf(sh + 18, "%d", &r->shared) != 1)
+	if (!sec || sscanf(sec + 11, "%63[^\"]", r->section) != 1 || !sh || sscanf(sh + 18, "%d", &r->shared) != 1 ||
+	    !hd || sscanf(hd + 7, "%lf", &r->hand) != 1)
 		return false;
 	for (int k = 0; k < 3; k++) {
 		const char *at = strstr(s, roles[k]), *st, *p;
@@ -349,6 +352,8 @@ static int calibrate(char *path, size_t plen, int argc, char **argv)
 			return 76; /* EX_PROTOCOL */
 		}
 	}
+	if (!hand_given)
+		hand = first.hand; /* the configured one: the fit's forearm is then the configuration's */
 	if (file && first.shared > 1) {
 		fprintf(stderr, "avatargw-ctl: %s is one of the %d avatars of [avatar %s] (count = %d), which share one body: "
 				"not written (the keys are printed; put them in that section by hand if they fit them all)\n",

@@ -372,9 +372,10 @@ static void ctl_sensors(FILE *out, const struct ctl_info *info, const char *name
 	}
 	atomic_store_explicit(&g->probe.want, 0, memory_order_relaxed);
 	t = (uint64_t)w[0] | (uint64_t)w[1] << 32;
-	fprintf(out, "{\"avatar\":\"%s\",\"id\":%u,\"section\":\"%s\",\"section_avatars\":%d,\"mono_ns\":%llu,"
-		     "\"sensors\":[",
-		name, g->av[idx].cfg->id, g->av[idx].cfg->section, shared, (unsigned long long)t);
+	fprintf(out, "{\"avatar\":\"%s\",\"id\":%u,\"section\":\"%s\",\"section_avatars\":%d,\"hand\":%.4f,"
+		     "\"mono_ns\":%llu,\"sensors\":[",
+		name, g->av[idx].cfg->id, g->av[idx].cfg->section, shared, (double)g->av[idx].av->body.dims.hand,
+		(unsigned long long)t);
 	for (int r = 0; r < FRAME_SENSORS; r++) {
 		const uint32_t *o = w + GW_PROBE_HEAD + r * GW_PROBE_SENSOR_WORDS;
 		float v[7];

@@ -686,9 +686,10 @@ class CalibrateTest(unittest.TestCase):
         with tempfile.TemporaryDirectory() as tmp:
             clip = os.path.join(tmp, "poses.csv")
             self.write_clip(clip)
+            # the hand sensor 5 cm beyond the wrist, as configured: the fit's forearm is F - 5 cm
             conf = ("[daemon]\nrate = 120\nstale_ms = 60000\n[source rp]\ntype = replay\nfile = %s\nstep = yes\n"
-                    "[avatar tester]\nperson = rp\n[output u]\ntype = udp\naddress = 127.0.0.1\nport = %d\n"
-                    % (clip, port))
+                    "[avatar tester]\nperson = rp\nhand = 0.05\n[output u]\ntype = udp\naddress = 127.0.0.1\n"
+                    "port = %d\n" % (clip, port))
             d = Daemon(tmp, conf)
             try:
                 # the sensors, as the loop has them: the first row
@@ -732,8 +733,9 @@ class CalibrateTest(unittest.TestCase):
                 self.assertEqual(cal.returncode, 0, err.decode())
                 text = out_text.decode()
                 self.assertIn("[avatar tester]", text)
-                # no --hand: the configured hand length is left alone
+                # no --hand: the configured hand length is the fit's and is left alone
                 self.assertNotIn("hand =", text)
+                self.assertEqual(got["hand"], 0.05)
                 with open(dropin) as f:
                     self.assertEqual(f.read(), text)
                 # the drop-in is what the configuration now says, to a tenth of a millimetre
@@ -747,8 +749,8 @@ class CalibrateTest(unittest.TestCase):
                     vals[k.strip()] = [float(x) for x in v.split()]
                 self.assertAlmostEqual(vals["shoulder"][0], self.S, delta=1e-4)
                 self.assertAlmostEqual(vals["upper_arm"][0], self.A, delta=1e-4)
-                self.assertAlmostEqual(vals["forearm"][0], self.F, delta=1e-4)
-                self.assertAlmostEqual(vals["hand"][0], 0, delta=1e-4)
+                self.assertAlmostEqual(vals["forearm"][0], self.F - 0.05, delta=1e-4)
+                self.assertAlmostEqual(vals["hand"][0], 0.05, delta=1e-4)
                 for got_h, want_h in zip(vals["head_offset"], self.HEAD):
                     self.assertAlmostEqual(got_h, want_h, delta=1e-4)
                 # and the daemon takes it in
