@@ -75,16 +75,17 @@ def rec_csv(path):
             for r in csv.DictReader(io.StringIO(out.stdout))]
 
 
-def record(tmp, seconds, extra="", speed=1):
-    """the demo clip recorded for a while; the file's path"""
+def record(tmp, seconds, extra="", speed=1, with_status=False):
+    """the demo clip recorded for a while; the file's path (and the daemon's last status)"""
     rec = os.path.join(tmp, "rec")
     d = td.Daemon(tmp, CLIP_CONF.format(rec=rec, extra=extra, speed=speed, port=td.free_port()))
     time.sleep(seconds)
+    st = d.status()
     rc = d.stop()
     assert rc == 0, d.stderr()
     files = sorted(glob.glob(os.path.join(rec, "*.agwrec")))
     assert len(files) == 1, files
-    return files[0]
+    return (files[0], st) if with_status else files[0]
 
 
 def seg_dist(p, a, b):
@@ -119,7 +120,7 @@ class RecordReplayTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.tmpd = tempfile.TemporaryDirectory()
-        cls.file = record(cls.tmpd.name, 1.2, "record_messages = yes\nrecord_flush = 0.05")
+        cls.file, cls.status = record(cls.tmpd.name, 1.2, "record_messages = yes\nrecord_flush = 0.05", with_status=True)
 
     @classmethod
     def tearDownClass(cls):
@@ -142,8 +143,18 @@ class RecordReplayTest(unittest.TestCase):
     def test_samples_are_the_clip(self):
         got = rec_csv(self.file)
         self.assertGreater(len(got), 55)
-        # every row the clip's next one
-        self.assertIsNotNone(rows_in_order(got, td.load_clip(), most=1))
+        # every row the clip's next one; unless the host stalled the daemon: a loop that overran
+        # releases only the newest instants it owes (DAEMON.md), and a recorder thread kept from
+        # writing drops what its ring cannot hold, counted; then the rows only go forward
+        clip = td.load_clip()
+        stalled = self.status["loop"]["overruns"] or self.status["recorder"]["dropped"]
+        steps = rows_in_order(got, clip, most=len(clip) - 1 if stalled else 1)
+        self.assertIsNotNone(steps, "a recorded row is not the clip's next one (overruns %d, dropped %d)"
+                             % (self.status["loop"]["overruns"], self.status["recorder"]["dropped"]))
+        if stalled:
+            print("test_samples_are_the_clip: the host stalled the daemon (overruns %d, dropped %d): %d of %d "
+                  "rows followed the one before" % (self.status["loop"]["overruns"],
+                                                    self.status["recorder"]["dropped"], steps.count(1), len(steps)))
 
     def test_replayed_recording_publishes_the_clip(self):
         tmp = tempfile.mkdtemp(dir=self.tmpd.name)
