@@ -877,10 +877,9 @@ static bool reach_chest(const struct avatar *av, const struct dq *const hand[2],
 /*
  * AVATAR_BOW: a hand the upright chest leaves more than a millimetre off its
  * sensor (a joint limit in the way, after AVATAR_REACH_CHEST has mended the
- * arm's length)
- * may be a bow at the waist: the trunk pitched forward carries the shoulders
- * and sweeps the arms back along it, while the head, on its sensor, stays
- * up. The chest is tried pitched forward by 15, 30 ... 75 degrees about
+ * arm's length) may be a bow at the waist: the trunk pitched forward carries
+ * the shoulders and sweeps the arms back along it, while the head, on its
+ * sensor, stays up. The chest is tried pitched forward by 15, 30 ... 75 degrees about
  * its x axis, turning with the neck and head about the head sensor
  * (origin = head - Rz Rx(pitch) B head_offset, B the neck's bend as
  * upright), both arms solved at each, in the order of how nearly each bow
@@ -958,7 +957,7 @@ static void bowed_chest(const struct avatar *av, const struct dq *head, const st
 	dq_from_rt(&rb, &o, chest);
 }
 
-/* the bow_cost of the shoulder-wrist lines alone, before any solve: which bows to try first */
+/* bow_eval's lie of the shoulder-wrist lines alone, before any solve: which bows to try first */
 static sc_t bow_line_cost(const struct avatar *av, const struct ik_target t[2])
 {
 	sc_t cost = 0;
