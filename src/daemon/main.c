@@ -192,6 +192,22 @@ static void report(struct seen *s, struct gateway *g)
 	}
 }
 
+/* the loop's and the recorder's counters at the end, for the journal: final once the loop has stopped */
+static void final_line(struct gateway *g, struct recorder *rec)
+{
+	char tail[160] = "";
+
+	if (rec) {
+		const struct recorder_stats *rs = recorder_stats(rec);
+
+		snprintf(tail, sizeof(tail), "; recorder: %llu records, %llu dropped, %llu write errors",
+			 (unsigned long long)stat_get(&rs->records), (unsigned long long)stat_get(&rs->dropped_records),
+			 (unsigned long long)stat_get(&rs->write_errors));
+	}
+	pr_info("stopped after %llu cycles, %llu overruns, %llu poll errors%s", (unsigned long long)stat_get(&g->st.cycles),
+		(unsigned long long)stat_get(&g->st.overruns), (unsigned long long)stat_get(&g->st.poll_errors), tail);
+}
+
 static void status_line(struct gateway *g)
 {
 	int ok = 0;
@@ -439,6 +455,7 @@ int main(int argc, char **argv)
 	pr_info("stopping");
 	ctl_close(lfd, ctl_path);
 	loop_stop(loop);
+	final_line(&gws[cur], rec);
 	recorder_close(rec);
 	drain_notes(&gws[cur]);
 	gw_close(&gws[cur]);

@@ -66,7 +66,8 @@ class Daemon:
             time.sleep(0.02)
 
     def stderr(self):
-        self.err.flush()
+        if not self.err.closed:
+            self.err.flush()
         with open(self.err_path) as f:
             return f.read()
 

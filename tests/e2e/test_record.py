@@ -80,12 +80,22 @@ def record(tmp, seconds, extra="", speed=1, with_status=False):
     rec = os.path.join(tmp, "rec")
     d = td.Daemon(tmp, CLIP_CONF.format(rec=rec, extra=extra, speed=speed, port=td.free_port()))
     time.sleep(seconds)
-    st = d.status()
     rc = d.stop()
-    assert rc == 0, d.stderr()
+    err = d.stderr()
+    assert rc == 0, err
     files = sorted(glob.glob(os.path.join(rec, "*.agwrec")))
     assert len(files) == 1, files
-    return (files[0], st) if with_status else files[0]
+    return (files[0], final_counters(err)) if with_status else files[0]
+
+
+def final_counters(err):
+    """the loop's overruns and the recorder's dropped records, from the daemon's last line: final, counted
+    after the loop stopped (a status asked before the stop misses a stall between it and the stop)"""
+    m = re.search(r"stopped after (\d+) cycles, (\d+) overruns, \d+ poll errors; recorder: (\d+) records, "
+                  r"(\d+) dropped", err)
+    assert m, "no final counters in the daemon's log:\n" + err
+    return {"loop": {"cycles": int(m.group(1)), "overruns": int(m.group(2))},
+            "recorder": {"records": int(m.group(3)), "dropped": int(m.group(4))}}
 
 
 def seg_dist(p, a, b):
