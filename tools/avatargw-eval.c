@@ -66,8 +66,15 @@ static const char *const fields[7] = { "x", "y", "z", "qw", "qx", "qy", "qz" };
 static void usage(FILE *f)
 {
 	fprintf(f, "usage: avatargw-eval [--dims S,A,F,H] [--head-offset X,Y,Z] [--limits FILE]\n"
-		   "       [--solver dq|matrix] [--reset] [--keyframes HZ [--interp linear|catmull-rom|natural]]\n"
-		   "       [--person SOURCE/PREFIX] INPUT.csv|INPUT.agwrec\n");
+		   "       [--left-arm A,F,H] [--solver dq|matrix] [--reset] [--model MODEL]\n"
+		   "       [--chest-truth X,Y,Z [--chest-part all|yaw|upright]]\n"
+		   "       [--keyframes HZ [--interp linear|catmull-rom|natural]]\n"
+		   "       [--person SOURCE/PREFIX] INPUT.csv|INPUT.agwrec\n"
+		   "  --left-arm     the left arm's own lengths (the right's are --dims)\n"
+		   "  --model        paper, default, or names joined by '+': hand-elbow, reach-first,\n"
+		   "                 yaw-hands, reach-chest, neck, bow (the avatar's choices, docs/IK.md)\n"
+		   "  --chest-truth  the chest from the CSV's true chest columns (X,Y,Z: the chain origin in\n"
+		   "                 the chest frame); --chest-part: all of it, its heading only, or upright\n");
 }
 
 /* ---- input: sensor CSV ---------------------------------------------------------------- */
@@ -560,7 +567,7 @@ int main(int argc, char **argv)
 			model = parse_model(optarg);
 			if (model < 0) {
 				fprintf(stderr, "avatargw-eval: --model paper, default, or names joined by '+': "
-						"hand-elbow, reach-first, yaw-hands, reach-chest, neck\n");
+						"hand-elbow, reach-first, yaw-hands, reach-chest, neck, bow\n");
 				return 2;
 			}
 			break;
