@@ -200,7 +200,8 @@ $(BUILD)/tests/test_alloc_renderers: TEST_LDFLAGS = -Wl,--wrap=malloc,--wrap=cal
 
 # test_fixq is the fixed-point build's own test (sc_t = Q5.26). It holds the core's
 # Q5.26 build against the double one through tools/lib/ikx.c, and links a counting
-# build of the fixed core (suffix _qs, SC_FIXQ_STATS: how many results saturated).
+# build of the fixed core (suffix _qs, SC_FIXQ_STATS: how many results saturated)
+# and the tests' clip reader (tests/fake/clip.c: the avatar on motion capture).
 SC_qs = -DSC_TYPE=SC_FIXQ -DSC_FIXQ_STATS -DSC_SUFFIX=_qs
 QS_OBJ = $(patsubst src/%.c,$(BUILD)/obj/%.qs.o,$(CORE_SRC_q)) $(BUILD)/obj/tools/lib/ikx.qs.o
 
@@ -211,7 +212,8 @@ $(BUILD)/obj/tools/lib/%.qs.o: tools/lib/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) $(SC_qs) -Itools -c $< -o $@
 $(BUILD)/obj/tests/test_fixq.o: TEST_CFLAGS = $(SC_q) -Itools
-$(BUILD)/tests/test_fixq: $(BUILD)/obj/tests/test_fixq.o $(QS_OBJ) $(IKX_OBJ) $(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
+$(BUILD)/tests/test_fixq: $(BUILD)/obj/tests/test_fixq.o $(QS_OBJ) $(IKX_OBJ) $(BUILD)/obj/tests/fake/clip.o \
+	$(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
 	@mkdir -p $(dir $@)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) $(LIBS)
 

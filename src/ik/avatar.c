@@ -171,14 +171,23 @@ bool avatar_chest_hands(const struct avatar *av, const struct dq *head, const st
 			k = sc_div(SC_C(1), n);
 			cy = sc_mul(mx, k);
 			sy = sc_mul(my, k);
-			n = sc_sqrt(2 * (SC_C(1) + cy));
-			if (n > SC_C(1e-6)) {
-				k = sc_div(SC_C(1), n);
+			/*
+			 * The half angle of the heading (cy, sy) = (cos y, sin y):
+			 * (1 + cy, sy) over its norm while |y| <= 90 degrees, beyond
+			 * that (|sy|, 1 - cy) with sy's sign on the second (the same
+			 * direction), each norm at least sqrt 2. The first form alone
+			 * leaves 1 + cy without bits near y = 180 degrees in fixed
+			 * point: a rotation far from unit, 1 / n saturated, the chest
+			 * a metre off (test_fixq, the clip turned around).
+			 */
+			if (cy >= 0) {
+				k = sc_div(SC_C(1), sc_sqrt(2 * (SC_C(1) + cy)));
 				w = sc_mul(SC_C(1) + cy, k);
 				z = sc_mul(sy, k);
 			} else {
-				w = 0;
-				z = SC_C(1);
+				k = sc_div(SC_C(1), sc_sqrt(2 * (SC_C(1) - cy)));
+				w = sc_mul(sc_abs(sy), k);
+				z = sc_mul(sy < 0 ? cy - SC_C(1) : SC_C(1) - cy, k);
 			}
 		}
 	}

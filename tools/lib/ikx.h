@@ -10,6 +10,7 @@
 #define IKX_H
 
 #include <stdbool.h>
+#include <stddef.h>
 
 #define IKX_DOF 8
 
@@ -28,6 +29,28 @@ struct ikx_result {
 	double err_pos, err_rot; /* the solver's own final errors */
 };
 
+/* the whole avatar (ik/avatar.h): avatar_init with the default limits and model, ik_default_opts */
+struct ikx_avatar_setup {
+	double dims[4];	       /* S, A, F, H, metres (both arms) */
+	double head_offset[3]; /* head sensor from the chest origin, chest frame, metres */
+};
+
+/* one frame's sensor poses, world: x y z qw qx qy qz */
+struct ikx_avatar_frame {
+	double head[7], lhand[7], rhand[7];
+};
+
+/* one solved frame; arrays per arm are indexed ARM_RIGHT (0), ARM_LEFT (1) */
+struct ikx_avatar_out {
+	unsigned flags[2];	       /* IK_* */
+	double err_pos[2], err_rot[2]; /* the solver's own final errors */
+	double chest[7];	       /* chest frame in the world: x y z qw qx qy qz */
+	double q[2][IKX_DOF];
+	double shoulder[2][3], elbow[2][3], wrist[2][3], hand[2][3]; /* chest frame */
+	bool finite;		   /* every value of the pose finite (always so in fixed point) */
+	unsigned long saturations; /* results that saturated in this frame: the counting build only, else 0 */
+};
+
 #define IKX_DECLARE(s)                                                                                                 \
 	void ikx_fk##s(const struct ikx_setup *o, const double q[IKX_DOF], double out[7]);                             \
 	void ikx_jacobian##s(const struct ikx_setup *o, const double q[IKX_DOF], double J[6][IKX_DOF]);                \
@@ -35,11 +58,19 @@ struct ikx_result {
 	unsigned ikx_solve##s(const struct ikx_setup *o, const double p[3], const double r[4], const double *seed,     \
 			      double q[IKX_DOF], struct ikx_result *res);                                              \
 	const char *ikx_name##s(void);                                                                                 \
-	void ikx_limits##s(const struct ikx_setup *o, double lo[IKX_DOF], double hi[IKX_DOF]);
+	void ikx_limits##s(const struct ikx_setup *o, double lo[IKX_DOF], double hi[IKX_DOF]);                         \
+	void ikx_tolerances##s(double *pos, double *rot);                                                              \
+	void ikx_avatar_run##s(const struct ikx_avatar_setup *o, const struct ikx_avatar_frame *in, size_t n,          \
+			       struct ikx_avatar_out *out);
 
 /* out = px, py, pz, qw, qx, qy, qz of the end effector */
 /* seed NULL: a reset (the rest posture, or q = 0 for the paper's Newton) */
 /* ikx_limits: the joint limits as this type holds them (rounded), radians */
+/* ikx_tolerances: ik_default_opts' tol_pos (m) and tol_rot (rad) of this type */
+/*
+ * ikx_avatar_run: avatar_solve over n frames as the daemon tracks, each from
+ * the previous frame's pose (the first from the rest posture), in out[0..n-1]
+ */
 IKX_DECLARE(_d)
 IKX_DECLARE(_f)
 IKX_DECLARE(_q)
