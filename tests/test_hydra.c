@@ -8,13 +8,15 @@
  * hemisphere flips a real base produces.
  *
  * First the decoder alone (report layout, frames, hemispheres, sequence
- * numbers, malformed reports, the whole capture against the clip), then a
+ * numbers, malformed reports, each report counted once whatever was
+ * rejected or lost around it, the whole capture against the clip), then a
  * real gateway (gw_open / gw_cycle, this thread playing the loop) with a
  * hydra source on the simulated device: the handshake, the poses and
  * inputs published, and the faults: unplug and replug, short, long and
- * garbage reports, a device stuck in gamepad mode, sequence gaps, stalls,
- * the mode changed behind the driver's back, no permission. Every FRAME
- * published is decoded and checked (tests/fake/gwtest.c).
+ * garbage reports, a device stuck in gamepad mode, sequence gaps, reports
+ * damaged on their way, stalls, the mode changed behind the driver's back,
+ * no permission. Every FRAME published is decoded and checked
+ * (tests/fake/gwtest.c).
  */
 #include "fake/clip.h"
 #include "fake/fake.h"
@@ -28,6 +30,7 @@
 #include <cmocka.h>
 
 #include <errno.h>
+#include <inttypes.h>
 #include <math.h>
 #include <poll.h>
 #include <stdio.h>
@@ -377,6 +380,220 @@ static void test_jump_restart(void **state)
 	free(k.st);
 }
 
+/*
+ * How a script of reports counts. Each step is a report fed, or a number
+ * the device sent that never came: G a good report, J one with an
+ * impossible jump of the left wand, Q one whose quaternion is not unit
+ * length, S one of the wrong length, D a repeat of the last good number,
+ * L a number lost. The number is the step's own (S and D have none of theirs).
+ */
+struct step {
+	char kind;
+	uint8_t seq;
+};
+
+static void feed_step(struct codec *k, struct step s, uint8_t last_good)
+{
+	struct got g;
+	uint8_t r[52];
+
+	switch (s.kind) {
+	case 'G':
+		simple_report(r, s.seq, -150, 100, -80, 200, 120, -60);
+		assert_int_equal(feed(k, r, 52, &g), 2);
+		break;
+	case 'J':
+		/* 3 m away: too far even for the longest gap the sequence byte can show */
+		simple_report(r, s.seq, -3000, 100, -80, 200, 120, -60);
+		assert_int_equal(feed(k, r, 52, &g), -EINVAL);
+		break;
+	case 'Q':
+		simple_report(r, s.seq, -150, 100, -80, 200, 120, -60);
+		memset(r + 8 + 6, 0, 8);
+		assert_int_equal(feed(k, r, 52, &g), -EINVAL);
+		break;
+	case 'S':
+		simple_report(r, s.seq, -150, 100, -80, 200, 120, -60);
+		assert_int_equal(feed(k, r, 12, &g), -EMSGSIZE);
+		break;
+	case 'D':
+		simple_report(r, last_good, -150, 100, -80, 200, 120, -60);
+		assert_int_equal(feed(k, r, 52, &g), -EINVAL);
+		break;
+	case 'L':
+		return;
+	default:
+		fail_msg("no step '%c'", s.kind);
+	}
+	assert_true(s.kind == 'G' || g.n == 0);
+}
+
+/*
+ * A rejected report whose number lies between the good reports around it
+ * was received: malformed, and not lost as well, whatever else was
+ * rejected or lost among them (docs/TRACKERS.md, Sequence numbers).
+ */
+static void test_rejects_counted_once(void **state)
+{
+	static const struct {
+		const char *what;
+		const char *kinds;
+		uint8_t first;
+		uint64_t malformed, lost;
+	} cases[] = {
+		/* the chain of jumps cut by another kind of reject: each report counted once */
+		{ "jump, bad quaternion, jump", "GJQJG", 0, 3, 0 },
+		{ "a bad quaternion alone", "GQG", 10, 1, 0 },
+		{ "bad quaternion, then jumps, then a loss", "GQJJLG", 20, 3, 1 },
+		{ "bad quaternions and jumps taking turns", "GJQJQJQG", 30, 6, 0 },
+		/* the chain cut by a loss: the jumps after it were received too */
+		{ "a loss inside the chain", "GJLJG", 40, 2, 1 },
+		{ "a loss before the chain", "GLJJG", 50, 2, 1 },
+		{ "losses around a jump", "GLLJLG", 60, 1, 3 },
+		/* numberless or out-of-line rejects do not cut it, and were never lost */
+		{ "jump, short report, jump", "GJSJG", 70, 3, 0 },
+		{ "jump, repeat of the last good, jump", "GJDJG", 80, 3, 0 },
+		{ "across the wrap", "GJQJG", 254, 3, 0 },
+		{ "across the wrap, with a loss", "GQLJLG", 253, 2, 2 },
+		/* the rule as it was (test_jump_restart) still holds */
+		{ "jumps only, in line", "GJJJG", 90, 3, 0 },
+		{ "a jump, then a loss", "GJLG", 100, 1, 1 },
+	};
+
+	(void)state;
+	for (size_t c = 0; c < sizeof(cases) / sizeof(cases[0]); c++) {
+		struct codec k;
+		uint8_t seq = cases[c].first, last = 0;
+
+		print_message("%s: %s\n", cases[c].what, cases[c].kinds);
+		codec_open(&k);
+		for (const char *p = cases[c].kinds; *p; p++) {
+			struct step s = { *p, seq };
+
+			feed_step(&k, s, last);
+			if (*p == 'G')
+				last = seq;
+			if (*p != 'S' && *p != 'D')
+				seq++;
+		}
+		assert_int_equal(k.c->reports, 2);
+		assert_int_equal(k.c->malformed, cases[c].malformed);
+		assert_int_equal(k.c->lost, cases[c].lost);
+		free(k.st);
+	}
+	/* garbage numbered outside the gap takes nothing off it, nor off a later one */
+	{
+		struct codec k;
+
+		codec_open(&k);
+		feed_step(&k, (struct step){ 'G', 0 }, 0);
+		feed_step(&k, (struct step){ 'Q', 200 }, 0);
+		feed_step(&k, (struct step){ 'J', 5 }, 0);
+		feed_step(&k, (struct step){ 'G', 2 }, 0);
+		assert_int_equal(k.c->lost, 1);
+		feed_step(&k, (struct step){ 'G', 7 }, 2);
+		assert_int_equal(k.c->lost, 1 + 4);
+		assert_int_equal(k.c->malformed, 2);
+		free(k.st);
+	}
+}
+
+/* the restart after 25 jumps, the chain cut by a bad quaternion: still nothing lost */
+static void test_jump_restart_cut(void **state)
+{
+	struct codec k;
+	uint8_t seq = 0;
+
+	(void)state;
+	codec_open(&k);
+	feed_step(&k, (struct step){ 'G', seq++ }, 0);
+	for (int i = 0; i < 12; i++)
+		feed_step(&k, (struct step){ 'J', seq++ }, 0);
+	feed_step(&k, (struct step){ 'Q', seq++ }, 0);
+	/* 13 more jumps: 25 in a row but for the bad quaternion, which neither counts nor breaks the run */
+	for (int i = 0; i < 13; i++)
+		feed_step(&k, (struct step){ 'J', seq++ }, 0);
+	/* tracking restarted from the sides: a report 3 m away is taken */
+	{
+		struct got g;
+		uint8_t r[52];
+
+		simple_report(r, seq++, -3000, 100, -80, 200, 120, -60);
+		assert_int_equal(feed(&k, r, 52, &g), 2);
+	}
+	assert_int_equal(k.c->reports, 2);
+	assert_int_equal(k.c->malformed, 26);
+	assert_int_equal(k.c->lost, 0);
+	free(k.st);
+}
+
+/* a new stream forgets the numbers rejected in the old one */
+static void test_reset_forgets_rejects(void **state)
+{
+	struct codec k;
+
+	(void)state;
+	codec_open(&k);
+	feed_step(&k, (struct step){ 'G', 0 }, 0);
+	feed_step(&k, (struct step){ 'Q', 1 }, 0);
+	feed_step(&k, (struct step){ 'J', 2 }, 0);
+	hydra_codec.reset(k.st);
+	/* the same numbers again, this time lost */
+	feed_step(&k, (struct step){ 'G', 0 }, 0);
+	feed_step(&k, (struct step){ 'G', 3 }, 0);
+	assert_int_equal(k.c->malformed, 2);
+	assert_int_equal(k.c->lost, 2);
+	free(k.st);
+}
+
+/*
+ * Many numbers, each good, rejected or lost at random, with numberless
+ * and repeated reports between them: every number is counted once, as a
+ * report, a malformed one or a lost one (seeded: the same script every run).
+ */
+static void test_every_number_once(void **state)
+{
+	struct codec k;
+	uint8_t seq = 7, last = 7;
+	uint64_t good = 0, bad = 0, gone = 0, extra = 0;
+	int run = 0;
+
+	(void)state;
+	codec_open(&k);
+	srand(11);
+	feed_step(&k, (struct step){ 'G', seq++ }, 0);
+	good++;
+	for (int n = 0; n < 3000; n++) {
+		static const char kinds[] = "GGGGJJQL";
+		/* fewer than 25 rejects in a row (no restart), gaps well under 256 */
+		char kind = run >= 10 || n == 2999 ? 'G' : kinds[rand() % 8];
+
+		if (rand() % 8 == 0) {
+			feed_step(&k, (struct step){ rand() % 2 ? 'S' : 'D', 0 }, last);
+			extra++;
+		}
+		feed_step(&k, (struct step){ kind, seq }, last);
+		if (kind == 'G') {
+			last = seq;
+			good++;
+			run = 0;
+		} else {
+			run++;
+			if (kind == 'L')
+				gone++;
+			else
+				bad++;
+		}
+		seq++;
+	}
+	print_message("%" PRIu64 " good, %" PRIu64 " rejected, %" PRIu64 " lost, %" PRIu64 " without a number\n",
+		      good, bad, gone, extra);
+	assert_int_equal(k.c->reports, good);
+	assert_int_equal(k.c->malformed, bad + extra);
+	assert_int_equal(k.c->lost, gone);
+	free(k.st);
+}
+
 /* the whole capture, decoded, against the motion it was made from */
 static void test_capture_matches_clip(void **state)
 {
@@ -698,6 +915,46 @@ static void test_sequence_gaps(void **state)
 	gwt_close(&t);
 }
 
+/*
+ * Reports damaged on their way (a corrupted transfer): dropped, and each
+ * counted once, received or lost, through the device thread to the
+ * tracker's counters (the decoder's own cases: test_rejects_counted_once).
+ */
+static void test_damaged_reports(void **state)
+{
+	static const struct {
+		const char *script;
+		uint64_t malformed, lost;
+	} cases[] = {
+		{ "JQJ", 3, 0 },      /* a run of jumps cut by a bad quaternion */
+		{ "LJSQLLJ", 4, 3 },  /* and by losses and a short report */
+		{ "QLJJJL", 4, 2 },
+	};
+	static struct gwt t;
+	struct tracker *h;
+	uint64_t f0;
+
+	(void)state;
+	fake_hid_plug(true);
+	gwt_open(&t, conf_device);
+	h = gwt_tracker(&t, "hydra");
+	assert_true(gwt_until(&t, hands_ok, NULL, 2000) >= 0);
+	f0 = ctr_get(&h->st.faults);
+	for (size_t c = 0; c < sizeof(cases) / sizeof(cases[0]); c++) {
+		uint64_t m0 = ctr_get(&h->st.malformed), l0 = ctr_get(&h->st.lost);
+
+		fake_hid_damage(cases[c].script);
+		gwt_run(&t, 150);
+		print_message("%s: %" PRIu64 " malformed, %" PRIu64 " lost\n", cases[c].script,
+			      ctr_get(&h->st.malformed) - m0, ctr_get(&h->st.lost) - l0);
+		assert_int_equal(ctr_get(&h->st.malformed) - m0, cases[c].malformed);
+		assert_int_equal(ctr_get(&h->st.lost) - l0, cases[c].lost);
+		assert_true(hands_ok(&t, NULL));
+	}
+	assert_int_equal(ctr_get(&h->st.faults), f0);
+	gwt_close(&t);
+}
+
 static void test_stall(void **state)
 {
 	static struct gwt t;
@@ -999,6 +1256,10 @@ int main(void)
 		cmocka_unit_test_setup_teardown(test_sequence, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_malformed_reports, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_jump_restart, setup, gwt_teardown),
+		cmocka_unit_test_setup_teardown(test_rejects_counted_once, setup, gwt_teardown),
+		cmocka_unit_test_setup_teardown(test_jump_restart_cut, setup, gwt_teardown),
+		cmocka_unit_test_setup_teardown(test_reset_forgets_rejects, setup, gwt_teardown),
+		cmocka_unit_test_setup_teardown(test_every_number_once, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_capture_matches_clip, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_published_poses_and_inputs, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_found_in_motion_mode, setup, gwt_teardown),
@@ -1006,6 +1267,7 @@ int main(void)
 		cmocka_unit_test_setup_teardown(test_bad_reports, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_stuck_in_gamepad_mode, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_sequence_gaps, setup, gwt_teardown),
+		cmocka_unit_test_setup_teardown(test_damaged_reports, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_stall, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_mode_changed_behind_our_back, setup, gwt_teardown),
 		cmocka_unit_test_setup_teardown(test_permission_denied, setup, gwt_teardown),

@@ -118,7 +118,7 @@ struct hydra_codec_st {
 	bool tracking[2];
 	double prev[2][3];  /* the previous position of each wand, base frame, mm, hemisphere resolved */
 	int jumps;          /* reports in a row rejected for an impossible jump */
-	uint8_t rejected;   /* of them, those that came in sequence after seq: received, not lost */
+	uint64_t rejected[4]; /* bit d: number seq + d came in a rejected report (received: not lost) */
 	uint64_t flips;     /* positions taken as -p */
 };
 
@@ -132,6 +132,37 @@ struct hydra_codec_st {
 #define HYDRA_MAX_STEP_MM 150.0
 #define HYDRA_MAX_GAP_MM 2000.0 /* however many reports were lost (the counter wraps at 256) */
 #define HYDRA_MAX_JUMPS 25
+
+/*
+ * A report of the right length was rejected (not a unit quaternion, an
+ * impossible jump): its number is noted, not taken as the reference
+ * (garbage that passed the other checks would derail the count). If the
+ * next good report shows a gap that this number falls in, the report was
+ * received: malformed, not lost as well. Noted by distance from the last
+ * good number, which stays put until the next good report.
+ */
+static void hydra_note_rejected(struct hydra_codec_st *h, const uint8_t *buf)
+{
+	uint8_t d = (uint8_t)(buf[7] - h->seq);
+
+	if (h->have_seq && d)
+		h->rejected[d >> 6] |= 1ull << (d & 63);
+}
+
+/*
+ * A good report step numbers after the last: of the step - 1 numbers in
+ * between, those not received at all, each counted once however many
+ * rejects carried it and in whatever order they came. The notes go.
+ */
+static unsigned hydra_gap_lost(struct hydra_codec_st *h, unsigned step)
+{
+	unsigned lost = step - 1u;
+
+	for (unsigned d = 1; d < step; d++)
+		lost -= (unsigned)(h->rejected[d >> 6] >> (d & 63) & 1u);
+	memset(h->rejected, 0, sizeof(h->rejected));
+	return lost;
+}
 
 static int16_t le16(const uint8_t *p)
 {
@@ -177,7 +208,7 @@ static void hydra_codec_reset(void *st)
 	h->have_seq = false;
 	h->tracking[0] = h->tracking[1] = false;
 	h->jumps = 0;
-	h->rejected = 0;
+	memset(h->rejected, 0, sizeof(h->rejected));
 }
 
 static double hydra_period(const void *st)
@@ -195,6 +226,7 @@ static int hydra_feed(void *st, const uint8_t *buf, size_t len, device_emit_fn *
 	bool jump = false, neg[2] = { false, false };
 
 	if (len != HYDRA_REPORT_LEN) {
+		/* not a motion report (hidraw reads whole reports): it has no number, and none is lost by it */
 		h->c.malformed++;
 		return -EMSGSIZE;
 	}
@@ -207,6 +239,7 @@ static int hydra_feed(void *st, const uint8_t *buf, size_t len, device_emit_fn *
 		/* int16 / 32768 is a unit quaternion to 1e-4; anything far from it is not a report */
 		if (n < 0.9 || n > 1.1) {
 			h->c.malformed++;
+			hydra_note_rejected(h, buf);
 			return -EINVAL;
 		}
 	}
@@ -251,13 +284,7 @@ static int hydra_feed(void *st, const uint8_t *buf, size_t len, device_emit_fn *
 	}
 	if (jump) {
 		h->c.malformed++;
-		/*
-		 * Its sequence byte is not taken (garbage that passed the other
-		 * checks would derail the count), but one that comes next in line
-		 * was received: counted malformed, not lost as well.
-		 */
-		if (h->have_seq && (uint8_t)(buf[7] - h->seq) == (uint8_t)(h->rejected + 1u))
-			h->rejected++;
+		hydra_note_rejected(h, buf);
 		/* so many in a row that the wands must really be there: start over from the sides */
 		if (++h->jumps >= HYDRA_MAX_JUMPS) {
 			h->tracking[0] = h->tracking[1] = false;
@@ -267,8 +294,7 @@ static int hydra_feed(void *st, const uint8_t *buf, size_t len, device_emit_fn *
 	}
 	h->jumps = 0;
 	if (h->have_seq)
-		h->c.lost += step - 1u - (h->rejected < step ? h->rejected : step - 1u);
-	h->rejected = 0;
+		h->c.lost += hydra_gap_lost(h, step);
 	h->have_seq = true;
 	h->seq = buf[7];
 	for (int w = 0; w < 2; w++) {

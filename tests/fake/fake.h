@@ -19,10 +19,10 @@
  * the device's sequence numbers counting on) or stepped (a report only
  * when the test releases it: deterministic checks of what comes out). Both
  * take faults from the test: unplug and replug, injected bytes, dropped
- * reports, stalls, halted endpoints. The test thread drives them while the
- * driver's device thread calls them: every entry point locks. What the two
- * share (the capture's play, its pace, the injected bytes, the lock) is
- * player.c.
+ * and damaged reports, stalls, halted endpoints. The test thread drives
+ * them while the driver's device thread calls them: every entry point
+ * locks. What the two share (the capture's play, its pace, the injected
+ * bytes, the lock) is player.c.
  */
 #ifndef AGW_TEST_FAKE_H
 #define AGW_TEST_FAKE_H
@@ -59,6 +59,13 @@ void fake_hid_seek(int index);          /* the next report is this capture index
 void fake_hid_inject(const uint8_t *rep, size_t len); /* the next read returns these bytes (queued) */
 void fake_hid_skip(int n);              /* n reports are lost: the sequence byte jumps by n + 1 */
 void fake_hid_stall(int ms);            /* no report for ms */
+/*
+ * The next reports, a letter each: '.' intact, 'J' the left wand 30 m away
+ * (an impossible jump), 'Q' the left wand's quaternion zero, 'L' lost (its
+ * number skipped, the wands move on), 'S' a 12-byte report (no number)
+ * sent before the next one. Then intact again.
+ */
+void fake_hid_damage(const char *script);
 void fake_hid_stats(struct fake_hid_stats *s);
 /* the capture's report i (its bytes as recorded, before sequence rewriting) */
 const uint8_t *fake_hid_capture_report(int i, size_t *len);

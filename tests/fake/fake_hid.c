@@ -30,6 +30,8 @@ static struct {
 	unsigned gen;
 	int deny;
 	uint8_t seq;
+	char damage[64];  /* what happens to the next reports, a letter each (fake_hid_damage) */
+	int damage_at;
 	uint64_t stall_until;
 	struct fake_hid_stats st;
 } F = { .p = PLAYER_INIT };
@@ -42,6 +44,8 @@ void fake_hid_reset(const char *capture)
 	F.gen++;
 	F.deny = 0;
 	F.seq = 0x10;
+	F.damage[0] = '\0';
+	F.damage_at = 0;
 	F.stall_until = 0;
 	memset(&F.st, 0, sizeof(F.st));
 	F.st.last_index = -1;
@@ -122,6 +126,14 @@ void fake_hid_skip(int n)
 	F.seq = (uint8_t)(F.seq + n);
 	for (int i = 0; i < n; i++)
 		player_advance_locked(&F.p); /* the reports that were lost still moved the wands */
+	pthread_mutex_unlock(&F.p.mu);
+}
+
+void fake_hid_damage(const char *script)
+{
+	pthread_mutex_lock(&F.p.mu);
+	snprintf(F.damage, sizeof(F.damage), "%s", script);
+	F.damage_at = 0;
 	pthread_mutex_unlock(&F.p.mu);
 }
 
@@ -255,17 +267,39 @@ static bool alive(const hid_device *dev)
 	return F.plugged && dev->gen == F.gen;
 }
 
-/* the next capture report into data, with the device's own sequence number */
+static char next_damage(void)
+{
+	return F.damage[F.damage_at] ? F.damage[F.damage_at++] : '.';
+}
+
+/* the next capture report into data, with the device's own sequence number (and the damage asked for) */
 static int deliver(unsigned char *data, size_t length)
 {
-	const struct capture_report *r = &F.p.cap.rep[F.p.idx];
-	size_t n = r->len < length ? r->len : length;
+	const struct capture_report *r;
+	size_t n;
+	char damage = next_damage();
 
+	for (; damage == 'L'; damage = next_damage()) {
+		F.seq++;
+		player_advance_locked(&F.p);
+	}
+	r = &F.p.cap.rep[F.p.idx];
+	n = r->len < length ? r->len : length;
 	memcpy(data, F.p.cap.bytes + r->off, n);
+	/* a short report: it bears no number, and this one is sent next */
+	if (damage == 'S')
+		return n < 12 ? (int)n : 12;
 	if (n > 29) {
 		data[7] = F.seq;
 		data[29] = F.seq;
 	}
+	if (damage == 'J' && n >= 52) {
+		/* the left wand's x 30 m away: a jump no hand makes */
+		data[8] = 30000 & 0xff;
+		data[9] = 30000 >> 8;
+	}
+	if (damage == 'Q' && n >= 52)
+		memset(data + 8 + 6, 0, 8); /* the left wand's quaternion zero */
 	F.seq++;
 	F.st.delivered++;
 	F.st.last_index = F.p.idx;
