@@ -219,7 +219,10 @@ $(BUILD)/tests/test_fixq: $(BUILD)/obj/tests/test_fixq.o $(QS_OBJ) $(IKX_OBJ) $(
 
 # The hardware drivers' tests: simulated devices (tests/fake) take the place of
 # every hidapi and libusb function the drivers call, and count the loop
-# thread's allocations.
+# thread's allocations; the steps both tests take with their device are
+# tests/fake/devtest.c. The fake objects go before the libraries: they call
+# into the gateway themselves (the linker takes from an archive only what is
+# wanted by what came before it).
 FAKE_OBJ = $(patsubst tests/%.c,$(BUILD)/obj/tests/%.o,$(wildcard tests/fake/*.c))
 FAKE_WRAP = hid_init hid_exit hid_enumerate hid_free_enumeration hid_open_path hid_close hid_read_timeout \
 	hid_send_feature_report hid_get_feature_report hid_error \
@@ -231,7 +234,9 @@ FAKE_WRAP = hid_init hid_exit hid_enumerate hid_free_enumeration hid_open_path h
 	libusb_release_interface libusb_clear_halt libusb_bulk_transfer \
 	malloc calloc realloc free
 FAKE_TESTS = $(BUILD)/tests/test_hydra $(BUILD)/tests/test_polhemus
-$(FAKE_TESTS): $(FAKE_OBJ)
+$(FAKE_TESTS): $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(FAKE_OBJ) $(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
+	@mkdir -p $(dir $@)
+	$(CXX) $(LDFLAGS) $(TEST_LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) $(LIBS)
 $(FAKE_TESTS): TEST_LDFLAGS = $(foreach f,$(FAKE_WRAP),-Wl,--wrap=$(f))
 
 # ---- top-level targets --------------------------------------------------------

@@ -16,9 +16,14 @@
  * garbage reports, a device stuck in gamepad mode, sequence gaps, reports
  * damaged on their way, stalls, the mode changed behind the driver's back,
  * no permission. Every FRAME published is decoded and checked
- * (tests/fake/gwtest.c).
+ * (tests/fake/gwtest.c). The steps every device goes through (up,
+ * unplugged and replugged, denied, listed, the loop's allocations, a
+ * capture played) are tests/fake/devtest.c's, shared with
+ * test_polhemus.c: here, what they are for a Hydra and what only a Hydra
+ * does.
  */
 #include "fake/clip.h"
+#include "fake/devtest.h"
 #include "fake/fake.h"
 #include "fake/gwtest.h"
 #include "trackers/device.h"
@@ -160,20 +165,6 @@ static void simple_report(uint8_t r[52], uint8_t seq, int lx, int ly, int lz, in
 	make_report(r, seq, pos, quat, buttons, joy, trig);
 }
 
-static void pose_of(const struct device_sample *s, double p[3], double q[4])
-{
-	struct vec3 t;
-
-	dq_translation(&s->pose, &t);
-	p[0] = t.x;
-	p[1] = t.y;
-	p[2] = t.z;
-	q[0] = s->pose.r.w;
-	q[1] = s->pose.r.x;
-	q[2] = s->pose.r.y;
-	q[3] = s->pose.r.z;
-}
-
 /* the layout of docs/TRACKERS.md, field by field */
 static void test_report_layout(void **state)
 {
@@ -197,7 +188,7 @@ static void test_report_layout(void **state)
 	assert_int_equal(g.sensor[0], HYDRA_LEFT);
 	assert_int_equal(g.sensor[1], HYDRA_RIGHT);
 	/* positions: mm, base frame (x right, y front, z down) -> tracker frame (x, -y, -z), metres */
-	pose_of(&g.s[0], p, q);
+	devtest_pose(&g.s[0], p, q);
 	assert_float_equal(p[0], -0.100, 1e-9);
 	assert_float_equal(p[1], -0.200, 1e-9);
 	assert_float_equal(p[2], 0.300, 1e-9);
@@ -221,7 +212,7 @@ static void test_report_layout(void **state)
 	assert_float_equal(g.s[1].analog[HYDRA_AN_TRIGGER], 0.2, 1e-6);
 	assert_true(g.s[0].inputs && g.s[1].inputs);
 	/* the right wand: raw (0,1,0,0) is the wand upright, along the tracker's axes: identity */
-	pose_of(&g.s[1], p, q);
+	devtest_pose(&g.s[1], p, q);
 	assert_float_equal(p[0], 0.050, 1e-9);
 	assert_float_equal(p[1], 0.0, 1e-9);
 	assert_float_equal(p[2], -0.400, 1e-9);
@@ -247,9 +238,9 @@ static void test_hemisphere(void **state)
 	/* both wands reported mirrored: left at x > 0, right at x < 0; the start puts them back */
 	simple_report(r, seq++, 150, -100, 80, -200, -120, 60);
 	assert_int_equal(feed(&k, r, sizeof(r), &g), 2);
-	pose_of(&g.s[0], p, q);
+	devtest_pose(&g.s[0], p, q);
 	assert_float_equal(p[0], -0.150, 1e-9);
-	pose_of(&g.s[1], p, q);
+	devtest_pose(&g.s[1], p, q);
 	assert_float_equal(p[0], 0.200, 1e-9);
 	/* the right wand rises through the base's z = 0 plane: the base reports -p beyond it */
 	for (int z = -60; z <= 60; z += 5) {
@@ -257,7 +248,7 @@ static void test_hemisphere(void **state)
 
 		simple_report(r, seq++, -150, 100, -80, sgn * 200, sgn * 120, rz);
 		assert_int_equal(feed(&k, r, sizeof(r), &g), 2);
-		pose_of(&g.s[1], p, q);
+		devtest_pose(&g.s[1], p, q);
 		assert_float_equal(p[0], 0.200, 1e-9);
 		assert_float_equal(p[1], -0.120, 1e-9);
 		assert_float_equal(p[2], -z * 1e-3, 1e-9);
@@ -266,7 +257,7 @@ static void test_hemisphere(void **state)
 	hydra_codec.reset(k.st);
 	simple_report(r, 0, -150, 100, -80, -200, -120, 60);
 	assert_int_equal(feed(&k, r, sizeof(r), &g), 2);
-	pose_of(&g.s[1], p, q);
+	devtest_pose(&g.s[1], p, q);
 	assert_float_equal(p[0], 0.200, 1e-9);
 	assert_int_equal(k.c->malformed, 0);
 	free(k.st);
@@ -364,7 +355,7 @@ static void test_jump_restart(void **state)
 	assert_true(feed(&k, r, 52, &g) < 0);
 	simple_report(r, seq++, -3000, 100, -80, 200, 120, -60);
 	assert_int_equal(feed(&k, r, 52, &g), 2);
-	pose_of(&g.s[0], p, q);
+	devtest_pose(&g.s[0], p, q);
 	assert_float_equal(p[0], -3.0, 1e-9);
 	/* the 25 rejected reports came in sequence: received (malformed), not lost as well */
 	assert_int_equal(k.c->malformed, 25);
@@ -621,7 +612,7 @@ static void test_capture_matches_clip(void **state)
 			const uint8_t *blk = b + 8 + 22 * w;
 			uint32_t bits = 0;
 
-			pose_of(&g.s[w], local.p, local.q);
+			devtest_pose(&g.s[w], local.p, local.q);
 			/* the report's x against the decoded one (the tracker frame keeps the base's x) */
 			{
 				bool neg = (int16_t)(blk[0] | blk[1] << 8) * local.p[0] < 0;
@@ -688,21 +679,52 @@ static bool samples_above(struct gwt *t, void *arg)
 /* the hands' wire sensor indices: FRAME sensors are head, left hand, right hand */
 static const int wire_of[2] = { WIRE_S_LEFT_HAND, WIRE_S_RIGHT_HAND };
 
+static void plug_motion(void)
+{
+	fake_hid_plug(true);
+}
+
+static void plug_gamepad(void)
+{
+	fake_hid_plug(false);
+}
+
+static void deny_open(bool deny)
+{
+	fake_hid_deny_open(deny ? EACCES : 0);
+}
+
+/* the driver probed, found gamepad mode and sent the motion-mode request */
+static bool motion_requested(void)
+{
+	return stats().motion_requests >= 1;
+}
+
+/* the Hydra for the steps every device goes through (fake/devtest.h), plugged in by plug_fn */
+#define HYDRA_DEVTEST(plug_fn)                                                                                  \
+	{                                                                                                       \
+		.source = "hydra", .conf = conf_device,                                                         \
+		.sensors = 1u << WIRE_S_LEFT_HAND | 1u << WIRE_S_RIGHT_HAND, .inputs = true,                    \
+		.drv = &hydra_driver, .plug = plug_fn, .unplug = fake_hid_unplug, .deny_open = deny_open,       \
+		.denied = "Permission denied", .stepped = fake_hid_stepped, .set_up = motion_requested,         \
+	}
+
+/* found streaming (left in motion mode by a program before us) */
+static struct devtest hydra = HYDRA_DEVTEST(plug_motion);
+/* as it comes from the box, and back from every replug: in gamepad mode, to be switched */
+static struct devtest hydra_gamepad = HYDRA_DEVTEST(plug_gamepad);
+
 /* handshake from gamepad mode, then every report of the capture, one at a time, through the gateway */
 static void test_published_poses_and_inputs(void **state)
 {
 	static struct gwt t;
 	struct clip clip;
-	int one = 1;
 	double worst_p = 0, worst_a = 0;
 
 	(void)state;
 	assert_int_equal(clip_load(&clip, CLIP), 0);
-	fake_hid_stepped(true);
-	fake_hid_plug(false);
-	gwt_open(&t, conf_stepped);
 	/* the driver probes, finds gamepad mode, sends the motion-mode request to interface 1 */
-	assert_true(gwt_until(&t, requested, &one, 3000) >= 0);
+	devtest_stepped(&t, &hydra_gamepad, conf_stepped);
 	for (int i = 0; i < fake_hid_capture_count(); i++) {
 		uint64_t before = ctr_get(&gwt_tracker(&t, "hydra")->st.samples);
 		struct fake_hid_stats s;
@@ -756,64 +778,22 @@ static void test_found_in_motion_mode(void **state)
 	static struct gwt t;
 
 	(void)state;
-	fake_hid_plug(true);
-	gwt_open(&t, conf_device);
-	assert_true(gwt_until(&t, gwt_tracker_ok, "hydra", 2000) >= 0);
+	devtest_up(&t, &hydra);
 	gwt_close(&t);
 	assert_int_equal(stats().motion_requests, 0);
 	assert_int_equal(stats().gamepad_requests, 0);
 }
 
-static bool hands_missing(struct gwt *t, void *arg)
-{
-	(void)arg;
-	return gwt_state(t, "hydra") == TRACKER_FAULTY && t->f.sensor[WIRE_S_LEFT_HAND].state == WIRE_SENSOR_MISSING &&
-	       t->f.sensor[WIRE_S_RIGHT_HAND].state == WIRE_SENSOR_MISSING;
-}
-
-static bool hands_ok(struct gwt *t, void *arg)
-{
-	(void)arg;
-	return gwt_state(t, "hydra") == TRACKER_OK && t->f.sensor[WIRE_S_LEFT_HAND].state == WIRE_SENSOR_OK &&
-	       t->f.sensor[WIRE_S_RIGHT_HAND].state == WIRE_SENSOR_OK;
-}
-
+/* in gamepad mode again after the replug: switched again */
 static void test_unplug_replug(void **state)
 {
 	static struct gwt t;
-	struct tracker *h;
-	uint64_t f0;
-	int ms;
 
 	(void)state;
-	fake_hid_plug(false);
-	gwt_open(&t, conf_device);
-	h = gwt_tracker(&t, "hydra");
-	assert_true(gwt_until(&t, hands_ok, NULL, 2000) >= 0);
-	/* FAULTY from the start until the first sample (unless a sample beat the first cycle) */
-	f0 = ctr_get(&h->st.faults);
-	assert_true(f0 <= 1);
-	gwt_run(&t, 200);
-	fake_hid_unplug();
-	ms = gwt_until(&t, hands_missing, NULL, 1000);
-	print_message("unplugged: FAULTY after %d ms\n", ms);
-	assert_true(ms >= 0);
-	/* the daemon keeps running: the head still tracks, the frames say STALE */
-	gwt_run(&t, 300);
-	assert_int_equal(t.f.sensor[WIRE_S_HEAD].state, WIRE_SENSOR_OK);
-	assert_true(t.f.h.flags & WIRE_F_STALE);
-	assert_false(t.f.h.flags & WIRE_F_INPUTS);
-	assert_int_equal(ctr_get(&h->st.faults), f0 + 1);
-	/* replugged: it comes back in gamepad mode and must be switched again */
-	fake_hid_plug(false);
-	ms = gwt_until(&t, hands_ok, NULL, 3000);
-	print_message("replugged: OK again after %d ms\n", ms);
-	assert_true(ms >= 0 && ms < 1000);
-	assert_int_equal(ctr_get(&h->st.reconnects), 1);
-	assert_int_equal(ctr_get(&h->st.faults), f0 + 1);
+	devtest_unplug_replug(&t, &hydra_gamepad);
 	assert_int_equal(stats().motion_requests, 2);
 	gwt_take_notes(&t);
-	assert_non_null(strstr(t.notes, "unplugged?"));
+	assert_non_null(strstr(t.notes, "unplugged? Looking for it again"));
 	gwt_close(&t);
 	/* the unplugged handle was not told anything; the new one goes back to gamepad mode */
 	assert_int_equal(stats().gamepad_requests, 1);
@@ -828,10 +808,7 @@ static void test_bad_reports(void **state)
 	uint64_t m0, f0;
 
 	(void)state;
-	fake_hid_plug(true);
-	gwt_open(&t, conf_device);
-	h = gwt_tracker(&t, "hydra");
-	assert_true(gwt_until(&t, hands_ok, NULL, 2000) >= 0);
+	h = devtest_up(&t, &hydra);
 	m0 = ctr_get(&h->st.malformed);
 	f0 = ctr_get(&h->st.faults);
 	memset(junk, 0x5a, sizeof(junk));
@@ -875,9 +852,7 @@ static void test_stuck_in_gamepad_mode(void **state)
 	fake_hid_plug(false);
 	gwt_open(&t, conf_device);
 	assert_true(gwt_until(&t, requested, &three, 3000) >= 0);
-	assert_int_equal(gwt_state(&t, "hydra"), TRACKER_FAULTY);
-	assert_int_equal(t.f.sensor[WIRE_S_LEFT_HAND].state, WIRE_SENSOR_MISSING);
-	assert_int_equal(t.f.sensor[WIRE_S_RIGHT_HAND].state, WIRE_SENSOR_MISSING);
+	assert_true(devtest_missing(&t, &hydra));
 	assert_int_equal(ctr_get(&gwt_tracker(&t, "hydra")->st.samples), 0);
 	gwt_take_notes(&t);
 	assert_non_null(strstr(t.notes, "asking again"));
@@ -890,7 +865,7 @@ static void test_stuck_in_gamepad_mode(void **state)
 	}
 	/* it finally obeys */
 	fake_hid_ignore_requests(false);
-	ms = gwt_until(&t, hands_ok, NULL, 2000);
+	ms = gwt_until(&t, devtest_ok, &hydra, 2000);
 	assert_true(ms >= 0 && ms < 1000);
 	gwt_close(&t);
 }
@@ -901,10 +876,7 @@ static void test_sequence_gaps(void **state)
 	struct tracker *h;
 
 	(void)state;
-	fake_hid_plug(true);
-	gwt_open(&t, conf_device);
-	h = gwt_tracker(&t, "hydra");
-	assert_true(gwt_until(&t, hands_ok, NULL, 2000) >= 0);
+	h = devtest_up(&t, &hydra);
 	fake_hid_skip(5);
 	gwt_run(&t, 100);
 	fake_hid_skip(3);
@@ -926,8 +898,8 @@ static void test_damaged_reports(void **state)
 		const char *script;
 		uint64_t malformed, lost;
 	} cases[] = {
-		{ "JQJ", 3, 0 },      /* a run of jumps cut by a bad quaternion */
-		{ "LJSQLLJ", 4, 3 },  /* and by losses and a short report */
+		{ "JQJ", 3, 0 },     /* a run of jumps cut by a bad quaternion */
+		{ "LJSQLLJ", 4, 3 }, /* and by losses and a short report */
 		{ "QLJJJL", 4, 2 },
 	};
 	static struct gwt t;
@@ -935,10 +907,7 @@ static void test_damaged_reports(void **state)
 	uint64_t f0;
 
 	(void)state;
-	fake_hid_plug(true);
-	gwt_open(&t, conf_device);
-	h = gwt_tracker(&t, "hydra");
-	assert_true(gwt_until(&t, hands_ok, NULL, 2000) >= 0);
+	h = devtest_up(&t, &hydra);
 	f0 = ctr_get(&h->st.faults);
 	for (size_t c = 0; c < sizeof(cases) / sizeof(cases[0]); c++) {
 		uint64_t m0 = ctr_get(&h->st.malformed), l0 = ctr_get(&h->st.lost);
@@ -949,7 +918,7 @@ static void test_damaged_reports(void **state)
 			      ctr_get(&h->st.malformed) - m0, ctr_get(&h->st.lost) - l0);
 		assert_int_equal(ctr_get(&h->st.malformed) - m0, cases[c].malformed);
 		assert_int_equal(ctr_get(&h->st.lost) - l0, cases[c].lost);
-		assert_true(hands_ok(&t, NULL));
+		assert_true(devtest_ok(&t, &hydra));
 	}
 	assert_int_equal(ctr_get(&h->st.faults), f0);
 	gwt_close(&t);
@@ -963,18 +932,14 @@ static void test_stall(void **state)
 	uint64_t t0;
 
 	(void)state;
-	fake_hid_plug(true);
-	gwt_open(&t, conf_device);
-	h = gwt_tracker(&t, "hydra");
-	assert_true(gwt_until(&t, hands_ok, NULL, 2000) >= 0);
+	h = devtest_up(&t, &hydra);
 	fake_hid_stall(900);
 	t0 = gwt_ms();
 	/* no report: STALE after stale_ms (the hands keep their last pose, flagged) */
-	assert_true(gwt_until(&t, gwt_tracker_stale, "hydra", 400) >= 0);
-	assert_int_equal(t.f.sensor[WIRE_S_LEFT_HAND].state, WIRE_SENSOR_STALE);
+	assert_true(gwt_until(&t, devtest_stale, &hydra, 400) >= 0);
 	/* then the driver gives up on the stream and asks for motion mode again: FAULTY meanwhile */
 	assert_true(gwt_until(&t, gwt_tracker_faulty, "hydra", 1000) >= 0);
-	ms = gwt_until(&t, hands_ok, NULL, 2000);
+	ms = gwt_until(&t, devtest_ok, &hydra, 2000);
 	print_message("stalled 900 ms: OK again %d ms after the stall ended\n", (int)(gwt_ms() - t0) - 900);
 	assert_true(ms >= 0 && gwt_ms() - t0 < 900 + 1000);
 	assert_int_equal(ctr_get(&h->st.reconnects), 1);
@@ -992,14 +957,12 @@ static void test_mode_changed_behind_our_back(void **state)
 	int two = 2;
 
 	(void)state;
-	fake_hid_plug(false);
-	gwt_open(&t, conf_device);
-	assert_true(gwt_until(&t, hands_ok, NULL, 2000) >= 0);
+	devtest_up(&t, &hydra_gamepad);
 	/* gamepad mode: no motion reports at all */
 	fake_hid_set_mode(false);
 	t0 = gwt_ms();
 	assert_true(gwt_until(&t, requested, &two, 2000) >= 0);
-	assert_true(gwt_until(&t, hands_ok, NULL, 2000) >= 0);
+	assert_true(gwt_until(&t, devtest_ok, &hydra, 2000) >= 0);
 	assert_true(gwt_ms() - t0 < 500 + 250 + 1000);
 	/* reports of the wrong length, a run of them: the driver takes it as a mode change */
 	for (int i = 0; i < 30; i++)
@@ -1007,7 +970,7 @@ static void test_mode_changed_behind_our_back(void **state)
 	gwt_run(&t, 400);
 	gwt_take_notes(&t);
 	assert_non_null(strstr(t.notes, "reports of the wrong length in a row"));
-	assert_true(hands_ok(&t, NULL));
+	assert_true(devtest_ok(&t, &hydra));
 	assert_int_equal(ctr_get(&gwt_tracker(&t, "hydra")->st.reconnects), 2);
 	gwt_close(&t);
 }
@@ -1015,55 +978,19 @@ static void test_mode_changed_behind_our_back(void **state)
 static void test_permission_denied(void **state)
 {
 	static struct gwt t;
-	int ms;
 
 	(void)state;
-	fake_hid_deny_open(EACCES);
-	fake_hid_plug(true);
-	gwt_open(&t, conf_device);
-	gwt_run(&t, 300);
-	gwt_take_notes(&t);
-	assert_non_null(strstr(t.notes, "Permission denied"));
-	assert_non_null(strstr(t.notes, "60-avatargw.rules"));
-	assert_int_equal(gwt_state(&t, "hydra"), TRACKER_FAULTY);
-	/* someone fixes the udev rule: the driver tries again by itself */
-	fake_hid_deny_open(0);
-	ms = gwt_until(&t, hands_ok, NULL, 3000);
-	assert_true(ms >= 0);
+	devtest_denied(&t, &hydra);
 	gwt_close(&t);
 }
 
 static void test_list_devices(void **state)
 {
-	char *text = NULL;
-	size_t len = 0;
-	FILE *out;
+	static const char *const says[] = { "Razer Hydra (1532:0300)", "/dev/fake-hidraw",
+					    "[source hydra]\n  type = hydra\n  device = /dev/fake-hidraw", NULL };
 
 	(void)state;
-	out = open_memstream(&text, &len);
-	assert_int_equal(hydra_driver.list_devices(out), 0);
-	fclose(out);
-	assert_int_equal(len, 0);
-	free(text);
-
-	fake_hid_plug(false);
-	out = open_memstream(&text, &len);
-	assert_int_equal(hydra_driver.list_devices(out), 1);
-	fclose(out);
-	print_message("%s", text);
-	assert_non_null(strstr(text, "Razer Hydra (1532:0300)"));
-	assert_non_null(strstr(text, "/dev/fake-hidraw"));
-	assert_non_null(strstr(text, "[source hydra]\n  type = hydra\n  device = /dev/fake-hidraw"));
-	assert_null(strstr(text, "cannot open"));
-	free(text);
-
-	fake_hid_deny_open(EACCES);
-	out = open_memstream(&text, &len);
-	assert_int_equal(hydra_driver.list_devices(out), 1);
-	fclose(out);
-	assert_non_null(strstr(text, "cannot open it: Permission denied"));
-	assert_non_null(strstr(text, "group avatargw"));
-	free(text);
+	devtest_list_devices(&hydra_gamepad, says);
 	/* listing leaves the device as it was */
 	assert_int_equal(stats().motion_requests, 0);
 	assert_int_equal(stats().opens, stats().closes);
@@ -1073,41 +1000,10 @@ static void test_list_devices(void **state)
 static void test_loop_allocates_nothing(void **state)
 {
 	static struct gwt t;
-	long n;
 
 	(void)state;
-	fake_hid_plug(false);
-	gwt_open(&t, conf_device);
-	assert_true(gwt_until(&t, hands_ok, NULL, 2000) >= 0);
-	fake_alloc_count_start();
-	for (int i = 0; i < 100; i++) {
-		struct tracker_clock now;
-
-		gw_clock(&now);
-		gw_cycle(&t.g, &now);
-		gwt_sleep_ms(2);
-	}
-	/* including an unplug and a replug (the device thread allocates, the loop must not) */
-	fake_hid_unplug();
-	for (int i = 0; i < 100; i++) {
-		struct tracker_clock now;
-
-		gw_clock(&now);
-		gw_cycle(&t.g, &now);
-		gwt_sleep_ms(5);
-	}
-	fake_hid_plug(true);
-	for (int i = 0; i < 150; i++) {
-		struct tracker_clock now;
-
-		gw_clock(&now);
-		gw_cycle(&t.g, &now);
-		gwt_sleep_ms(5);
-	}
-	n = fake_alloc_count_stop();
-	assert_int_equal(n, 0);
-	assert_true(gwt_until(&t, hands_ok, NULL, 2000) >= 0);
-	gwt_close(&t);
+	/* the replug in gamepad mode: the whole handshake again while the loop is counted */
+	devtest_loop_allocates_nothing(&t, &hydra_gamepad);
 }
 
 /* event mode: the driver's descriptor wakes the loop when a report came */
@@ -1116,14 +1012,9 @@ static void test_event_fd(void **state)
 	static struct gwt t;
 	struct tracker *h;
 	struct pollfd p;
-	int one = 1;
 
 	(void)state;
-	fake_hid_stepped(true);
-	fake_hid_plug(false);
-	gwt_open(&t, conf_device);
-	h = gwt_tracker(&t, "hydra");
-	assert_true(gwt_until(&t, requested, &one, 3000) >= 0);
+	h = devtest_stepped(&t, &hydra_gamepad, conf_device);
 	gwt_run(&t, 20);
 	p = (struct pollfd){ h->drv->fd(h), POLLIN, 0 };
 	assert_true(p.fd >= 0);
@@ -1133,12 +1024,6 @@ static void test_event_fd(void **state)
 	gwt_cycle(&t);
 	assert_int_equal(poll(&p, 1, 0), 0);
 	gwt_close(&t);
-}
-
-static bool ended(struct gwt *t, void *arg)
-{
-	(void)arg;
-	return gwt_state(t, "hydra") == TRACKER_ENDED;
 }
 
 /* capture = FILE: the same decoder, no device; the mount offset moves the tracked point */
@@ -1153,15 +1038,9 @@ static void test_capture_source_and_mount(void **state)
 	(void)state;
 	snprintf(conf, sizeof(conf), CONF_HEAD "capture = %s\nspeed = 4\nloop = no\nmount_left = 0 0.1 0\n", CAPTURE);
 	assert_int_equal(clip_load(&clip, CLIP), 0);
-	gwt_open(&t, conf);
-	assert_true(gwt_until(&t, hands_ok, NULL, 1000) >= 0);
-	assert_true(t.f.h.flags & WIRE_F_INPUTS);
-	/* 2 s of capture at 4x: then the source ENDS and its last samples go STALE */
-	assert_true(gwt_until(&t, ended, NULL, 2000) >= 0);
-	gwt_run(&t, 150);
-	assert_int_equal(gwt_state(&t, "hydra"), TRACKER_ENDED);
-	assert_int_equal(t.f.sensor[WIRE_S_LEFT_HAND].state, WIRE_SENSOR_STALE);
-	assert_int_equal(ctr_get(&gwt_tracker(&t, "hydra")->st.samples), 2 * 500);
+	/* 2 s of capture at 4x */
+	devtest_capture(&t, &hydra, conf, 2 * 500);
+	assert_int_equal(stats().enumerations, 0);
 	/* the last report's left wand, 10 cm along its own y */
 	clip_at(&clip, CLIP_LHAND, CAPTURE_T0 + 499 / 250.0, &want);
 	for (int k = 0; k < 4; k++)
@@ -1184,15 +1063,11 @@ static void test_record(void **state)
 	static struct gwt t;
 	char conf[2048], path[64], err[256];
 	struct capture cap;
-	int one = 1;
 
 	(void)state;
 	snprintf(path, sizeof(path), "/tmp/avatargw-test-record-%d.cap", (int)getpid());
 	snprintf(conf, sizeof(conf), CONF_HEAD "record = %s\n", path);
-	fake_hid_stepped(true);
-	fake_hid_plug(false);
-	gwt_open(&t, conf);
-	assert_true(gwt_until(&t, requested, &one, 3000) >= 0);
+	devtest_stepped(&t, &hydra_gamepad, conf);
 	for (int i = 0; i < 10; i++) {
 		uint64_t before = ctr_get(&gwt_tracker(&t, "hydra")->st.samples);
 
@@ -1230,15 +1105,13 @@ static void test_reload_keeps_the_mode(void **state)
 	static struct gwt a, b;
 
 	(void)state;
-	fake_hid_plug(false);
-	gwt_open(&a, conf_device);
-	assert_true(gwt_until(&a, hands_ok, NULL, 2000) >= 0);
+	devtest_up(&a, &hydra_gamepad);
 	gwt_open(&b, conf_device);
-	assert_true(gwt_until(&b, hands_ok, NULL, 2000) >= 0);
+	assert_true(gwt_until(&b, devtest_ok, &hydra, 2000) >= 0);
 	gwt_close(&a);
 	for (uint64_t t0 = gwt_ms(); gwt_ms() - t0 < 800;) {
 		gwt_cycle(&b);
-		assert_true(hands_ok(&b, NULL));
+		assert_true(devtest_ok(&b, &hydra));
 		gwt_sleep_ms(5);
 	}
 	assert_int_equal(stats().gamepad_requests, 0);

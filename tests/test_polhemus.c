@@ -17,9 +17,14 @@
  * enumeration without them), a halted endpoint once and for good, a
  * device that stops streaming, records split across transfers, garbage
  * bytes, frame-count gaps, the pre-firmware product id, no permission.
- * Every FRAME published is decoded and checked (tests/fake/gwtest.c).
+ * Every FRAME published is decoded and checked (tests/fake/gwtest.c). The
+ * steps every device goes through (up, unplugged and replugged, denied,
+ * listed, the loop's allocations, a capture played) are
+ * tests/fake/devtest.c's, shared with test_hydra.c: here, what they are
+ * for a Polhemus and what only a Polhemus does.
  */
 #include "fake/clip.h"
+#include "fake/devtest.h"
 #include "fake/fake.h"
 #include "fake/gwtest.h"
 #include "trackers/device.h"
@@ -164,20 +169,6 @@ static size_t frame3(uint8_t *b, uint32_t frame)
 	return n;
 }
 
-static void pose_of(const struct device_sample *s, double p[3], double q[4])
-{
-	struct vec3 t;
-
-	dq_translation(&s->pose, &t);
-	p[0] = t.x;
-	p[1] = t.y;
-	p[2] = t.z;
-	q[0] = s->pose.r.w;
-	q[1] = s->pose.r.x;
-	q[2] = s->pose.r.y;
-	q[3] = s->pose.r.z;
-}
-
 static void test_record_layout(void **state)
 {
 	struct codec k;
@@ -193,7 +184,7 @@ static void test_record_layout(void **state)
 	record(b, "LY", 2, ' ', p, q, 77);
 	assert_int_equal(feed(&k, b, 41, &g), 1);
 	assert_int_equal(g.sensor[0], 1); /* station 2: the second name */
-	pose_of(&g.s[0], pp, qq);
+	devtest_pose(&g.s[0], pp, qq);
 	/* cm -> m; the source's z points down, ours up: (x, -y, -z) */
 	assert_float_equal(pp[0], 0.125, 1e-7);
 	assert_float_equal(pp[1], 0.400, 1e-7);
@@ -225,7 +216,7 @@ static void test_station_map(void **state)
 	{
 		double p[3], q[4];
 
-		pose_of(&g.s[1], p, q);
+		devtest_pose(&g.s[1], p, q);
 		assert_float_equal(p[0], 0.30, 1e-7);
 	}
 	/* all three decoded (reports), two of them used */
@@ -433,7 +424,7 @@ static void test_capture_matches_clip(void **state)
 			double p[3], q[4];
 
 			assert_int_equal(g.sensor[s], s);
-			pose_of(&g.s[s], p, q);
+			devtest_pose(&g.s[s], p, q);
 			check_against_clip(&clip, s, i / RATE, p, q, &worst_p, &worst_a);
 		}
 	}
@@ -469,42 +460,47 @@ static bool samples_above(struct gwt *t, void *arg)
 	return ctr_get(&gwt_tracker(t, "polhemus")->st.samples) >= *(uint64_t *)arg;
 }
 
-static bool all_ok(struct gwt *t, void *arg)
+static void plug_ready(void)
 {
-	(void)arg;
-	if (gwt_state(t, "polhemus") != TRACKER_OK)
-		return false;
-	for (int s = 0; s < WIRE_SENSORS; s++)
-		if (t->f.sensor[s].state != WIRE_SENSOR_OK)
-			return false;
-	return true;
+	fake_usb_plug(0xff20);
 }
 
-static bool all_missing(struct gwt *t, void *arg)
+static void deny_open(bool deny)
 {
-	(void)arg;
-	if (gwt_state(t, "polhemus") != TRACKER_FAULTY)
-		return false;
-	for (int s = 0; s < WIRE_SENSORS; s++)
-		if (t->f.sensor[s].state != WIRE_SENSOR_MISSING)
-			return false;
-	return true;
+	fake_usb_deny_open(deny ? LIBUSB_ERROR_ACCESS : 0);
 }
+
+/* the driver's set-up went through: C after the rest */
+static bool set_up_once(void)
+{
+	return stats().setups >= 1;
+}
+
+/* the Liberty HS with its firmware, for the steps every device goes through (fake/devtest.h) */
+static struct devtest polhemus = {
+	.source = "polhemus",
+	.conf = CONF,
+	.sensors = 1u << WIRE_S_HEAD | 1u << WIRE_S_LEFT_HAND | 1u << WIRE_S_RIGHT_HAND,
+	.inputs = false,
+	.drv = &polhemus_driver,
+	.plug = plug_ready,
+	.unplug = fake_usb_unplug,
+	.deny_open = deny_open,
+	.denied = "Access denied",
+	.stepped = fake_usb_stepped,
+	.set_up = set_up_once,
+};
 
 /* the set-up commands, then each frame of the capture through the gateway to the published avatar */
 static void test_setup_and_published_poses(void **state)
 {
 	static struct gwt t;
 	struct clip clip;
-	int one = 1;
 	double worst_p = 0, worst_a = 0;
 
 	(void)state;
 	assert_int_equal(clip_load(&clip, CLIP), 0);
-	fake_usb_stepped(true);
-	fake_usb_plug(0xff20);
-	gwt_open(&t, CONF_STEPPED);
-	assert_true(gwt_until(&t, set_up, &one, 3000) >= 0);
+	devtest_stepped(&t, &polhemus, CONF_STEPPED);
 	/* stop, binary, centimetres, the hemisphere, the output list, continuous: exactly these */
 	assert_string_equal(stats().commands, "P|F1|U1|H*,0,0,1|O*,2,7,9,0|C|");
 	assert_int_equal(stats().claims, 1);
@@ -549,41 +545,19 @@ static void test_setup_and_published_poses(void **state)
 	clip_free(&clip);
 }
 
+/* the avatar holds its last posture meanwhile (HELD), never a NaN joint: devtest_unplug_replug */
 static void replug(bool hotplug)
 {
 	static struct gwt t;
-	struct tracker *p;
-	uint64_t f0;
-	int ms;
 
 	fake_usb_hotplug(hotplug);
-	fake_usb_plug(0xff20);
-	gwt_open(&t, CONF);
-	p = gwt_tracker(&t, "polhemus");
-	assert_true(gwt_until(&t, all_ok, NULL, 2000) >= 0);
-	f0 = ctr_get(&p->st.faults);
-	gwt_run(&t, 200);
-	fake_usb_unplug();
-	ms = gwt_until(&t, all_missing, NULL, 1000);
-	print_message("unplugged: FAULTY after %d ms\n", ms);
-	assert_true(ms >= 0);
-	/* the avatar holds its last posture (HELD), never a NaN joint */
-	gwt_run(&t, 300);
-	assert_true(t.f.h.flags & WIRE_F_HELD);
-	assert_true(isfinite(t.f.joint[3]));
-	assert_int_equal(ctr_get(&p->st.faults), f0 + 1);
-	fake_usb_plug(0xff20);
-	ms = gwt_until(&t, all_ok, NULL, 3000);
-	print_message("replugged (%s): OK again after %d ms\n", hotplug ? "hot-plug event" : "enumeration", ms);
-	assert_true(ms >= 0 && ms < 1000);
-	assert_int_equal(ctr_get(&p->st.reconnects), 1);
+	devtest_unplug_replug(&t, &polhemus);
+	print_message("(found again by %s)\n", hotplug ? "a hot-plug event" : "enumeration");
 	assert_int_equal(stats().setups, 2);
 	assert_int_equal(stats().opens, 2);
 	assert_int_equal(stats().hotplug_registered, hotplug ? 1 : 0);
 	if (hotplug)
 		assert_true(stats().hotplug_callbacks >= 2);
-	gwt_take_notes(&t);
-	assert_non_null(strstr(t.notes, "unplugged"));
 	gwt_close(&t);
 }
 
@@ -605,16 +579,14 @@ static void test_halt_once(void **state)
 	uint64_t m0;
 
 	(void)state;
-	fake_usb_plug(0xff20);
-	gwt_open(&t, CONF);
-	assert_true(gwt_until(&t, all_ok, NULL, 2000) >= 0);
+	devtest_up(&t, &polhemus);
 	m0 = ctr_get(&gwt_tracker(&t, "polhemus")->st.malformed);
 	fake_usb_halt(1);
 	gwt_run(&t, 200);
 	/* cleared and carried on: same device handle, OK all along */
 	assert_int_equal(stats().clear_halts, 1);
 	assert_int_equal(stats().opens, 1);
-	assert_true(all_ok(&t, NULL));
+	assert_true(devtest_ok(&t, &polhemus));
 	assert_int_equal(ctr_get(&gwt_tracker(&t, "polhemus")->st.malformed), m0);
 	gwt_close(&t);
 }
@@ -635,13 +607,11 @@ static void test_stuck_endpoint(void **state)
 	int ms;
 
 	(void)state;
-	fake_usb_plug(0xff20);
-	gwt_open(&t, CONF);
-	assert_true(gwt_until(&t, all_ok, NULL, 2000) >= 0);
+	devtest_up(&t, &polhemus);
 	/* it halts again after every clear */
 	fake_usb_halt(1000000);
 	t0 = gwt_ms();
-	assert_true(gwt_until(&t, all_missing, NULL, 1500) >= 0);
+	assert_true(gwt_until(&t, devtest_missing, &polhemus, 1500) >= 0);
 	gwt_run(&t, 1000);
 	/* reopened, again and again, but not in a tight loop (search_ms apart), and not logged each time */
 	print_message("stuck endpoint: %d opens in %d ms\n", stats().opens, (int)(gwt_ms() - t0));
@@ -653,7 +623,7 @@ static void test_stuck_endpoint(void **state)
 	assert_non_null(strstr(t.notes, "further failures in a row are not logged"));
 	/* someone unjams it */
 	fake_usb_halt(0);
-	ms = gwt_until(&t, all_ok, NULL, 2000);
+	ms = gwt_until(&t, devtest_ok, &polhemus, 2000);
 	print_message("endpoint unstuck: OK again after %d ms\n", ms);
 	assert_true(ms >= 0 && ms < 1000);
 	gwt_close(&t);
@@ -666,16 +636,13 @@ static void test_stops_streaming(void **state)
 	int two = 2, ms;
 
 	(void)state;
-	fake_usb_plug(0xff20);
-	gwt_open(&t, CONF);
-	assert_true(gwt_until(&t, all_ok, NULL, 2000) >= 0);
+	devtest_up(&t, &polhemus);
 	fake_usb_stop_streaming();
 	t0 = gwt_ms();
-	assert_true(gwt_until(&t, gwt_tracker_stale, "polhemus", 400) >= 0);
-	assert_int_equal(t.f.sensor[WIRE_S_HEAD].state, WIRE_SENSOR_STALE);
+	assert_true(gwt_until(&t, devtest_stale, &polhemus, 400) >= 0);
 	/* set up again after stall_ms: the device streams once it hears C */
 	assert_true(gwt_until(&t, set_up, &two, 2000) >= 0);
-	ms = gwt_until(&t, all_ok, NULL, 2000);
+	ms = gwt_until(&t, devtest_ok, &polhemus, 2000);
 	print_message("stopped streaming: OK again %d ms later (stall_ms 500 + set-up)\n", (int)(gwt_ms() - t0));
 	assert_true(ms >= 0 && gwt_ms() - t0 < 500 + 1000);
 	assert_int_equal(stats().opens, 1);
@@ -689,13 +656,9 @@ static void test_split_transfers(void **state)
 {
 	static const int cuts[] = { 3, 50, 100 };
 	static struct gwt t;
-	int one = 1;
 
 	(void)state;
-	fake_usb_stepped(true);
-	fake_usb_plug(0xff20);
-	gwt_open(&t, CONF_STEPPED);
-	assert_true(gwt_until(&t, set_up, &one, 3000) >= 0);
+	devtest_stepped(&t, &polhemus, CONF_STEPPED);
 	for (size_t c = 0; c < sizeof(cuts) / sizeof(cuts[0]); c++) {
 		fake_usb_split(cuts[c]);
 		for (int i = 0; i < 20; i++) {
@@ -718,10 +681,7 @@ static void test_garbage_bytes(void **state)
 	uint64_t s0, f0;
 
 	(void)state;
-	fake_usb_plug(0xff20);
-	gwt_open(&t, CONF);
-	p = gwt_tracker(&t, "polhemus");
-	assert_true(gwt_until(&t, all_ok, NULL, 2000) >= 0);
+	p = devtest_up(&t, &polhemus);
 	srand(3);
 	for (size_t i = 0; i < sizeof(junk); i++)
 		junk[i] = (uint8_t)(rand() >> 4);
@@ -734,7 +694,7 @@ static void test_garbage_bytes(void **state)
 	/* counted, resynchronised on the next header, nothing else happened */
 	assert_true(ctr_get(&p->st.malformed) >= 1);
 	assert_true(ctr_get(&p->st.samples) > s0 + 3 * 40);
-	assert_true(all_ok(&t, NULL));
+	assert_true(devtest_ok(&t, &polhemus));
 	assert_int_equal(ctr_get(&p->st.faults), f0);
 	assert_int_equal(ctr_get(&p->st.lost), 0);
 	gwt_close(&t);
@@ -745,14 +705,12 @@ static void test_frame_count_gap(void **state)
 	static struct gwt t;
 
 	(void)state;
-	fake_usb_plug(0xff20);
-	gwt_open(&t, CONF);
-	assert_true(gwt_until(&t, all_ok, NULL, 2000) >= 0);
+	devtest_up(&t, &polhemus);
 	fake_usb_skip(4);
 	gwt_run(&t, 100);
 	/* per sensor: 4 frames of 3 stations */
 	assert_int_equal(ctr_get(&gwt_tracker(&t, "polhemus")->st.lost), 12);
-	assert_true(all_ok(&t, NULL));
+	assert_true(devtest_ok(&t, &polhemus));
 	gwt_close(&t);
 }
 
@@ -784,7 +742,7 @@ static void test_before_firmware(void **state)
 	fake_usb_unplug();
 	gwt_run(&t, 50);
 	fake_usb_plug(0xff20);
-	ms = gwt_until(&t, all_ok, NULL, 2000);
+	ms = gwt_until(&t, devtest_ok, &polhemus, 2000);
 	assert_true(ms >= 0 && ms < 1000);
 	gwt_close(&t);
 }
@@ -794,54 +752,24 @@ static void test_access_denied(void **state)
 	static struct gwt t;
 
 	(void)state;
-	fake_usb_deny_open(LIBUSB_ERROR_ACCESS);
-	fake_usb_plug(0xff20);
-	gwt_open(&t, CONF);
-	gwt_run(&t, 300);
-	assert_int_equal(gwt_state(&t, "polhemus"), TRACKER_FAULTY);
-	gwt_take_notes(&t);
-	assert_non_null(strstr(t.notes, "60-avatargw.rules"));
-	fake_usb_deny_open(0);
-	assert_true(gwt_until(&t, all_ok, NULL, 3000) >= 0);
+	devtest_denied(&t, &polhemus);
 	gwt_close(&t);
 }
 
 static void test_list_devices(void **state)
 {
-	char *text = NULL;
-	size_t len = 0;
-	FILE *out;
+	static const char *const says[] = { "Polhemus Liberty HS (0f44:ff20) on USB port 1-4",
+					    "[source polhemus]\n  type = polhemus\n  model = liberty_hs\n  device = 1-4\n",
+					    NULL };
+	char *text;
 
 	(void)state;
-	out = open_memstream(&text, &len);
-	assert_int_equal(polhemus_driver.list_devices(out), 0);
-	fclose(out);
-	free(text);
-
-	fake_usb_plug(0xff20);
-	out = open_memstream(&text, &len);
-	assert_int_equal(polhemus_driver.list_devices(out), 1);
-	fclose(out);
-	print_message("%s", text);
-	assert_non_null(strstr(text, "Polhemus Liberty HS (0f44:ff20) on USB port 1-4"));
-	assert_non_null(strstr(text, "[source polhemus]\n  type = polhemus\n  model = liberty_hs\n  device = 1-4\n"));
-	assert_null(strstr(text, "cannot open"));
-	free(text);
-
+	devtest_list_devices(&polhemus, says);
+	/* before its firmware: what to load, and how */
+	fake_usb_deny_open(0);
 	fake_usb_plug(0xff21);
-	out = open_memstream(&text, &len);
-	assert_int_equal(polhemus_driver.list_devices(out), 1);
-	fclose(out);
+	text = devtest_listing(&polhemus, 1);
 	assert_non_null(strstr(text, "no firmware yet: load it with fxload -t fx2"));
-	free(text);
-
-	fake_usb_plug(0xff20);
-	fake_usb_deny_open(LIBUSB_ERROR_ACCESS);
-	out = open_memstream(&text, &len);
-	assert_int_equal(polhemus_driver.list_devices(out), 1);
-	fclose(out);
-	assert_non_null(strstr(text, "cannot open it"));
-	assert_non_null(strstr(text, "group avatargw"));
 	free(text);
 	assert_int_equal(stats().setups, 0);
 }
@@ -849,34 +777,9 @@ static void test_list_devices(void **state)
 static void test_loop_allocates_nothing(void **state)
 {
 	static struct gwt t;
-	long n;
 
 	(void)state;
-	fake_usb_plug(0xff20);
-	gwt_open(&t, CONF);
-	assert_true(gwt_until(&t, all_ok, NULL, 2000) >= 0);
-	fake_alloc_count_start();
-	for (int i = 0; i < 300; i++) {
-		struct tracker_clock now;
-
-		if (i == 100)
-			fake_usb_unplug();
-		if (i == 150)
-			fake_usb_plug(0xff20);
-		gw_clock(&now);
-		gw_cycle(&t.g, &now);
-		gwt_sleep_ms(4);
-	}
-	n = fake_alloc_count_stop();
-	assert_int_equal(n, 0);
-	assert_true(gwt_until(&t, all_ok, NULL, 2000) >= 0);
-	gwt_close(&t);
-}
-
-static bool ended(struct gwt *t, void *arg)
-{
-	(void)arg;
-	return gwt_state(t, "polhemus") == TRACKER_ENDED;
+	devtest_loop_allocates_nothing(&t, &polhemus);
 }
 
 /* capture = FILE: the same decoder, no device (and no libusb at all) */
@@ -885,12 +788,7 @@ static void test_capture_source(void **state)
 	static struct gwt t;
 
 	(void)state;
-	gwt_open(&t, CONF "capture = " CAPTURE "\nspeed = 4\nloop = no\n");
-	assert_true(gwt_until(&t, all_ok, NULL, 1000) >= 0);
-	assert_true(gwt_until(&t, ended, NULL, 2000) >= 0);
-	gwt_run(&t, 150);
-	assert_int_equal(ctr_get(&gwt_tracker(&t, "polhemus")->st.samples), 3 * 360);
-	assert_int_equal(t.f.sensor[WIRE_S_HEAD].state, WIRE_SENSOR_STALE);
+	devtest_capture(&t, &polhemus, CONF "capture = " CAPTURE "\nspeed = 4\nloop = no\n", 3 * 360);
 	assert_int_equal(stats().enumerations, 0);
 	gwt_close(&t);
 }
@@ -903,17 +801,15 @@ static void test_reload_hands_over(void **state)
 	int ms;
 
 	(void)state;
-	fake_usb_plug(0xff20);
-	gwt_open(&a, CONF);
-	assert_true(gwt_until(&a, all_ok, NULL, 2000) >= 0);
+	devtest_up(&a, &polhemus);
 	gwt_open(&b, CONF);
 	gwt_run(&b, 300);
 	assert_int_equal(gwt_state(&b, "polhemus"), TRACKER_FAULTY);
 	gwt_cycle(&a);
-	assert_true(all_ok(&a, NULL));
+	assert_true(devtest_ok(&a, &polhemus));
 	t0 = gwt_ms();
 	gwt_close(&a);
-	ms = gwt_until(&b, all_ok, NULL, 2000);
+	ms = gwt_until(&b, devtest_ok, &polhemus, 2000);
 	print_message("reload: the new source streams %d ms after the old one closed\n", (int)(gwt_ms() - t0));
 	assert_true(ms >= 0 && gwt_ms() - t0 < 1000);
 	gwt_take_notes(&b);

@@ -22,7 +22,8 @@
  * and damaged reports, stalls, halted endpoints. The test thread drives
  * them while the driver's device thread calls them: every entry point
  * locks. What the two share (the capture's play, its pace, the injected
- * bytes, the lock) is player.c.
+ * bytes, the lock) is player.c; what their tests share (the steps every
+ * device goes through with a gateway) is devtest.c.
  */
 #ifndef AGW_TEST_FAKE_H
 #define AGW_TEST_FAKE_H

@@ -218,3 +218,8 @@ bool gwt_tracker_stale(struct gwt *t, void *name)
 {
 	return gwt_state(t, name) == TRACKER_STALE;
 }
+
+bool gwt_tracker_ended(struct gwt *t, void *name)
+{
+	return gwt_state(t, name) == TRACKER_ENDED;
+}

@@ -44,5 +44,6 @@ void gwt_sleep_ms(int ms);
 bool gwt_tracker_ok(struct gwt *t, void *name);     /* the tracker is OK and its last frame's sensors too */
 bool gwt_tracker_faulty(struct gwt *t, void *name);
 bool gwt_tracker_stale(struct gwt *t, void *name);
+bool gwt_tracker_ended(struct gwt *t, void *name);     /* a capture played to its end */
 
 #endif /* AGW_TEST_GWTEST_H */
