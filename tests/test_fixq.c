@@ -4,12 +4,13 @@
  * SC_TYPE=SC_FIXQ): its scalar operations against long double, its
  * kinematics and solves against the double build on the shared benchmark
  * targets (the goals: within 1 um and 0.001 deg of the double solution,
- * the same success and in-limits rates), and a counting build of the core
- * (suffix _qs, SC_FIXQ_STATS) that proves no result saturates on valid
- * input. Hopeless input must stay well defined (the SAN build runs this
- * under UBSan, which catches any signed overflow). The whole avatar
- * (avatar_solve) tracks a motion-capture clip in both builds, which must
- * agree frame by frame to a micrometre.
+ * the same success and in-limits rates), the closed-form search's verdict
+ * on the limits, and a counting build of the core (suffix _qs,
+ * SC_FIXQ_STATS) that proves no result saturates on valid input. Hopeless
+ * input must stay well defined (the SAN build runs this under UBSan, which
+ * catches any signed overflow). The whole avatar (avatar_solve) tracks a
+ * motion-capture clip in both builds, which must agree frame by frame to a
+ * micrometre.
  */
 #define _DEFAULT_SOURCE
 #include <math.h>
@@ -389,7 +390,12 @@ static void test_random_reset(void **state)
 	}
 	check_goals("random targets, reset", &t);
 	assert_true(t.strict_q >= n - 1);
-	assert_true(t.same >= t.both * 85 / 100);
+	/*
+	 * From the rest posture the search picks double's posture: measured 999
+	 * of 1000 (923 while its limit test took some samples just outside a
+	 * limit for inside, test_swivel_inside)
+	 */
+	assert_true(t.same >= t.both * 99 / 100);
 	assert_int_equal(sc_saturations_qs - sat, 0);
 }
 
@@ -450,7 +456,8 @@ static void test_matrix_and_left(void **state)
 	}
 	check_goals("random targets, reset, matrix kinematics", &t);
 	print_message("left arm: %zu of %zu mirrored postures equal the right arm's to 1e-5 rad\n", mirrored, n);
-	assert_true(mirrored >= n * 95 / 100);
+	/* measured 300 of 300 (293 while the search's limit test let samples just outside pass) */
+	assert_true(mirrored >= n * 99 / 100);
 	assert_int_equal(sc_saturations_qs - sat, 0);
 }
 
@@ -479,6 +486,40 @@ static void test_paper_newton(void **state)
 	}
 	/* double reaches all 200 */
 	assert_true(reached >= n * 99 / 100);
+}
+
+bool swivel_agree_q(const double dims[4], const double p[3], const double r[4], double q[ARM_DOF], double *outside);
+
+/*
+ * The closed-form search's verdict in fixed point: a posture it reports
+ * inside the limits is inside them (to 4 units, the rounding of an angle).
+ * Its scans rank a sample outside by 1 - cos of the angle to the nearer
+ * limit plus SC_EPS (one unit). Within 2e-4 rad of a limit 1 - cos is
+ * below one unit, and the cosine of a (c, s) that is a unit vector only up
+ * to rounding (magnified by the division by cos b of the Y-X-Z test) can
+ * round above 1: a term came out negative, cancelling SC_EPS and at times
+ * another joint's violation in the triple's sum. 830 of these 10 000
+ * searches reported postures outside, up to 0.012 rad (Newton pulled them
+ * in, to other postures than double's: test_random_reset).
+ */
+static void test_swivel_inside(void **state)
+{
+	static struct row rows[10000];
+	size_t n = load("targets.csv", rows, 10000, 1), i, found = 0;
+
+	(void)state;
+	assert_int_equal(n, 10000);
+	for (i = 0; i < n; i++) {
+		double q[ARM_DOF], out;
+
+		if (!swivel_agree_q(bench.dims, rows[i].p, rows[i].r, q, &out))
+			continue;
+		if (out > 4 * ULP)
+			fail_msg("row %zu: reported inside, %.3g rad (%.0f units) outside", i, out, out / ULP);
+		found++;
+	}
+	/* and it still finds one for as many targets as before (and as double: 9 998 of 10 000) */
+	assert_true(found >= n - 2);
 }
 
 /*
@@ -621,14 +662,11 @@ struct av_diff {
  * The avatar over every frame of the clip, turned by turn_deg about the
  * world's z axis, tracking as the daemon does (each frame from the
  * previous frame's pose), in double and in Q5.26 (the counting build, and
- * the plain one, which must give the same bits), with the daemon's default
- * body: the clip's own segment lengths and head offset (src/config/config.c,
- * test_avatar's test_wave_clip) and avatar_default_limits().
+ * the plain one, which must give the same bits), with the body's lengths
+ * and head offset and avatar_default_limits().
  */
-static void avatar_against_double(double turn_deg, struct av_diff *m)
+static void avatar_against_double(const struct ikx_avatar_setup *body, double turn_deg, struct av_diff *m)
 {
-	static const struct ikx_avatar_setup body = { .dims = { 0.1732, 0.2886, 0.1955, 0 },
-						      .head_offset = { 0.008, -0.0386, 0.0967 } };
 	static const double origin[3] = { 0, 0, 0 };
 	struct ikx_avatar_frame *in;
 	struct ikx_avatar_out *od, *oq, *op;
@@ -656,9 +694,9 @@ static void avatar_against_double(double turn_deg, struct av_diff *m)
 	}
 	ikx_tolerances_d(&tol_d, &rot_d);
 	ikx_tolerances_qs(&tol_q, &rot_q);
-	ikx_avatar_run_d(&body, in, n, od);
-	ikx_avatar_run_qs(&body, in, n, oq);
-	ikx_avatar_run_q(&body, in, n, op);
+	ikx_avatar_run_d(body, in, n, od);
+	ikx_avatar_run_qs(body, in, n, oq);
+	ikx_avatar_run_q(body, in, n, op);
 	for (i = 0; i < n; i++) {
 		const struct ikx_avatar_out *d = &od[i], *q = &oq[i];
 
@@ -714,12 +752,19 @@ static void print_diff(const char *what, const struct av_diff *m)
 		      what, m->chest * 1e6, m->chest_rot * 1e6, m->elbow * 1e6, m->hand * 1e6, m->joint * RAD2DEG);
 }
 
+/*
+ * The daemon's default body: the clip's own segment lengths and head offset
+ * (src/config/config.c, test_avatar's test_wave_clip).
+ */
+static const struct ikx_avatar_setup clip_body = { .dims = { 0.1732, 0.2886, 0.1955, 0 },
+						   .head_offset = { 0.008, -0.0386, 0.0967 } };
+
 static void test_avatar_clip(void **state)
 {
 	struct av_diff m = { 0 };
 
 	(void)state;
-	avatar_against_double(0, &m);
+	avatar_against_double(&clip_body, 0, &m);
 	print_diff("the clip", &m);
 }
 
@@ -735,8 +780,29 @@ static void test_avatar_clip_turned(void **state)
 
 	(void)state;
 	for (int turn = 10; turn < 360; turn += 10)
-		avatar_against_double(turn, &m);
+		avatar_against_double(&clip_body, turn, &m);
 	print_diff("the clip turned by 10 to 350 degrees", &m);
+}
+
+/*
+ * The same clip on another body: the benchmark's arm (0.18, 0.30, 0.26,
+ * 0.08 m) under the paper's head offset (0, 0, 0.25), as test_avatar's
+ * bodies, as recorded and turned every 10 degrees. The left elbow of frame
+ * 193 once lay 23 mm off double's for one frame (and 0.37 mm at other
+ * turns), where the search's limit test took a sample just outside a limit
+ * for inside (test_swivel_inside). Measured since: chest 0.14 um, elbows
+ * 0.31 um, hands 0.29 um.
+ */
+static void test_avatar_clip_bench_arm(void **state)
+{
+	static const struct ikx_avatar_setup body = { .dims = { 0.18, 0.30, 0.26, 0.08 },
+						      .head_offset = { 0, 0, 0.25 } };
+	struct av_diff m = { 0 };
+
+	(void)state;
+	for (int turn = 0; turn < 360; turn += 10)
+		avatar_against_double(&body, turn, &m);
+	print_diff("the benchmark's arm, the clip turned by 0 to 350 degrees", &m);
 }
 
 int main(void)
@@ -744,6 +810,8 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_avatar_bow),	cmocka_unit_test(test_avatar_clip),
 		cmocka_unit_test(test_avatar_clip_turned),
+		cmocka_unit_test(test_avatar_clip_bench_arm),
+		cmocka_unit_test(test_swivel_inside),
 		cmocka_unit_test(test_mul_div_sqrt),	cmocka_unit_test(test_trig),
 		cmocka_unit_test(test_fk_jacobian),	cmocka_unit_test(test_lsq),
 		cmocka_unit_test(test_random_reset),	cmocka_unit_test(test_trajectory_warm),

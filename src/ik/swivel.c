@@ -112,13 +112,20 @@ static sc_t euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, 
  * The same limit test without atan2, for the scans: the angle of the unit
  * vector (c, s) against joint j's limits through sin(theta - lo) and
  * sin(hi - theta). Returns 0 inside, else 1 - cos of the angle to the nearer
- * limit (monotonic in that angle, which is all the search needs to rank).
+ * limit (monotonic in that angle, which is all the search needs to rank)
+ * plus SC_EPS, so that every joint outside adds at least SC_EPS. (c, s) is a
+ * unit vector only up to rounding, the more so after euler_fast's division
+ * by cos b, and near a limit the cosine can round above 1 (in Q5.26 1 - cos
+ * is under one unit up to 2e-4 rad out): 1 - cos is clamped at 0 before
+ * SC_EPS is added, or a negative term would let the sample count as inside
+ * or cancel another joint's violation in euler_fast's sum.
  */
 static sc_t arc_violation(const struct arm *a, int j, sc_t c, sc_t s)
 {
 	const sc_t *cs = a->lim_cs[j];
 	sc_t slo = sc_mul_sub(cs[0], s, cs[1], c);
 	sc_t shi = sc_mul_sub(c, cs[3], s, cs[2]);
+	sc_t near; /* cos of the angle to the nearer limit */
 	bool in;
 
 	if (a->lim.hi[j] - a->lim.lo[j] <= SC_PI)
@@ -127,7 +134,8 @@ static sc_t arc_violation(const struct arm *a, int j, sc_t c, sc_t s)
 		in = slo >= 0 || shi >= 0;
 	if (in)
 		return 0;
-	return SC_C(1) - sc_max(sc_mul_add(c, cs[0], s, cs[1]), sc_mul_add(c, cs[2], s, cs[3])) + SC_EPS;
+	near = sc_max(sc_mul_add(c, cs[0], s, cs[1]), sc_mul_add(c, cs[2], s, cs[3]));
+	return sc_max(SC_C(1) - near, SC_C(0)) + SC_EPS;
 }
 
 /*
