@@ -135,6 +135,11 @@ def load_clip():
     return rows
 
 
+def read_text(path):
+    with open(path) as f:
+        return f.read()
+
+
 def dist(a, b):
     return math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b)))
 
@@ -536,13 +541,13 @@ class BusyWaitTest(unittest.TestCase):
             d = Daemon(tmp, conf)
             try:
                 loop = [t for t in os.listdir("/proc/%d/task" % d.proc.pid)
-                        if open("/proc/%d/task/%s/comm" % (d.proc.pid, t)).read().strip() == "avatargw-loop"]
+                        if read_text("/proc/%d/task/%s/comm" % (d.proc.pid, t)).strip() == "avatargw-loop"]
                 self.assertEqual(len(loop), 1)
                 stat = "/proc/%d/task/%s/stat" % (d.proc.pid, loop[0])
                 tick = os.sysconf("SC_CLK_TCK")
 
                 def cpu_s():
-                    f = open(stat).read().rsplit(")", 1)[1].split()
+                    f = read_text(stat).rsplit(")", 1)[1].split()
                     return (int(f[11]) + int(f[12])) / tick  # utime + stime
 
                 c0, st0, w0 = cpu_s(), d.status(), time.monotonic()

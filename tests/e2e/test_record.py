@@ -198,7 +198,8 @@ class DamageTest(unittest.TestCase):
         with tempfile.TemporaryDirectory() as tmp:
             good = record(tmp, 1.0, "record_flush = 0.05")
             rc, info = rec_info(good)
-            data = bytearray(open(good, "rb").read())
+            with open(good, "rb") as f:
+                data = bytearray(f.read())
             hit = len(data) * 2 // 5
             data[hit:hit + 200] = bytes((i * 37 + 11) % 256 for i in range(200))
             del data[-30:]
