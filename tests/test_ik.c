@@ -219,6 +219,67 @@ static void test_trajectory_warm(void **state)
 }
 
 /*
+ * max_evals = 0: Newton from the seed, never the search. On the trajectory
+ * it tracks as the default does (each target a small step from the last);
+ * on random targets from a far seed it moves the arm only where Newton
+ * takes it, inside the limits, flagged unreached where it stops short,
+ * while the default's search reaches them.
+ */
+static void test_no_search(void **state)
+{
+	static struct row rows[600];
+	size_t n = load("trajectory.csv", rows, 600, 1), i;
+	struct arm a;
+	struct ik_opts o, no;
+	double prev[ARM_DOF];
+	int short_of = 0;
+
+	(void)state;
+	assert_int_equal(n, 600);
+	arm_init(&a, ARM_RIGHT, &bench_dims, NULL);
+	ik_default_opts(&o);
+	no = o;
+	no.max_evals = 0;
+	for (i = 0; i < n; i++) {
+		struct ik_target t;
+		struct ik_result res;
+		double q[ARM_DOF], ep, er;
+
+		target_of(&rows[i], &t);
+		ik_solve(&a, &ik_kin_dq, &t, i ? prev : rows[0].q, &no, q, &res);
+		assert_int_equal(res.evals, 0);
+		assert_false(res.flags & IK_ANALYTIC);
+		assert_true(in_limits(&a, q));
+		judge(&a, q, &t, &ep, &er);
+		assert_true(ep < 1e-4 && er < 0.01);
+		memcpy(prev, q, sizeof(prev));
+	}
+	n = load("targets.csv", rows, 200, 50);
+	assert_int_equal(n, 200);
+	for (i = 1; i < n; i++) {
+		struct ik_target t;
+		struct ik_result res, rd;
+		double q[ARM_DOF], qd[ARM_DOF], ep, er;
+
+		target_of(&rows[i], &t);
+		ik_solve(&a, &ik_kin_dq, &t, rows[i - 1].q, &no, q, &res);
+		ik_solve(&a, &ik_kin_dq, &t, rows[i - 1].q, &o, qd, &rd);
+		assert_int_equal(res.evals, 0);
+		assert_true(in_limits(&a, q));
+		judge(&a, q, &t, &ep, &er);
+		if (res.flags & IK_REACHED) {
+			assert_true(ep < 1e-4 && er < 0.01);
+		} else {
+			assert_true(res.flags & IK_UNREACHABLE);
+			short_of++;
+		}
+		assert_true(rd.flags & IK_REACHED);
+	}
+	print_message("random targets from the previous row's posture, Newton only: %d of %zu short\n", short_of, n - 1);
+	assert_true(short_of > 0);
+}
+
+/*
  * ik_solve_pose: the same posture as ik_solve, and segment poses equal, bit
  * for bit, to arm_fk_pose at it, whichever way the solve ended (tracking,
  * reset, the matrix backend, an unreachable or invalid target).
@@ -688,6 +749,7 @@ int main(void)
 		cmocka_unit_test(test_solve_random_matrix),
 		cmocka_unit_test(test_paper_newton),
 		cmocka_unit_test(test_trajectory_warm),
+		cmocka_unit_test(test_no_search),
 		cmocka_unit_test(test_solve_pose),
 		cmocka_unit_test(test_sincos8_same_bits),
 		cmocka_unit_test(test_atan2_accuracy),

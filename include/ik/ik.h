@@ -80,7 +80,8 @@ struct ik_opts {
 	sc_t max_step;      /* largest joint step per iteration, radians (0: none) */
 	int swivel_samples; /* closed-form search: samples of the swivel circle */
 	int yaw_samples;    /* closed-form search: samples of J1 */
-	int max_evals;      /* closed-form search: postures evaluated at most (bounds the time) */
+	int max_evals;      /* closed-form search: postures evaluated at most (bounds the time); 0: no search,
+			       Newton only, from the seed (an arm kept on its branch) */
 	int warm_iter;      /* Newton iterations tried from a seed before the closed-form search */
 	sc_t center_gain;   /* tracking: fraction of the way to mid-range the redundancy moves per step */
 };

@@ -735,6 +735,67 @@ static void posture_err(const struct arm *a, const struct ik_target *t, const sc
 /* closed-form postures tried per frame while tracking a target out of the limits' reach */
 #define TRACK_EVALS 48
 
+/*
+ * An arm kept on its branch (avatar_arm_solve's last step): a frame whose
+ * elbow moved JUMP_MARGIN more than its hand since the last frame jumped to
+ * another branch of the arm; the posture near the last one is kept instead
+ * when it has the hand within HOLD_POS of its sensor and the hand's
+ * orientation within HOLD_ROT of what the jump gave (radians, 20 degrees).
+ */
+#define JUMP_MARGIN SC_C(0.10)
+#define HOLD_POS SC_C(0.001)
+#define HOLD_ROT SC_C(0.35)
+#define HOLD_STEPS 6
+#define HOLD_STEP SC_C(0.04363323129985824) /* 2.5 degrees */
+
+/*
+ * The posture with the hand on its target's position and the elbow where
+ * it was (its swivel about the new shoulder-wrist line, J1 as it was), the
+ * wrist as near the orientation as its limits allow; false if J2..J5 leave
+ * their limits there.
+ */
+static bool hold_swivel(const struct arm *a, const struct ik_target *t, const sc_t pq[ARM_DOF],
+			const struct arm_pose *was, sc_t q[ARM_DOF])
+{
+	struct arm_goal g;
+	struct vec3 e;
+	sc_t c, s, n, va, vw, phi;
+	int k;
+
+	if (!goal_init(a, t, pq[0], &g) || !g.in_reach)
+		return false;
+	e = (struct vec3){ was->elbow.x, was->elbow.y, was->elbow.z };
+	if (a->side == ARM_LEFT)
+		e.x = -e.x;
+	e = (struct vec3){ e.x - g.s.x, e.y - g.s.y, e.z - g.s.z };
+	c = v3_dot(&e, &g.d0);
+	s = v3_dot(&e, &g.d1);
+	n = sc_sqrt(sc_mul(c, c) + sc_mul(s, s));
+	if (!(n > SC_C(1e-6)))
+		return false;
+	phi = sc_atan2(s, c);
+	/* the swivel it had, else the nearest within HOLD_STEPS steps of 2.5 degrees that keeps J2..J5 inside */
+	for (k = 0; k <= 2 * HOLD_STEPS; k++) {
+		sc_t d = sc_mul(sc_from_int((k + 1) / 2 * (k & 1 ? 1 : -1)), HOLD_STEP);
+
+		if (goal_posture(a, &g, phi + d, q, &va, &vw) && va == 0)
+			break;
+	}
+	if (k > 2 * HOLD_STEPS)
+		return false;
+	arm_clamp(a, q);
+	return true;
+}
+
+/* the elbow moved JUMP_MARGIN more than the hand since the previous frame (chest frame) */
+static bool arm_jumped(const struct arm_pose *was, const struct arm_pose *now)
+{
+	struct vec3 de = { now->elbow.x - was->elbow.x, now->elbow.y - was->elbow.y, now->elbow.z - was->elbow.z };
+	struct vec3 dh = { now->hand.x - was->hand.x, now->hand.y - was->hand.y, now->hand.z - was->hand.z };
+
+	return v3_norm(&de) > v3_norm(&dh) + JUMP_MARGIN;
+}
+
 unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin *kin, const struct ik_opts *o,
 			  const struct ik_target *t, const struct avatar_pose *prev, struct avatar_pose *out)
 {
@@ -796,6 +857,42 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 						res->flags |= IK_LIMITED;
 				flags = res->flags;
 			}
+		}
+	}
+	if (prev && t->valid && arm_jumped(&prev->seg[side], &out->seg[side])) {
+		/*
+		 * The elbow left the last frame's far faster than the hand: the
+		 * search found another branch of the arm, and the next frame may
+		 * well go back (an arm against its limits, a body whose arms do
+		 * not fit its sensors: the default body on other people's motion
+		 * flickered so 22 times in the seven clips of docs/FIDELITY.md).
+		 * A renderer shows that as a flicker of the arm; the branch the arm
+		 * is on does better, unless it costs the hand its place or much
+		 * of its orientation: Newton from the last posture (no search),
+		 * or where Newton gives up the hand's place for its orientation,
+		 * the hand on its place with the elbow at its last swivel.
+		 */
+		struct ik_opts no = *o;
+		struct ik_result r2;
+		struct arm_pose s2;
+		sc_t q2[ARM_DOF];
+
+		no.max_evals = 0;
+		ik_solve_pose(a, kin, t, prev->q[side], &no, q2, &r2, &s2);
+		if (!(r2.err.pos <= HOLD_POS) && hold_swivel(a, t, prev->q[side], &prev->seg[side], q2)) {
+			/* Newton gave up the hand's place for its orientation: the hand on its place at the elbow's swivel */
+			posture_err(a, t, q2, &r2.err);
+			arm_fk_pose(a, q2, &s2);
+			r2.flags = IK_UNREACHABLE;
+			for (int i = 0; i < ARM_DOF; i++)
+				if (q2[i] <= a->lim.lo[i] || q2[i] >= a->lim.hi[i])
+					r2.flags |= IK_LIMITED;
+		}
+		if (r2.err.pos <= HOLD_POS && r2.err.rot <= res->err.rot + HOLD_ROT && !arm_jumped(&prev->seg[side], &s2)) {
+			q_set(q, q2);
+			*res = r2;
+			out->seg[side] = s2;
+			flags = r2.flags;
 		}
 	}
 	return flags;

@@ -802,6 +802,13 @@ static unsigned solve(const struct arm *a, const struct ik_kin *kin, const struc
 		res->flags |= IK_BAD_TARGET;
 		goto out;
 	}
+	if (o->max_evals <= 0) {
+		/* no search: Newton from the seed, within the limits, and what it reaches */
+		for (i = 0; i < ARM_DOF; i++)
+			q[i] = pref[i];
+		newton_limited(a, kin, t, o, 0, q, res, chp, ch_at);
+		goto done;
+	}
 	if (seed && !(res->flags & IK_BAD_TARGET) && o->warm_iter > 0) {
 		/* tracking: a few limited Newton steps from the previous posture move the arm least */
 		struct ik_opts wo = *o;
