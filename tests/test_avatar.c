@@ -91,6 +91,18 @@ static void pose_dq(const double p[7], struct dq *out)
 	dq_from_rt(&r, &t, out);
 }
 
+/* frame i of the loaded clip through the avatar, tracking from prev; its hand sensors in hand[] */
+static void solve_frame(const struct avatar *av, const struct ik_opts *o, size_t i, const struct avatar_pose *prev,
+			struct avatar_pose *cur, struct dq hand[2])
+{
+	struct dq head;
+
+	pose_dq(frames[i].head, &head);
+	pose_dq(frames[i].rhand, &hand[ARM_RIGHT]);
+	pose_dq(frames[i].lhand, &hand[ARM_LEFT]);
+	avatar_solve(av, &ik_kin_dq, o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], prev, cur);
+}
+
 /*
  * cmu_141_16 ("wave hello") with the clip's own segment lengths (its JSON:
  * paper_model_m and in_chest_frame_median_m; the hand sensor sits at the
@@ -111,12 +123,9 @@ static void test_wave_clip(void **state)
 	ik_default_opts(&o);
 	for (i = 0; i < n; i++) {
 		struct avatar_pose *cur = &pose[i & 1], *prev = i ? &pose[(i - 1) & 1] : NULL;
-		struct dq head, hand[2];
+		struct dq hand[2];
 
-		pose_dq(frames[i].head, &head);
-		pose_dq(frames[i].rhand, &hand[ARM_RIGHT]);
-		pose_dq(frames[i].lhand, &hand[ARM_LEFT]);
-		avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], prev, cur);
+		solve_frame(&av, &o, i, prev, cur, hand);
 		/* the person stands and waves: never a bow, the chest upright */
 		assert_true(fabs(cur->chest.r.x) < 1e-12 && fabs(cur->chest.r.y) < 1e-12);
 		for (int side = 0; side < 2; side++) {
@@ -178,12 +187,9 @@ static void test_branch_held(void **state)
 	ik_default_opts(&o);
 	for (i = 0; i < n; i++) {
 		struct avatar_pose *cur = &pose[i & 1], *prev = i ? &pose[(i - 1) & 1] : NULL;
-		struct dq head, hand[2];
+		struct dq hand[2];
 
-		pose_dq(frames[i].head, &head);
-		pose_dq(frames[i].rhand, &hand[ARM_RIGHT]);
-		pose_dq(frames[i].lhand, &hand[ARM_LEFT]);
-		avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], prev, cur);
+		solve_frame(&av, &o, i, prev, cur, hand);
 		for (int side = 0; side < 2; side++) {
 			assert_true(arm_in_limits(&av.arm[side], cur->q[side]));
 			assert_true(cur->res[side].err.pos < 1e-3);

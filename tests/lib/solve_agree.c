@@ -6,16 +6,26 @@
  */
 #include "ik/ik.h"
 
+/* a right arm of these dimensions, the default options, the target (p, r), in this build's type */
+static void setup(const double dims[4], const double p[3], const double r[4], struct arm *a, struct ik_opts *o,
+		  struct ik_target *t)
+{
+	struct arm_dims d = { sc_from_double(dims[0]), sc_from_double(dims[1]), sc_from_double(dims[2]),
+			      sc_from_double(dims[3]) };
+	struct vec3 pp = { sc_from_double(p[0]), sc_from_double(p[1]), sc_from_double(p[2]) };
+	struct quat rr = { sc_from_double(r[0]), sc_from_double(r[1]), sc_from_double(r[2]), sc_from_double(r[3]) };
+
+	arm_init(a, ARM_RIGHT, &d, NULL);
+	ik_default_opts(o);
+	ik_target_set(t, &pp, &rr);
+}
+
 unsigned SCN(solve_agree)(const double dims[4], const double p[3], const double r[4], double q_out[ARM_DOF],
 			  double fk_out[7]);
 
 unsigned SCN(solve_agree)(const double dims[4], const double p[3], const double r[4], double q_out[ARM_DOF],
 			  double fk_out[7])
 {
-	struct arm_dims d = { sc_from_double(dims[0]), sc_from_double(dims[1]), sc_from_double(dims[2]),
-			      sc_from_double(dims[3]) };
-	struct vec3 pp = { sc_from_double(p[0]), sc_from_double(p[1]), sc_from_double(p[2]) };
-	struct quat rr = { sc_from_double(r[0]), sc_from_double(r[1]), sc_from_double(r[2]), sc_from_double(r[3]) };
 	struct arm a;
 	struct ik_opts o;
 	struct ik_target t;
@@ -25,9 +35,7 @@ unsigned SCN(solve_agree)(const double dims[4], const double p[3], const double 
 	sc_t q[ARM_DOF];
 	int i;
 
-	arm_init(&a, ARM_RIGHT, &d, NULL);
-	ik_default_opts(&o);
-	ik_target_set(&t, &pp, &rr);
+	setup(dims, p, r, &a, &o, &t);
 	ik_solve(&a, &ik_kin_dq, &t, NULL, &o, q, &res);
 	arm_fk(&a, q, &fk);
 	dq_translation(&fk, &pc);
@@ -55,10 +63,6 @@ bool SCN(swivel_agree)(const double dims[4], const double p[3], const double r[4
 bool SCN(swivel_agree)(const double dims[4], const double p[3], const double r[4], double q_out[ARM_DOF],
 		       double *outside)
 {
-	struct arm_dims d = { sc_from_double(dims[0]), sc_from_double(dims[1]), sc_from_double(dims[2]),
-			      sc_from_double(dims[3]) };
-	struct vec3 pp = { sc_from_double(p[0]), sc_from_double(p[1]), sc_from_double(p[2]) };
-	struct quat rr = { sc_from_double(r[0]), sc_from_double(r[1]), sc_from_double(r[2]), sc_from_double(r[3]) };
 	struct arm a;
 	struct ik_opts o;
 	struct ik_target t;
@@ -67,9 +71,7 @@ bool SCN(swivel_agree)(const double dims[4], const double p[3], const double r[4
 	bool found;
 	int evals, i;
 
-	arm_init(&a, ARM_RIGHT, &d, NULL);
-	ik_default_opts(&o);
-	ik_target_set(&t, &pp, &rr);
+	setup(dims, p, r, &a, &o, &t);
 	ik_rest_posture(&a, rest);
 	found = ik_swivel_solve(&a, &t, rest, &o, q, &evals);
 	for (i = 0; i < ARM_DOF; i++) {
