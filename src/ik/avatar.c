@@ -719,6 +719,15 @@ static bool reach_first(const struct arm *a, const struct ik_target *t, const sc
 	return true;
 }
 
+/* IK_LIMITED if a joint of q is at one of its limits, as the solver flags it */
+static unsigned at_limits(const struct arm *a, const sc_t q[ARM_DOF])
+{
+	for (int i = 0; i < ARM_DOF; i++)
+		if (q[i] <= a->lim.lo[i] || q[i] >= a->lim.hi[i])
+			return IK_LIMITED;
+	return 0;
+}
+
 /* |hand - target| and the angle between their orientations, for a posture */
 static void posture_err(const struct arm *a, const struct ik_target *t, const sc_t q[ARM_DOF], struct ik_err *err)
 {
@@ -851,10 +860,7 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 				q_set(q, q2);
 				arm_fk_pose(a, q, &out->seg[side]);
 				res->err = e2;
-				res->flags &= ~(unsigned)IK_LIMITED;
-				for (int i = 0; i < ARM_DOF; i++)
-					if (q[i] <= a->lim.lo[i] || q[i] >= a->lim.hi[i])
-						res->flags |= IK_LIMITED;
+				res->flags = (res->flags & ~(unsigned)IK_LIMITED) | at_limits(a, q);
 				flags = res->flags;
 			}
 		}
@@ -883,10 +889,7 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 			/* Newton gave up the hand's place for its orientation: the hand on its place at the elbow's swivel */
 			posture_err(a, t, q2, &r2.err);
 			arm_fk_pose(a, q2, &s2);
-			r2.flags = IK_UNREACHABLE;
-			for (int i = 0; i < ARM_DOF; i++)
-				if (q2[i] <= a->lim.lo[i] || q2[i] >= a->lim.hi[i])
-					r2.flags |= IK_LIMITED;
+			r2.flags = IK_UNREACHABLE | at_limits(a, q2);
 		}
 		if (r2.err.pos <= HOLD_POS && r2.err.rot <= res->err.rot + HOLD_ROT && !arm_jumped(&prev->seg[side], &s2)) {
 			q_set(q, q2);
