@@ -646,6 +646,7 @@ static void test_out_safe_speed_limit(void **state)
 {
 	struct out_fx *x = out_setup(NULL, "");
 	struct cancodec_avatar a;
+	struct timespec t0;
 	double deg[WIRE_JOINTS] = { 0 }, prev = 0;
 
 	(void)state;
@@ -656,6 +657,7 @@ static void test_out_safe_speed_limit(void **state)
 	deg[3] = 20; /* right shoulder flexion: 20 degrees away */
 	for (int i = 1; i <= 5; i++) {
 		sleep_ms(15); /* longer than a period: the step is capped at one period's worth */
+		clock_gettime(CLOCK_MONOTONIC, &t0); /* before this command is stamped */
 		send_frame(x, 0, deg, 0);
 		assert_true(read_command(x, 0x100, &a));
 		assert_int_equal(a.joint[3], 90 * i);
@@ -663,18 +665,22 @@ static void test_out_safe_speed_limit(void **state)
 	}
 	/* commands closer together than a period move less: max_speed times the time between them */
 	{
-		struct timespec t0, t1;
+		struct timespec t1;
 		double dt;
 
 		prev = a.joint[3];
-		clock_gettime(CLOCK_MONOTONIC, &t0);
+		sleep_ms(4); /* less than a period */
 		send_frame(x, 0, deg, 0);
 		clock_gettime(CLOCK_MONOTONIC, &t1);
-		/* at most the time since the previous command: from before that sleep_ms() ended */
+		/*
+		 * An upper bound of the time between the two commands: from before the previous one
+		 * was sent (t0) to after this one was. Reading the previous command back, and any
+		 * preemption, falls inside it.
+		 */
 		dt = (double)(t1.tv_sec - t0.tv_sec) + (t1.tv_nsec - t0.tv_nsec) * 1e-9;
 		assert_true(read_command(x, 0x100, &a));
 		print_message("a command %.3f ms after the previous one moved %d\n", dt * 1e3, a.joint[3] - (int)prev);
-		assert_true(a.joint[3] >= prev);
+		assert_true(a.joint[3] >= prev + 9000 * 0.004 - 1); /* the sleep was at least 4 ms */
 		assert_true(a.joint[3] <= prev + 9000 * fmin(dt, 0.01) + 1);
 	}
 	/* back down, as fast as allowed */
