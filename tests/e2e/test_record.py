@@ -91,11 +91,11 @@ def record(tmp, seconds, extra="", speed=1, with_status=False):
 def final_counters(err):
     """the loop's overruns and the recorder's dropped records, from the daemon's last line: final, counted
     after the loop stopped (a status asked before the stop misses a stall between it and the stop)"""
-    m = re.search(r"stopped after (\d+) cycles, (\d+) overruns, \d+ poll errors; recorder: (\d+) records, "
-                  r"(\d+) dropped", err)
+    m = re.search(r"stopped after (\d+) cycles, (\d+) overruns, \d+ poll errors(?:; recorder: (\d+) records, "
+                  r"(\d+) dropped)?", err)
     assert m, "no final counters in the daemon's log:\n" + err
     return {"loop": {"cycles": int(m.group(1)), "overruns": int(m.group(2))},
-            "recorder": {"records": int(m.group(3)), "dropped": int(m.group(4))}}
+            "recorder": {"records": int(m.group(3) or 0), "dropped": int(m.group(4) or 0)}}
 
 
 def seg_dist(p, a, b):
@@ -176,6 +176,7 @@ class RecordReplayTest(unittest.TestCase):
             frames = [m for _, m in td.dump(["--udp", "127.0.0.1:%d" % port], 100)]
         finally:
             self.assertEqual(d.stop(), 0)
+        replay = final_counters(d.stderr())
         clip = td.load_clip()
         seen = []
         for m in frames:
@@ -186,11 +187,20 @@ class RecordReplayTest(unittest.TestCase):
         # float32 storage: a few micrometres. A cycle that comes late releases
         # every instant it owes and publishes the newest, so a loaded host may
         # skip a row: the rows seen are clip rows, in the clip's order, mostly
-        # one after the other.
+        # one after the other. A host that stalled the daemon that recorded or
+        # the one that replays (their final counters) may skip any number: the
+        # rows then only go forward.
+        stalled = (self.status["loop"]["overruns"] or self.status["recorder"]["dropped"]
+                   or replay["loop"]["overruns"])
         self.assertGreater(len(seen), 20)
-        steps = rows_in_order(seen, clip, 1e-5)
-        self.assertIsNotNone(steps, "a published row is not the clip's next rows")
-        self.assertGreaterEqual(steps.count(1), len(steps) // 2, steps)
+        steps = rows_in_order(seen, clip, 1e-5, most=len(clip) - 1 if stalled else 4)
+        self.assertIsNotNone(steps, "a published row is not the clip's next rows (overruns %d recording, %d "
+                             "replaying)" % (self.status["loop"]["overruns"], replay["loop"]["overruns"]))
+        if stalled:
+            print("test_replayed_recording_publishes_the_clip: the host stalled a daemon: %d of %d rows "
+                  "followed the one before" % (steps.count(1), len(steps)))
+        else:
+            self.assertGreaterEqual(steps.count(1), len(steps) // 2, steps)
 
 
 class DamageTest(unittest.TestCase):
