@@ -676,6 +676,33 @@ static bool samples_above(struct gwt *t, void *arg)
 	return ctr_get(&gwt_tracker(t, "hydra")->st.samples) > *n;
 }
 
+static bool read_to(struct gwt *t, void *arg)
+{
+	(void)t;
+	return stats().delivered >= *(uint64_t *)arg;
+}
+
+/*
+ * Cycles for at least ms, and until the driver has read n more reports than
+ * it had: it has then dealt with every report before the last it read (one
+ * device thread, one report after the other). What a test injected is
+ * counted however long a loaded host keeps that thread from it.
+ */
+static void run_reading(struct gwt *t, int ms, int n)
+{
+	uint64_t want = stats().delivered + (uint64_t)n;
+
+	gwt_run(t, ms);
+	assert_true(gwt_until(t, read_to, &want, 5000) >= 0);
+}
+
+/* what the drivers noted so far holds arg (t->notes keeps them) */
+static bool noted(struct gwt *t, void *arg)
+{
+	gwt_take_notes(t);
+	return strstr(t->notes, arg) != NULL;
+}
+
 /* the hands' wire sensor indices: FRAME sensors are head, left hand, right hand */
 static const int wire_of[2] = { WIRE_S_LEFT_HAND, WIRE_S_RIGHT_HAND };
 
@@ -828,7 +855,7 @@ static void test_bad_reports(void **state)
 		junk[7] = 0x77;
 		fake_hid_inject(junk, 52);
 	}
-	gwt_run(&t, 300);
+	run_reading(&t, 300, 6 + 2);
 	assert_int_equal(ctr_get(&h->st.malformed) - m0, 6);
 	/* dropped and counted, nothing else: still OK, no sample lost, never a 20 m hand (gwt_cycle checks) */
 	assert_int_equal(gwt_state(&t, "hydra"), TRACKER_OK);
@@ -878,9 +905,9 @@ static void test_sequence_gaps(void **state)
 	(void)state;
 	h = devtest_up(&t, &hydra);
 	fake_hid_skip(5);
-	gwt_run(&t, 100);
+	run_reading(&t, 100, 2);
 	fake_hid_skip(3);
-	gwt_run(&t, 100);
+	run_reading(&t, 100, 2);
 	assert_int_equal(ctr_get(&h->st.lost), 8);
 	assert_int_equal(ctr_get(&h->st.malformed), 0);
 	assert_int_equal(gwt_state(&t, "hydra"), TRACKER_OK);
@@ -913,7 +940,7 @@ static void test_damaged_reports(void **state)
 		uint64_t m0 = ctr_get(&h->st.malformed), l0 = ctr_get(&h->st.lost);
 
 		fake_hid_damage(cases[c].script);
-		gwt_run(&t, 150);
+		run_reading(&t, 150, (int)strlen(cases[c].script) + 2);
 		print_message("%s: %" PRIu64 " malformed, %" PRIu64 " lost\n", cases[c].script,
 			      ctr_get(&h->st.malformed) - m0, ctr_get(&h->st.lost) - l0);
 		assert_int_equal(ctr_get(&h->st.malformed) - m0, cases[c].malformed);
@@ -967,10 +994,8 @@ static void test_mode_changed_behind_our_back(void **state)
 	/* reports of the wrong length, a run of them: the driver takes it as a mode change */
 	for (int i = 0; i < 30; i++)
 		fake_hid_inject(small, sizeof(small));
-	gwt_run(&t, 400);
-	gwt_take_notes(&t);
-	assert_non_null(strstr(t.notes, "reports of the wrong length in a row"));
-	assert_true(devtest_ok(&t, &hydra));
+	assert_true(gwt_until(&t, noted, "reports of the wrong length in a row", 5000) >= 0);
+	assert_true(gwt_until(&t, devtest_ok, &hydra, 2000) >= 0);
 	assert_int_equal(ctr_get(&gwt_tracker(&t, "hydra")->st.reconnects), 2);
 	gwt_close(&t);
 }
