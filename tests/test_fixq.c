@@ -805,12 +805,94 @@ static void test_avatar_clip_bench_arm(void **state)
 	print_diff("the benchmark's arm, the clip turned by 0 to 350 degrees", &m);
 }
 
+/*
+ * Both arms held straight (the elbow bent 0.2 to 1.5 degrees), swept up
+ * and round, the benchmark's arm under the paper's head offset. The bend
+ * plane of a straight arm is short: its unit vector once took the
+ * reciprocal of a length under 1/32, which saturates in Q5.26 and left the
+ * hand-elbow seed's frame out of unit length. No result may saturate; the
+ * hands are on their sensors in both builds, and the Q5.26 avatar lies on
+ * the double one.
+ */
+static void test_avatar_straight_arms(void **state)
+{
+	enum { N = 48 };
+	static const struct ikx_avatar_setup body = { .dims = { 0.18, 0.30, 0.26, 0.08 },
+						      .head_offset = { 0, 0, 0.25 } };
+	const struct arm_dims dims = { sc_from_double(0.18), sc_from_double(0.30), sc_from_double(0.26),
+				       sc_from_double(0.08) };
+	const struct vec3 off = { 0, 0, sc_from_double(0.25) };
+	const double head[3] = { 0.2, -0.1, 1.6 };
+	static struct ikx_avatar_frame in[N];
+	static struct ikx_avatar_out od[N], oq[N];
+	struct avatar av;
+	struct dq chest;
+	double tol_d, tol_q, rot_d, rot_q, worst = 0;
+
+	(void)state;
+	avatar_init(&av, &dims, &off, NULL);
+	dq_from_rt(&(struct quat){ sc_from_double(1), 0, 0, 0 },
+		   &(struct vec3){ sc_from_double(head[0]), sc_from_double(head[1]), sc_from_double(head[2] - 0.25) },
+		   &chest);
+	for (int i = 0; i < N; i++) {
+		/* the arm from down and out to forward and up, its upper arm turning, the elbow nearly straight */
+		const double q[ARM_DOF] = { 0, (-60 + 1.5 * i) * DEG, (-20 + 2.5 * i) * DEG, (30 - i) * DEG,
+					    (-90 + 0.2 + 1.3 * (i % 5) / 4) * DEG, 0, 0, 0 };
+		sc_t qs[ARM_DOF];
+
+		for (int j = 0; j < ARM_DOF; j++)
+			qs[j] = sc_from_double(q[j]);
+		in[i].head[0] = head[0];
+		in[i].head[1] = head[1];
+		in[i].head[2] = head[2];
+		in[i].head[3] = 1;
+		for (int side = ARM_RIGHT; side <= ARM_LEFT; side++) {
+			double *dst = side == ARM_RIGHT ? in[i].rhand : in[i].lhand;
+			struct dq ee, w;
+			struct vec3 t;
+
+			arm_fk(&av.arm[side], qs, &ee);
+			dq_mul(&chest, &ee, &w);
+			dq_translation(&w, &t);
+			dst[0] = sc_to_double(t.x);
+			dst[1] = sc_to_double(t.y);
+			dst[2] = sc_to_double(t.z);
+			dst[3] = sc_to_double(w.r.w);
+			dst[4] = sc_to_double(w.r.x);
+			dst[5] = sc_to_double(w.r.y);
+			dst[6] = sc_to_double(w.r.z);
+		}
+	}
+	ikx_tolerances_d(&tol_d, &rot_d);
+	ikx_tolerances_qs(&tol_q, &rot_q);
+	ikx_avatar_run_d(&body, in, N, od);
+	ikx_avatar_run_qs(&body, in, N, oq);
+	for (int i = 0; i < N; i++) {
+		set_ctx("straight arms, frame %d", i);
+		if (oq[i].saturations)
+			fail_msg("%s: %lu results saturated in Q5.26", ctx, oq[i].saturations);
+		for (int side = ARM_RIGHT; side <= ARM_LEFT; side++) {
+			const double *sensor = side == ARM_RIGHT ? in[i].rhand : in[i].lhand;
+			double hd[3], hq[3];
+
+			chest_to_world(od[i].chest, od[i].hand[side], hd);
+			chest_to_world(oq[i].chest, oq[i].hand[side], hq);
+			assert_near(dist3(hd, sensor), 0, tol_d + AV_HAND_SLACK);
+			assert_near(dist3(hq, sensor), 0, tol_q + AV_HAND_SLACK);
+			assert_near(dist3(hq, hd), 0, AV_POS);
+			worst = fmax(worst, dist3(hq, hd));
+		}
+	}
+	print_message("straight arms: hands Q5.26 against double %.3g um at most\n", worst * 1e6);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_avatar_bow),	cmocka_unit_test(test_avatar_clip),
 		cmocka_unit_test(test_avatar_clip_turned),
 		cmocka_unit_test(test_avatar_clip_bench_arm),
+		cmocka_unit_test(test_avatar_straight_arms),
 		cmocka_unit_test(test_swivel_inside),
 		cmocka_unit_test(test_mul_div_sqrt),	cmocka_unit_test(test_trig),
 		cmocka_unit_test(test_fk_jacobian),	cmocka_unit_test(test_lsq),

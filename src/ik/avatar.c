@@ -237,16 +237,27 @@ static void v3_axpy(sc_t k, const struct vec3 *x, struct vec3 *y)
 	y->z += sc_mul(k, x->z);
 }
 
+/*
+ * v scaled to length 1 (unless it is nearly zero); its length before. Short
+ * vectors are divided component by component: their reciprocal length would
+ * saturate in fixed point (1/n > 32 in Q5.26 below n = 1/32, the bend plane
+ * of an arm straight to within 2 degrees), while each component over n is at
+ * most 1.
+ */
 static sc_t v3_unit(struct vec3 *v)
 {
 	sc_t n = v3_norm(v);
 
-	if (n > SC_EPS) {
+	if (n > SC_C(0.0625)) {
 		sc_t k = sc_div(SC_C(1), n);
 
 		v->x = sc_mul(v->x, k);
 		v->y = sc_mul(v->y, k);
 		v->z = sc_mul(v->z, k);
+	} else if (n > SC_EPS) {
+		v->x = sc_div(v->x, n);
+		v->y = sc_div(v->y, n);
+		v->z = sc_div(v->z, n);
 	}
 	return n;
 }
