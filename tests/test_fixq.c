@@ -819,48 +819,27 @@ static void test_avatar_straight_arms(void **state)
 	enum { N = 48 };
 	static const struct ikx_avatar_setup body = { .dims = { 0.18, 0.30, 0.26, 0.08 },
 						      .head_offset = { 0, 0, 0.25 } };
-	const struct arm_dims dims = { sc_from_double(0.18), sc_from_double(0.30), sc_from_double(0.26),
-				       sc_from_double(0.08) };
-	const struct vec3 off = { 0, 0, sc_from_double(0.25) };
-	const double head[3] = { 0.2, -0.1, 1.6 };
+	/* upright and facing +y: the chest is the head's place less the offset, unturned */
+	const double head[3] = { 0.2, -0.1, 1.6 }, chest[3] = { 0.2, -0.1, 1.6 - 0.25 };
 	static struct ikx_avatar_frame in[N];
 	static struct ikx_avatar_out od[N], oq[N];
-	struct avatar av;
-	struct dq chest;
 	double tol_d, tol_q, rot_d, rot_q, worst = 0;
 
 	(void)state;
-	avatar_init(&av, &dims, &off, NULL);
-	dq_from_rt(&(struct quat){ sc_from_double(1), 0, 0, 0 },
-		   &(struct vec3){ sc_from_double(head[0]), sc_from_double(head[1]), sc_from_double(head[2] - 0.25) },
-		   &chest);
 	for (int i = 0; i < N; i++) {
 		/* the arm from down and out to forward and up, its upper arm turning, the elbow nearly straight */
 		const double q[ARM_DOF] = { 0, (-60 + 1.5 * i) * DEG, (-20 + 2.5 * i) * DEG, (30 - i) * DEG,
 					    (-90 + 0.2 + 1.3 * (i % 5) / 4) * DEG, 0, 0, 0 };
-		sc_t qs[ARM_DOF];
 
-		for (int j = 0; j < ARM_DOF; j++)
-			qs[j] = sc_from_double(q[j]);
-		in[i].head[0] = head[0];
-		in[i].head[1] = head[1];
-		in[i].head[2] = head[2];
+		memcpy(in[i].head, head, sizeof(head));
 		in[i].head[3] = 1;
 		for (int side = ARM_RIGHT; side <= ARM_LEFT; side++) {
+			const struct ikx_setup arm = { .dims = { 0.18, 0.30, 0.26, 0.08 }, .left = side == ARM_LEFT };
 			double *dst = side == ARM_RIGHT ? in[i].rhand : in[i].lhand;
-			struct dq ee, w;
-			struct vec3 t;
 
-			arm_fk(&av.arm[side], qs, &ee);
-			dq_mul(&chest, &ee, &w);
-			dq_translation(&w, &t);
-			dst[0] = sc_to_double(t.x);
-			dst[1] = sc_to_double(t.y);
-			dst[2] = sc_to_double(t.z);
-			dst[3] = sc_to_double(w.r.w);
-			dst[4] = sc_to_double(w.r.x);
-			dst[5] = sc_to_double(w.r.y);
-			dst[6] = sc_to_double(w.r.z);
+			ikx_fk_d(&arm, q, dst); /* chest frame; the chest is only moved */
+			for (int k = 0; k < 3; k++)
+				dst[k] += chest[k];
 		}
 	}
 	ikx_tolerances_d(&tol_d, &rot_d);

@@ -676,24 +676,9 @@ static bool samples_above(struct gwt *t, void *arg)
 	return ctr_get(&gwt_tracker(t, "hydra")->st.samples) > *n;
 }
 
-static bool read_to(struct gwt *t, void *arg)
+static uint64_t reads(void)
 {
-	(void)t;
-	return stats().delivered >= *(uint64_t *)arg;
-}
-
-/*
- * Cycles for at least ms, and until the driver has read n more reports than
- * it had: it has then dealt with every report before the last it read (one
- * device thread, one report after the other). What a test injected is
- * counted however long a loaded host keeps that thread from it.
- */
-static void run_reading(struct gwt *t, int ms, int n)
-{
-	uint64_t want = stats().delivered + (uint64_t)n;
-
-	gwt_run(t, ms);
-	assert_true(gwt_until(t, read_to, &want, 5000) >= 0);
+	return stats().delivered;
 }
 
 /* what the drivers noted so far holds arg (t->notes keeps them) */
@@ -734,6 +719,7 @@ static bool motion_requested(void)
 		.sensors = 1u << WIRE_S_LEFT_HAND | 1u << WIRE_S_RIGHT_HAND, .inputs = true,                    \
 		.drv = &hydra_driver, .plug = plug_fn, .unplug = fake_hid_unplug, .deny_open = deny_open,       \
 		.denied = "Permission denied", .stepped = fake_hid_stepped, .set_up = motion_requested,         \
+		.reads = reads,                                                                                 \
 	}
 
 /* found streaming (left in motion mode by a program before us) */
@@ -855,7 +841,7 @@ static void test_bad_reports(void **state)
 		junk[7] = 0x77;
 		fake_hid_inject(junk, 52);
 	}
-	run_reading(&t, 300, 6 + 2);
+	devtest_run_reading(&t, &hydra, 300, 6 + 2);
 	assert_int_equal(ctr_get(&h->st.malformed) - m0, 6);
 	/* dropped and counted, nothing else: still OK, no sample lost, never a 20 m hand (gwt_cycle checks) */
 	assert_int_equal(gwt_state(&t, "hydra"), TRACKER_OK);
@@ -905,9 +891,9 @@ static void test_sequence_gaps(void **state)
 	(void)state;
 	h = devtest_up(&t, &hydra);
 	fake_hid_skip(5);
-	run_reading(&t, 100, 2);
+	devtest_run_reading(&t, &hydra, 100, 2);
 	fake_hid_skip(3);
-	run_reading(&t, 100, 2);
+	devtest_run_reading(&t, &hydra, 100, 2);
 	assert_int_equal(ctr_get(&h->st.lost), 8);
 	assert_int_equal(ctr_get(&h->st.malformed), 0);
 	assert_int_equal(gwt_state(&t, "hydra"), TRACKER_OK);
@@ -940,7 +926,7 @@ static void test_damaged_reports(void **state)
 		uint64_t m0 = ctr_get(&h->st.malformed), l0 = ctr_get(&h->st.lost);
 
 		fake_hid_damage(cases[c].script);
-		run_reading(&t, 150, (int)strlen(cases[c].script) + 2);
+		devtest_run_reading(&t, &hydra, 150, (int)strlen(cases[c].script) + 2);
 		print_message("%s: %" PRIu64 " malformed, %" PRIu64 " lost\n", cases[c].script,
 			      ctr_get(&h->st.malformed) - m0, ctr_get(&h->st.lost) - l0);
 		assert_int_equal(ctr_get(&h->st.malformed) - m0, cases[c].malformed);

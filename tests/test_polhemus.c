@@ -460,23 +460,9 @@ static bool samples_above(struct gwt *t, void *arg)
 	return ctr_get(&gwt_tracker(t, "polhemus")->st.samples) >= *(uint64_t *)arg;
 }
 
-static bool read_to(struct gwt *t, void *arg)
+static uint64_t reads(void)
 {
-	(void)t;
-	return stats().frames >= *(uint64_t *)arg;
-}
-
-/*
- * Cycles for at least ms, and until the driver has read n more frames than it
- * had: what came before them (injected bytes, a gap) has then been dealt with,
- * however long a loaded host kept the device thread from it.
- */
-static void run_reading(struct gwt *t, int ms, int n)
-{
-	uint64_t want = stats().frames + (uint64_t)n;
-
-	gwt_run(t, ms);
-	assert_true(gwt_until(t, read_to, &want, 5000) >= 0);
+	return stats().frames;
 }
 
 static void plug_ready(void)
@@ -508,6 +494,7 @@ static struct devtest polhemus = {
 	.denied = "Access denied",
 	.stepped = fake_usb_stepped,
 	.set_up = set_up_once,
+	.reads = reads,
 };
 
 /* the set-up commands, then each frame of the capture through the gateway to the published avatar */
@@ -709,7 +696,7 @@ static void test_garbage_bytes(void **state)
 	fake_usb_inject(junk + 7, 17);
 	s0 = ctr_get(&p->st.samples);
 	f0 = ctr_get(&p->st.faults);
-	run_reading(&t, 300, 40 + 4); /* 40 frames of 3 stations, and what the junk may cost */
+	devtest_run_reading(&t, &polhemus, 300, 40 + 4); /* 40 frames of 3 stations, and what the junk may cost */
 	/* counted, resynchronised on the next header, nothing else happened */
 	assert_true(ctr_get(&p->st.malformed) >= 1);
 	assert_true(ctr_get(&p->st.samples) > s0 + 3 * 40);
@@ -726,7 +713,7 @@ static void test_frame_count_gap(void **state)
 	(void)state;
 	devtest_up(&t, &polhemus);
 	fake_usb_skip(4);
-	run_reading(&t, 100, 2);
+	devtest_run_reading(&t, &polhemus, 100, 2);
 	/* per sensor: 4 frames of 3 stations */
 	assert_int_equal(ctr_get(&gwt_tracker(&t, "polhemus")->st.lost), 12);
 	assert_true(devtest_ok(&t, &polhemus));

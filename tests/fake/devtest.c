@@ -27,6 +27,27 @@ static bool in_state(struct gwt *t, const struct devtest *dev, uint32_t state, u
 	return true;
 }
 
+struct reads_to {
+	const struct devtest *dev;
+	uint64_t n;
+};
+
+static bool read_to(struct gwt *t, void *arg)
+{
+	const struct reads_to *r = arg;
+
+	(void)t;
+	return r->dev->reads() >= r->n;
+}
+
+void devtest_run_reading(struct gwt *t, const struct devtest *dev, int ms, int n)
+{
+	struct reads_to r = { dev, dev->reads() + (uint64_t)n };
+
+	gwt_run(t, ms);
+	assert_true(gwt_until(t, read_to, &r, 5000) >= 0);
+}
+
 bool devtest_ok(struct gwt *t, void *dev)
 {
 	return in_state(t, dev, TRACKER_OK, WIRE_SENSOR_OK);

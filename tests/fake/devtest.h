@@ -31,12 +31,21 @@ struct devtest {
 	const char *denied;       /* what the driver says of that permission (the library's words) */
 	void (*stepped)(bool on); /* stepped play: a report only when the test releases one */
 	bool (*set_up)(void);     /* the device saw the driver's handshake through (stepped: no report yet) */
+	uint64_t (*reads)(void);  /* reports (or frames) the driver has read from it so far */
 };
 
 /* predicates for gwt_until (arg: the struct devtest) */
 bool devtest_ok(struct gwt *t, void *dev);      /* the source is OK, and its sensors in the last FRAME */
 bool devtest_missing(struct gwt *t, void *dev); /* the source is FAULTY, its sensors MISSING */
 bool devtest_stale(struct gwt *t, void *dev);   /* the source is STALE, its sensors too */
+
+/*
+ * Cycles for at least ms, and until the driver has read n more reports than
+ * it had: it has then dealt with every one before the last it read (one
+ * device thread, one report after the other), so what a test injected is
+ * counted however long a loaded host kept that thread from it.
+ */
+void devtest_run_reading(struct gwt *t, const struct devtest *dev, int ms, int n);
 
 /* the device plugged, the gateway opened on dev->conf, the source OK within 2 s, its inputs published: the source */
 struct tracker *devtest_up(struct gwt *t, const struct devtest *dev);
