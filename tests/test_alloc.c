@@ -8,8 +8,8 @@
  * then the real loop thread runs for a while with a TCP and a Unix
  * subscriber connected, a slow subscriber that never reads, several
  * avatars, sim and replay sources, DESCRIBEs, the recorder (samples and
- * messages, its writer thread flushing), and the counters must not move. mallinfo2() must not move either, which also catches allocations
- * made inside libc on our behalf.
+ * messages, its writer thread flushing), and the counters must not move. mallinfo2() must not move either, which also
+ * catches allocations made inside libc on our behalf.
  */
 #include "config/config.h"
 #include "daemon/gateway.h"
@@ -77,41 +77,40 @@ void __wrap_free(void *p)
 }
 
 /* the ports are chosen at run time (free ones): printf with udp port, tcp port */
-static const char conf_fmt[] =
-	"[daemon]\n"
-	"rate = 480\n"
-	"control_socket =\n"
-	"describe_interval = 0.1\n"
-	"stale_ms = 20\n"
-	"record_dir = /tmp/avatargw-test-alloc-rec\n"
-	"record_messages = yes\n"
-	"record_flush = 0.02\n"
-	"[source sim]\n"
-	"type = sim\n"
-	"people = 3\n"
-	"[source clip]\n"
-	"type = replay\n"
-	"file = builtin:cmu_141_16.csv\n"
-	"[avatar crowd]\n"
-	"person = sim/p0\n"
-	"count = 3\n"
-	"[avatar clip]\n"
-	"person = clip\n"
-	"[avatar mixed]\n"
-	"person = sim/p0\n"
-	"right_hand = clip/right_hand\n"
-	"[output udp]\n"
-	"type = udp\n"
-	"address = 127.0.0.1\n"
-	"port = %d\n"
-	"[output tcp]\n"
-	"type = tcp\n"
-	"address = 127.0.0.1\n"
-	"port = %d\n"
-	"client_buffer = 4096\n"
-	"[output unix]\n"
-	"type = unix\n"
-	"path = /tmp/avatargw-test-alloc.sock\n";
+static const char conf_fmt[] = "[daemon]\n"
+			       "rate = 480\n"
+			       "control_socket =\n"
+			       "describe_interval = 0.1\n"
+			       "stale_ms = 20\n"
+			       "record_dir = /tmp/avatargw-test-alloc-rec\n"
+			       "record_messages = yes\n"
+			       "record_flush = 0.02\n"
+			       "[source sim]\n"
+			       "type = sim\n"
+			       "people = 3\n"
+			       "[source clip]\n"
+			       "type = replay\n"
+			       "file = builtin:cmu_141_16.csv\n"
+			       "[avatar crowd]\n"
+			       "person = sim/p0\n"
+			       "count = 3\n"
+			       "[avatar clip]\n"
+			       "person = clip\n"
+			       "[avatar mixed]\n"
+			       "person = sim/p0\n"
+			       "right_hand = clip/right_hand\n"
+			       "[output udp]\n"
+			       "type = udp\n"
+			       "address = 127.0.0.1\n"
+			       "port = %d\n"
+			       "[output tcp]\n"
+			       "type = tcp\n"
+			       "address = 127.0.0.1\n"
+			       "port = %d\n"
+			       "client_buffer = 4096\n"
+			       "[output unix]\n"
+			       "type = unix\n"
+			       "path = /tmp/avatargw-test-alloc.sock\n";
 
 static int free_tcp_port(void);
 
@@ -132,7 +131,8 @@ static void test_loop_allocates_nothing(void **state)
 	struct recorder *rec = NULL;
 	uint64_t rec_before;
 	int tport = free_tcp_port();
-	struct sockaddr_in sin = { .sin_family = AF_INET, .sin_port = htons((uint16_t)tport),
+	struct sockaddr_in sin = { .sin_family = AF_INET,
+				   .sin_port = htons((uint16_t)tport),
 				   .sin_addr.s_addr = htonl(INADDR_LOOPBACK) };
 	char conf[4096];
 	struct sockaddr_un sun = { .sun_family = AF_UNIX, .sun_path = "/tmp/avatargw-test-alloc.sock" };
@@ -250,7 +250,8 @@ static void test_bus_loop_allocates_nothing(void **state)
 	struct loop *l = NULL;
 	struct mallinfo2 before, after;
 	int can_in[2], can_out[2], port = free_tcp_port(), cl;
-	struct sockaddr_in sin = { .sin_family = AF_INET, .sin_port = htons((uint16_t)port),
+	struct sockaddr_in sin = { .sin_family = AF_INET,
+				   .sin_port = htons((uint16_t)port),
 				   .sin_addr.s_addr = htonl(INADDR_LOOPBACK) };
 	uint64_t req0, cmd0, samples0, mbin0;
 	long n;

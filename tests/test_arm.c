@@ -33,7 +33,6 @@ void agree_fk_f(int left, const double dims[4], const double q[ARM_DOF], double 
 
 /* ---- checks ---------------------------------------------------------------- */
 
-
 #define assert_ctx(cond)                                                                                               \
 	do {                                                                                                           \
 		if (!(cond))                                                                                           \
@@ -54,7 +53,6 @@ static void assert_dq_same(const struct dq *a, const struct dq *b, double tol)
 	assert_near(a->d.y, k * b->d.y, tol);
 	assert_near(a->d.z, k * b->d.z, tol);
 }
-
 
 static void rnd_posture(double q[ARM_DOF])
 {

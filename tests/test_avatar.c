@@ -156,7 +156,8 @@ static void test_wave_clip(void **state)
 /* the elbow moved 10 cm more than the hand between two solved frames (chest frame) */
 static bool jumped(const struct arm_pose *a, const struct arm_pose *b)
 {
-	double de = sqrt(pow(b->elbow.x - a->elbow.x, 2) + pow(b->elbow.y - a->elbow.y, 2) + pow(b->elbow.z - a->elbow.z, 2));
+	double de = sqrt(pow(b->elbow.x - a->elbow.x, 2) + pow(b->elbow.y - a->elbow.y, 2) +
+			 pow(b->elbow.z - a->elbow.z, 2));
 	double dh = sqrt(pow(b->hand.x - a->hand.x, 2) + pow(b->hand.y - a->hand.y, 2) + pow(b->hand.z - a->hand.z, 2));
 
 	return de > dh + 0.10;
@@ -289,7 +290,8 @@ static void test_neck_bends(void **state)
 		v3_cross(&up, &hv, &axis);
 		n = v3_norm(&axis);
 		if (n > 1e-12) {
-			quat_from_axis_angle(&(struct vec3){ axis.x / n, axis.y / n, axis.z / n }, atan2(n, hv.z), &bend);
+			quat_from_axis_angle(&(struct vec3){ axis.x / n, axis.y / n, axis.z / n }, atan2(n, hv.z),
+					     &bend);
 			quat_rotate(&bend, &off, &bent);
 		} else {
 			bent = off;
@@ -382,7 +384,8 @@ static void test_bow(void **state)
 	for (int side = 0; side < 2; side++) {
 		struct quat id = { 1, 0, 0, 0 };
 
-		dq_from_rt(&id, &(struct vec3){ hp.x + (side == ARM_RIGHT ? 0.2 : -0.2), hp.y, hp.z + 0.9 }, &hand[side]);
+		dq_from_rt(&id, &(struct vec3){ hp.x + (side == ARM_RIGHT ? 0.2 : -0.2), hp.y, hp.z + 0.9 },
+			   &hand[side]);
 	}
 	avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
 	assert_true(p.res[ARM_RIGHT].err.pos > 0.05 && p.res[ARM_LEFT].err.pos > 0.05);
@@ -522,8 +525,8 @@ static void test_hand_elbow(void **state)
 				assert_true(fabs(p.q[ARM_LEFT][j] - p.q[ARM_RIGHT][j]) < 1e-6);
 		}
 	}
-	print_message("elbow found within 3 cm: paper %d, straight wrist %d, wrist cost %d of %d\n", found[0],
-		      straight, found[1], n);
+	print_message("elbow found within 3 cm: paper %d, straight wrist %d, wrist cost %d of %d\n", found[0], straight,
+		      found[1], n);
 	/*
 	 * random shoulders include unnatural elbows, where the pull toward a
 	 * natural one misleads: an elbow held up beside a bent arm, which the
@@ -586,7 +589,8 @@ static void test_reach_first(void **state)
 			arm_fk(&av.arm[ARM_RIGHT], p.q[ARM_RIGHT], &fk);
 			dq_translation(&fk, &got);
 			if (m) {
-				/* another elbow may give the orientation after all; either way the hand is on its sensor */
+				/* another elbow may give the orientation after all; either way the hand is on its
+				 * sensor */
 				assert_true(fabs(got.x - want.x) < 1e-6 && fabs(got.y - want.y) < 1e-6 &&
 					    fabs(got.z - want.z) < 1e-6);
 				assert_true(p.res[ARM_RIGHT].err.pos < 1e-6);
@@ -600,8 +604,9 @@ static void test_reach_first(void **state)
 			}
 		}
 	}
-	print_message("orientation out of the wrist's reach in %d of %d; the paper avatar's hand off its sensor in %d\n",
-		      unreachable, n, off_paper);
+	print_message(
+		"orientation out of the wrist's reach in %d of %d; the paper avatar's hand off its sensor in %d\n",
+		unreachable, n, off_paper);
 	assert_true(unreachable > n / 4);
 	assert_true(off_paper > unreachable / 2);
 }
@@ -721,7 +726,8 @@ static void test_chest_heading_consistent(void **state)
 		quat_mul(&hr, &pitch, &r);
 		dq_from_rt(&r, &(struct vec3){ 0, 0, 1.6 }, &head);
 		for (j = 1; j < 24; j++) {
-			double ly = hy + (j - 12) * (M_PI / 48), d; /* the hands' line up to 41 degrees off either way */
+			double ly = hy + (j - 12) * (M_PI / 48),
+			       d; /* the hands' line up to 41 degrees off either way */
 
 			dq_from_rt(&id, &(struct vec3){ -0.3 * cos(ly), -0.3 * sin(ly), 1.0 }, &lh);
 			dq_from_rt(&id, &(struct vec3){ 0.3 * cos(ly), 0.3 * sin(ly), 1.0 }, &rh);

@@ -27,7 +27,6 @@
 
 #define DEG2RAD 0.017453292519943295
 
-
 #define assert_rc(got, want)                                                                                           \
 	do {                                                                                                           \
 		int g_ = (got), w_ = (want);                                                                           \

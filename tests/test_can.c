@@ -146,7 +146,8 @@ static bool read_cmd(FILE *f, struct golden_cmd *g)
 		s = end;
 	}
 	g->id0 = (canid_t)v[1] | (v[0] ? CAN_EFF_FLAG : 0);
-	g->a = (struct cancodec_avatar){ (uint8_t)v[2], (uint8_t)v[3], (uint8_t)v[4], (uint8_t)v[5], (uint16_t)v[6], { 0 } };
+	g->a = (struct cancodec_avatar){ (uint8_t)v[2], (uint8_t)v[3],	(uint8_t)v[4],
+					 (uint8_t)v[5], (uint16_t)v[6], { 0 } };
 	for (int j = 0; j < CANCODEC_JOINTS; j++) {
 		g->deg[j] = strtod(s, &end);
 		assert_true(end != s);
@@ -210,7 +211,8 @@ static void test_golden_joints_decode(void **state)
 			assert_true(k >= 0 && k < CANCODEC_FRAMES);
 			seen |= 1 << k;
 			/* another avatar's decoder does not take it */
-			assert_int_equal(cancodec_decode_avatar(&f, cancodec_id(g.id0, CANCODEC_ID_STRIDE), &a), -ENOENT);
+			assert_int_equal(cancodec_decode_avatar(&f, cancodec_id(g.id0, CANCODEC_ID_STRIDE), &a),
+					 -ENOENT);
 		}
 		assert_int_equal(seen, 0x1f);
 		assert_int_equal(a.counter, g.a.counter);
@@ -255,7 +257,12 @@ static void test_decode_rejects(void **state)
 }
 
 static const struct cancodec_sensor_map default_map = {
-	.ori_id = 0x200, .pos_id = 0x280, .n = 2, .quat_scale = 32768, .xyzw = false, .pos_scale = 0.001,
+	.ori_id = 0x200,
+	.pos_id = 0x280,
+	.n = 2,
+	.quat_scale = 32768,
+	.xyzw = false,
+	.pos_scale = 0.001,
 };
 
 /* every frame of can_sensors.log is what can_sensors.txt says it is */
@@ -336,18 +343,27 @@ static void test_sensor_order_and_scale(void **state)
 static void test_candump_lines(void **state)
 {
 	static const char *const bad[] = {
-		"", "1436509052.249713 can0 123#00", "(1436509052.24971) can0 123#00", "(1436509052.249713)can0 123#00",
-		"(1436509052.249713) can0 1234#00", "(1436509052.249713) can0 123#0", "(1436509052.249713) can0 123#001122334455667788",
-		"(1436509052.249713) can0 123##0011", "(1436509052.249713) can0 800#00", "(1436509052.249713) can0 123#00 x",
-		"(1436509052.249713) can0 123", "(1436509052.249713) can0 3FFFFFFF#00",
+		"",
+		"1436509052.249713 can0 123#00",
+		"(1436509052.24971) can0 123#00",
+		"(1436509052.249713)can0 123#00",
+		"(1436509052.249713) can0 1234#00",
+		"(1436509052.249713) can0 123#0",
+		"(1436509052.249713) can0 123#001122334455667788",
+		"(1436509052.249713) can0 123##0011",
+		"(1436509052.249713) can0 800#00",
+		"(1436509052.249713) can0 123#00 x",
+		"(1436509052.249713) can0 123",
+		"(1436509052.249713) can0 3FFFFFFF#00",
 	};
 	struct can_frame f;
 	char ifname[16], out[128];
 	uint64_t t;
 
 	(void)state;
-	assert_int_equal(cancodec_parse_line("(1436509052.249713) vcan0 123#0011223344556677", &f, &t, ifname,
-					     sizeof(ifname)), 0);
+	assert_int_equal(
+		cancodec_parse_line("(1436509052.249713) vcan0 123#0011223344556677", &f, &t, ifname, sizeof(ifname)),
+		0);
 	assert_int_equal(f.can_id, 0x123);
 	assert_int_equal(f.len, 8);
 	assert_int_equal(f.data[7], 0x77);
@@ -487,7 +503,7 @@ static void out_teardown(struct out_fx *x)
 static void send_describe(struct out_fx *x, int avatar, double rate_hz)
 {
 	static const double lim[8][2] = { { -30, 30 }, { -90, 30 }, { -60, 120 }, { -90, 90 },
-					  { -90, 60 }, { -90, 90 }, { -70, 70 }, { -30, 30 } };
+					  { -90, 60 }, { -90, 90 }, { -70, 70 },  { -30, 30 } };
 	struct wire_describe d;
 	struct out_msg m;
 
@@ -916,7 +932,9 @@ static void test_in_records(void **state)
 {
 	struct in_fx *x = in_setup(NULL, "position_id = -1\nquaternion_order = xyzw\nquaternion_scale = 16384\n");
 	uint8_t big[72] = { 0 };
-	struct can_frame f = { .can_id = 0x201, .len = 8, .data = { 0, 0, 0, 0, 0, 0, 0, 0x40 } }; /* x y z w: identity */
+	struct can_frame f = { .can_id = 0x201,
+			       .len = 8,
+			       .data = { 0, 0, 0, 0, 0, 0, 0, 0x40 } }; /* x y z w: identity */
 
 	(void)state;
 	assert_int_equal(send(x->sv[1], big, sizeof(big), 0), sizeof(big));
@@ -942,16 +960,25 @@ static void test_in_config_checks(void **state)
 	(void)state;
 	assert_int_equal(config_load_text(&c, "x.conf", "[source bus]\ntype = can\n", err, sizeof(err)), -1);
 	assert_non_null(strstr(err, "interface: missing"));
-	assert_int_equal(config_load_text(&c, "x.conf", "[source bus]\ntype = can\ninterface = can0\nsensors = 16\n"
-				   "orientation_id = 0x7F8\n", err, sizeof(err)), -1);
+	assert_int_equal(config_load_text(&c, "x.conf",
+					  "[source bus]\ntype = can\ninterface = can0\nsensors = 16\n"
+					  "orientation_id = 0x7F8\n",
+					  err, sizeof(err)),
+			 -1);
 	assert_non_null(strstr(err, "extended_ids"));
-	assert_int_equal(config_load_text(&c, "x.conf", "[source bus]\ntype = can\ninterface = can0\nsensors = 4\n"
-				   "orientation_id = 0x280\nposition_id = 0x282\n", err, sizeof(err)), -1);
+	assert_int_equal(config_load_text(&c, "x.conf",
+					  "[source bus]\ntype = can\ninterface = can0\nsensors = 4\n"
+					  "orientation_id = 0x280\nposition_id = 0x282\n",
+					  err, sizeof(err)),
+			 -1);
 	assert_non_null(strstr(err, "overlap"));
 	assert_int_equal(config_load_text(&c, "x.conf", "[output o]\ntype = can\n", err, sizeof(err)), -1);
 	assert_non_null(strstr(err, "x.conf:2: [output o] interface: missing"));
-	assert_int_equal(config_load_text(&c, "x.conf", "[source bus]\ntype = can\ninterface = can0\n"
-				   "orientation_id = 0x18FF0000\nextended_ids = yes\n", err, sizeof(err)), 0);
+	assert_int_equal(config_load_text(&c, "x.conf",
+					  "[source bus]\ntype = can\ninterface = can0\n"
+					  "orientation_id = 0x18FF0000\nextended_ids = yes\n",
+					  err, sizeof(err)),
+			 0);
 	assert_int_equal(c.source[0].ori_id, 0x18FF0000);
 	assert_int_equal(c.source[0].pos_id, 0x280);
 	assert_true(c.source[0].extended_ids);

@@ -40,11 +40,11 @@
 /* ---- per-test state ----------------------------------------------------------------------- */
 
 struct fx {
-	char dir[64];      /* the test's own directory under /tmp */
+	char dir[64]; /* the test's own directory under /tmp */
 	struct config c;
 	char err[1024];
 	char *out, *errout; /* the daemon's stdout and stderr */
-	char *printed;      /* config_print's output */
+	char *printed;	    /* config_print's output */
 	int rc;
 };
 
@@ -341,7 +341,8 @@ static void run_daemon(struct fx *f, ...)
 	pid = fork();
 	assert_true(pid >= 0);
 	if (pid == 0) {
-		int o = open(out, O_WRONLY | O_CREAT | O_TRUNC, 0600), e = open(err, O_WRONLY | O_CREAT | O_TRUNC, 0600);
+		int o = open(out, O_WRONLY | O_CREAT | O_TRUNC, 0600),
+		    e = open(err, O_WRONLY | O_CREAT | O_TRUNC, 0600);
 
 		if (o < 0 || e < 0 || dup2(o, 1) < 0 || dup2(e, 2) < 0)
 			_exit(127);
@@ -448,10 +449,11 @@ static void test_err_record(void **state)
 			NULL);
 	expect_text_err(*state, "[daemon]\nrecord_flush_records = 2.5\n",
 			"e.conf:2: [daemon] record_flush_records: '2.5' is not a whole number", NULL);
-	expect_text_err(*state, "[daemon]\nrecord_fsync = always\n", "e.conf:2: [daemon] record_fsync: 'always' is not yes or no",
-			NULL);
+	expect_text_err(*state, "[daemon]\nrecord_fsync = always\n",
+			"e.conf:2: [daemon] record_fsync: 'always' is not yes or no", NULL);
 	expect_text_err(*state, "[source c]\ntype = replay\nfile = builtin:cmu_141_16.csv\ninterpolate = cubic\n",
-			"e.conf:4: [source c] interpolate: 'cubic' is not one of: none, linear, catmull-rom, natural", NULL);
+			"e.conf:4: [source c] interpolate: 'cubic' is not one of: none, linear, catmull-rom, natural",
+			NULL);
 	expect_text_err(*state, "[source s]\ntype = sim\nstep = yes\n",
 			"e.conf:3: [source s] step: unknown key for type sim", NULL);
 }
@@ -503,8 +505,8 @@ static void test_replay_recording(void **state)
 	recfile_seal(r);
 	len += RECFILE_REC_OVERHEAD + w.len;
 	for (int k = 0; k < 6; k++) {
-		struct recfile_sample smp = { 0, (uint16_t)(k % 3), 0, 0, (uint64_t)(k / 3) * 10000000, { 0, 0, 1 },
-					      { 1, 0, 0, 0 }, false, { 0 } };
+		struct recfile_sample smp = { 0,	   (uint16_t)(k % 3), 0,     0,	   (uint64_t)(k / 3) * 10000000,
+					      { 0, 0, 1 }, { 1, 0, 0, 0 },    false, { 0 } };
 
 		r = buf + len;
 		recfile_frame(r, RECFILE_SAMPLE, (uint32_t)recfile_sample_encode(&smp, r + RECFILE_REC_HEAD));
@@ -524,8 +526,8 @@ static void test_replay_recording(void **state)
 	put_bytes(f, "rec/a.agwrec", (const char *)buf, len);
 	put(f, "main.conf", "[source rec]\ntype = replay\nfile = rec/a.agwrec\n");
 	at(f, "rec/a.agwrec", path, sizeof(path));
-	expect_file_err(f, "main.conf", "%s/main.conf:3: [source rec] file: ", "a.agwrec: the file header is damaged (CRC)",
-			NULL);
+	expect_file_err(f, "main.conf",
+			"%s/main.conf:3: [source rec] file: ", "a.agwrec: the file header is damaged (CRC)", NULL);
 }
 
 static void test_values_sim_source(void **state)
@@ -566,23 +568,24 @@ static void test_values_sim_source(void **state)
 static void test_values_hardware_sources(void **state)
 {
 	struct fx *f = *state;
-	const struct config *c = load_text_ok(f, "[source h]\n"
-						 "type = hydra\n"
-						 "device = /dev/hydra\n"
-						 "interface = 2\n"
-						 "control_interface = 2\n"
-						 "record = /tmp/h.cap\n"
-						 "mount_left = 0 0.04 0\n"
-						 "mount_right = 0.01 0 0 0 0 0 2\n"
-						 "[source p]\n"
-						 "type = polhemus\n"
-						 "model = patriot\n"
-						 "device = 1-4.2\n"
-						 "sensors = head - right_hand\n"
-						 "hemisphere = 0 0 -1\n"
-						 "[source q]\n"
-						 "type = polhemus\n"
-						 "[avatar a]\nhead = p/head\nleft_hand = h/left\nright_hand = p/right_hand\n");
+	const struct config *c =
+		load_text_ok(f, "[source h]\n"
+				"type = hydra\n"
+				"device = /dev/hydra\n"
+				"interface = 2\n"
+				"control_interface = 2\n"
+				"record = /tmp/h.cap\n"
+				"mount_left = 0 0.04 0\n"
+				"mount_right = 0.01 0 0 0 0 0 2\n"
+				"[source p]\n"
+				"type = polhemus\n"
+				"model = patriot\n"
+				"device = 1-4.2\n"
+				"sensors = head - right_hand\n"
+				"hemisphere = 0 0 -1\n"
+				"[source q]\n"
+				"type = polhemus\n"
+				"[avatar a]\nhead = p/head\nleft_hand = h/left\nright_hand = p/right_hand\n");
 	const struct cfg_source *h = &c->source[0], *p = &c->source[1], *q = &c->source[2];
 
 	assert_int_equal(h->driver, trackers_find("hydra"));
@@ -618,7 +621,8 @@ static void test_values_hardware_sources(void **state)
 static void test_err_hardware_sources(void **state)
 {
 	expect_text_err(*state, "[source h]\ntype = hydra\nmount_wrist = 0 0 0\n",
-			"e.conf:3: [source h] mount_wrist: the source has no sensor 'wrist' (it has: left, right)", NULL);
+			"e.conf:3: [source h] mount_wrist: the source has no sensor 'wrist' (it has: left, right)",
+			NULL);
 	expect_text_err(*state, "[source h]\ntype = hydra\nmount_left = 0 0\n",
 			"e.conf:3: [source h] mount_left: '0 0' is not x y z or x y z qw qx qy qz", NULL);
 	expect_text_err(*state, "[source h]\ntype = hydra\nmount_left = 0 0 0 0 0 0 0\n",
@@ -629,7 +633,8 @@ static void test_err_hardware_sources(void **state)
 			"e.conf:3: [source h] model: unknown key for type hydra", NULL);
 	expect_text_err(*state, "[source p]\ntype = polhemus\nmodel = fastrak\n",
 			"e.conf:3: [source p] model: 'fastrak' is not one of: auto, liberty, liberty_hs, patriot, "
-			"patriot_hs", NULL);
+			"patriot_hs",
+			NULL);
 	expect_text_err(*state, "[source p]\ntype = polhemus\nsensors = a b a\n",
 			"e.conf:3: [source p] sensors: 'a' named twice", NULL);
 	expect_text_err(*state, "[source p]\ntype = polhemus\nsensors = - -\n",
@@ -675,7 +680,7 @@ static void test_values_avatar(void **state)
 						 "[source s]\ntype = sim\npeople = 2\n");
 	const struct cfg_avatar *a = &c->avatar[0];
 	static const double lim[8][2] = { { -10, 11 }, { -80, 20 }, { -50, 110 }, { -85, 75 },
-					  { -90, 45 }, { -60, 70 }, { -45, 35 }, { -15, 25 } };
+					  { -90, 45 }, { -60, 70 }, { -45, 35 },  { -15, 25 } };
 
 	assert_int_equal(c->n_avatars, 1);
 	assert_string_equal(a->name, "bob");
@@ -759,7 +764,7 @@ static void test_defaults(void **state)
 	const struct cfg_source *s = &c->source[0], *r = &c->source[1];
 	const struct cfg_avatar *a = &c->avatar[0];
 	static const double lim[8][2] = { { -30, 30 }, { -120, 10 }, { -60, 120 }, { -90, 90 },
-					  { -90, 60 }, { -90, 90 }, { -30, 30 }, { -80, 80 } };
+					  { -90, 60 }, { -90, 90 },  { -30, 30 },  { -80, 80 } };
 
 	assert_near(c->daemon.rate, 240, 0);
 	assert_int_equal(c->daemon.mode, CFG_LOOP_DEADLINE);
@@ -866,19 +871,22 @@ static void test_shipped_config(void **state)
 
 static void test_err_unknown_key(void **state)
 {
-	expect_text_err(*state, "[daemon]\nrate = 100\nrat = 100\n", "e.conf:3: [daemon] rat: unknown key",
-			"(known: rate, mode, stale_ms, realtime_priority, cpu, busy_wait, lock_memory, control_socket, "
-			"describe_interval, log_level, record_dir, record_messages, record_flush, record_flush_records, "
-			"record_fsync, record_rotate_size, record_rotate_time, record_buffer, record_keyframe_rate",
-			NULL);
+	expect_text_err(
+		*state, "[daemon]\nrate = 100\nrat = 100\n", "e.conf:3: [daemon] rat: unknown key",
+		"(known: rate, mode, stale_ms, realtime_priority, cpu, busy_wait, lock_memory, control_socket, "
+		"describe_interval, log_level, record_dir, record_messages, record_flush, record_flush_records, "
+		"record_fsync, record_rotate_size, record_rotate_time, record_buffer, record_keyframe_rate",
+		NULL);
 }
 
 /* a key of another driver or output type is unknown here, and the list shows this type's keys */
 static void test_err_key_of_other_type(void **state)
 {
-	expect_text_err(*state, "[source clip]\ntype = replay\nfile = builtin:cmu_141_16.csv\npeople = 2\n",
-			"e.conf:4: [source clip] people: unknown key for type replay",
-			"(known: type, origin, yaw, sample_rate, file, speed, loop, start, step, interpolate, mount_SENSOR)", NULL);
+	expect_text_err(
+		*state, "[source clip]\ntype = replay\nfile = builtin:cmu_141_16.csv\npeople = 2\n",
+		"e.conf:4: [source clip] people: unknown key for type replay",
+		"(known: type, origin, yaw, sample_rate, file, speed, loop, start, step, interpolate, mount_SENSOR)",
+		NULL);
 	expect_text_err(*state, "[output o]\ntype = udp\npath = /tmp/x\n",
 			"e.conf:3: [output o] path: unknown key for type udp",
 			"(known: type, address, port, gso, decimate, avatars)", NULL);
@@ -905,7 +913,8 @@ static void test_busy_wait(void **state)
 	struct fx *f = *state;
 
 	assert_true(load_text_ok(f, "[daemon]\nbusy_wait = yes\ncpu = 1\n[source s]\ntype = sim\n"
-				    "[avatar a]\nperson = s/p0\n")->daemon.busy_wait);
+				    "[avatar a]\nperson = s/p0\n")
+			    ->daemon.busy_wait);
 	config_free(&f->c);
 	expect_text_err(*state, "[daemon]\nmode = events\n; spin\nbusy_wait = yes\n",
 			"e.conf:4: [daemon] busy_wait: only with mode = deadline", NULL);
@@ -992,8 +1001,10 @@ static void test_err_source_type(void **state)
 {
 	expect_text_err(*state, "[daemon]\nrate = 100\n[source s]\npeople = 2\n",
 			"e.conf:4: [source s] type: missing (sim, replay, modbus, can, hydra or polhemus)", NULL);
-	expect_text_err(*state, "[source s]\n\ntype = vive\n",
-			"e.conf:3: [source s] type: unknown driver 'vive' (known: sim, replay, modbus, can, hydra, polhemus)", NULL);
+	expect_text_err(
+		*state, "[source s]\n\ntype = vive\n",
+		"e.conf:3: [source s] type: unknown driver 'vive' (known: sim, replay, modbus, can, hydra, polhemus)",
+		NULL);
 }
 
 static void test_err_replay_file(void **state)
@@ -1009,8 +1020,8 @@ static void test_err_replay_file(void **state)
 	/* a CSV without a needed column */
 	put_csv(f, "clips/partial.csv", "rhand_qz", 3);
 	put(f, "main.conf", "[source clip]\ntype = replay\nfile = clips/partial.csv\n");
-	expect_file_err(f, "main.conf", "%s/main.conf:3: [source clip] file: ", "clips/partial.csv:1: no column 'rhand_qz'",
-			NULL);
+	expect_file_err(f, "main.conf",
+			"%s/main.conf:3: [source clip] file: ", "clips/partial.csv:1: no column 'rhand_qz'", NULL);
 	put(f, "nocol.csv", "frame,time,head_x\n0,0,0\n");
 	put(f, "main.conf", "[source clip]\ntype = replay\nfile = nocol.csv\n");
 	expect_file_err(f, "main.conf", "%s/main.conf:3: [source clip] file: ", "no column 't'", NULL);
@@ -1058,7 +1069,8 @@ static void test_err_output_unknown_avatar(void **state)
 			"[source s]\ntype = sim\n[avatar a]\nperson = s/p0\n"
 			"[output o]\ntype = udp\navatars = a ghost\n",
 			"e.conf:7: [output o] avatars: no avatar named 'ghost'", NULL);
-	expect_text_err(*state, "[source s]\ntype = sim\n[avatar a]\nperson = s/p0\n[output o]\ntype = udp\navatars =\n",
+	expect_text_err(*state,
+			"[source s]\ntype = sim\n[avatar a]\nperson = s/p0\n[output o]\ntype = udp\navatars =\n",
 			"e.conf:7: [output o] avatars: empty list (say all)", NULL);
 }
 
@@ -1073,21 +1085,22 @@ static void test_err_multicast_without_address(void **state)
 static void test_values_bus(void **state)
 {
 	struct fx *f = *state;
-	const struct config *c = load_text_ok(f, "[source robot]\ntype = modbus\naddress = robot.local\nport = 5020\n"
-						 "unit_id = 255\nregister_type = input\nsensors = 2\nsensor_stride = 16\n"
-						 "position_register = 400\nposition_format = float32\nposition_scale = 1\n"
-						 "orientation_register = 406\norientation_format = int32\n"
-						 "orientation_scale = 0.0001\norientation = quat_xyzw\nword_order = dcba\n"
-						 "poll_rate = 125\ntimeout_ms = 50\n"
-						 "[source imu]\ntype = can\ninterface = fd:3\nsensors = 3\n"
-						 "orientation_id = 0x18FF0000\nposition_id = -1\nquaternion_scale = 16384\n"
-						 "quaternion_order = xyzw\nposition_scale = 0.0005\nextended_ids = yes\n"
-						 "[avatar a]\nhead = robot/pose0\nleft_hand = robot/pose1\nright_hand = imu/pose2\n"
-						 "[output plc]\ntype = modbus\naddress = 0.0.0.0\nport = 1502\nmax_clients = 3\n"
-						 "register_base = 1000\nregister_stride = 66\nword_order = cdab\n"
-						 "writable_registers = 8\nidle_timeout = 0\n"
-						 "[output arm]\ntype = can\ninterface = can1\nbase_id = 0x7F8\nsafe = no\n"
-						 "max_speed = 45\ndecimate = 2\n");
+	const struct config *c =
+		load_text_ok(f, "[source robot]\ntype = modbus\naddress = robot.local\nport = 5020\n"
+				"unit_id = 255\nregister_type = input\nsensors = 2\nsensor_stride = 16\n"
+				"position_register = 400\nposition_format = float32\nposition_scale = 1\n"
+				"orientation_register = 406\norientation_format = int32\n"
+				"orientation_scale = 0.0001\norientation = quat_xyzw\nword_order = dcba\n"
+				"poll_rate = 125\ntimeout_ms = 50\n"
+				"[source imu]\ntype = can\ninterface = fd:3\nsensors = 3\n"
+				"orientation_id = 0x18FF0000\nposition_id = -1\nquaternion_scale = 16384\n"
+				"quaternion_order = xyzw\nposition_scale = 0.0005\nextended_ids = yes\n"
+				"[avatar a]\nhead = robot/pose0\nleft_hand = robot/pose1\nright_hand = imu/pose2\n"
+				"[output plc]\ntype = modbus\naddress = 0.0.0.0\nport = 1502\nmax_clients = 3\n"
+				"register_base = 1000\nregister_stride = 66\nword_order = cdab\n"
+				"writable_registers = 8\nidle_timeout = 0\n"
+				"[output arm]\ntype = can\ninterface = can1\nbase_id = 0x7F8\nsafe = no\n"
+				"max_speed = 45\ndecimate = 2\n");
 	const struct cfg_source *r = &c->source[0], *i = &c->source[1];
 	const struct cfg_output *m = &c->output[0], *a = &c->output[1];
 
@@ -1139,11 +1152,12 @@ static void test_values_bus(void **state)
 static void test_defaults_bus(void **state)
 {
 	struct fx *f = *state;
-	const struct config *c = load_text_ok(f, "[source robot]\ntype = modbus\naddress = 192.0.2.1\n"
-						 "[source imu]\ntype = can\ninterface = can0\n"
-						 "[avatar a]\nhead = robot/pose0\nleft_hand = imu/pose0\nright_hand = robot/pose0\n"
-						 "[output plc]\ntype = modbus\nport = 1502\n"
-						 "[output arm]\ntype = can\ninterface = can0\n");
+	const struct config *c =
+		load_text_ok(f, "[source robot]\ntype = modbus\naddress = 192.0.2.1\n"
+				"[source imu]\ntype = can\ninterface = can0\n"
+				"[avatar a]\nhead = robot/pose0\nleft_hand = imu/pose0\nright_hand = robot/pose0\n"
+				"[output plc]\ntype = modbus\nport = 1502\n"
+				"[output arm]\ntype = can\ninterface = can0\n");
 	const struct cfg_source *r = &c->source[0], *i = &c->source[1];
 	const struct cfg_output *m = &c->output[0], *a = &c->output[1];
 
@@ -1199,13 +1213,15 @@ static void test_err_bus(void **state)
 	expect_text_err(*state, text, "e.conf:8: [output arm] base_id: 300 avatars need identifiers up to 0xA5C",
 			"extended_ids", NULL);
 	snprintf(text, sizeof(text), "%s[output plc]\ntype = modbus\nport = 1502\nregister_base = 40000\n", people);
-	expect_text_err(*state, text, "e.conf:8: [output plc] register_base, register_stride: 300 avatars need "
-			"registers up to 69965", NULL);
+	expect_text_err(*state, text,
+			"e.conf:8: [output plc] register_base, register_stride: 300 avatars need "
+			"registers up to 69965",
+			NULL);
 	expect_text_err(*state, "[source r]\ntype = modbus\n", "e.conf:2: [source r] address: missing", NULL);
-	expect_text_err(*state, "[source r]\ntype = modbus\naddress = h\nunit_id = 248\n", "e.conf:2: [source r] unit_id: 248",
-			NULL);
-	expect_text_err(*state, "[source r]\ntype = modbus\naddress = h\nsensors = 3\n", "e.conf:2: [source r] sensor_stride",
-			NULL);
+	expect_text_err(*state, "[source r]\ntype = modbus\naddress = h\nunit_id = 248\n",
+			"e.conf:2: [source r] unit_id: 248", NULL);
+	expect_text_err(*state, "[source r]\ntype = modbus\naddress = h\nsensors = 3\n",
+			"e.conf:2: [source r] sensor_stride", NULL);
 	expect_text_err(*state, "[source r]\ntype = modbus\naddress = h\norientation_register = 2\n",
 			"e.conf:2: [source r] position_register, orientation_register: sensor 0's", "overlap", NULL);
 	expect_text_err(*state, "[source r]\ntype = modbus\naddress = h\norientation = euler\n",
@@ -1258,21 +1274,25 @@ static void test_err_missing_file(void **state)
 
 static void put_dropin_tree(struct fx *f)
 {
-	put(f, "main.conf", "[daemon]\n"
-			    "rate = 100\n"
-			    "stale_ms = 50\n"
-			    "log_level = warning\n"
-			    "[source sim]\ntype = sim\npeople = 2\n"
-			    "[avatar a]\nperson = sim/p0\n");
+	put(f, "main.conf",
+	    "[daemon]\n"
+	    "rate = 100\n"
+	    "stale_ms = 50\n"
+	    "log_level = warning\n"
+	    "[source sim]\ntype = sim\npeople = 2\n"
+	    "[avatar a]\nperson = sim/p0\n");
 	/* created neither in the order of their names nor in its reverse: only sorting gets it right */
-	put(f, "conf.d/20-b.conf", "[daemon]\n"
-				   "rate = 300\n"
-				   "[output o]\ntype = udp\nport = 7000\n");
-	put(f, "conf.d/10-a.conf", "[daemon]\n"
-				   "rate = 200\n"
-				   "stale_ms = 60\n");
-	put(f, "conf.d/30-c.conf", "[daemon]\n"
-				   "describe_interval = 2\n");
+	put(f, "conf.d/20-b.conf",
+	    "[daemon]\n"
+	    "rate = 300\n"
+	    "[output o]\ntype = udp\nport = 7000\n");
+	put(f, "conf.d/10-a.conf",
+	    "[daemon]\n"
+	    "rate = 200\n"
+	    "stale_ms = 60\n");
+	put(f, "conf.d/30-c.conf",
+	    "[daemon]\n"
+	    "describe_interval = 2\n");
 	/* not *.conf, or hidden: ignored (they would not parse) */
 	put(f, "conf.d/README", "this is not = a [configuration\n");
 	put(f, "conf.d/30-c.conf.disabled", "[daemon]\nrate = fast\n");
@@ -1295,15 +1315,17 @@ static void test_dropins_later_wins(void **state)
 	assert_true(strstr(c->files[2], "/conf.d/20-b.conf") != NULL);
 	assert_true(strstr(c->files[3], "/conf.d/30-c.conf") != NULL);
 	assert_near(c->daemon.describe_interval, 2, 0);
-	assert_near(c->daemon.rate, 300, 0);      /* 20-b over 10-a over main */
-	assert_near(c->daemon.stale_ms, 60, 0);   /* 10-a over main */
+	assert_near(c->daemon.rate, 300, 0);			/* 20-b over 10-a over main */
+	assert_near(c->daemon.stale_ms, 60, 0);			/* 10-a over main */
 	assert_int_equal(c->daemon.log_level, CFG_LOG_WARNING); /* main only */
-	assert_int_equal(c->n_outputs, 1);        /* a drop-in adds a section */
+	assert_int_equal(c->n_outputs, 1);			/* a drop-in adds a section */
 	assert_int_equal(c->output[0].port, 7000);
 
 	p = print_config(f);
-	snprintf(want, sizeof(want), "; effective configuration, from: %s/main.conf %s/conf.d/10-a.conf %s/conf.d/20-b.conf "
-		 "%s/conf.d/30-c.conf\n", f->dir, f->dir, f->dir, f->dir);
+	snprintf(want, sizeof(want),
+		 "; effective configuration, from: %s/main.conf %s/conf.d/10-a.conf %s/conf.d/20-b.conf "
+		 "%s/conf.d/30-c.conf\n",
+		 f->dir, f->dir, f->dir, f->dir);
 	assert_has(p, want);
 	snprintf(want, sizeof(want), "\nrate = 300    ; %s/conf.d/20-b.conf:2\n", f->dir);
 	assert_has(p, want);
@@ -1332,8 +1354,8 @@ static void test_dropin_error_location(void **state)
 static void test_set_overrides(void **state)
 {
 	struct fx *f = *state;
-	const char *sets[] = { "daemon.rate=500", "output o.port=7771", "source sim.people=3",
-			       "avatar a.person=sim/p2", "output extra.type=tcp" };
+	const char *sets[] = { "daemon.rate=500", "output o.port=7771", "source sim.people=3", "avatar a.person=sim/p2",
+			       "output extra.type=tcp" };
 	char path[512];
 	const struct config *c = &f->c;
 	const char *p;
@@ -1459,13 +1481,15 @@ static void test_count_errors(void **state)
 {
 	expect_text_err(*state, "[source sim]\ntype = sim\npeople = 2\n[avatar c]\nperson = sim/p1\ncount = 2\n",
 			"e.conf:5: [avatar c] person: source 'sim' has no sensor 'p2.head'", NULL);
-	expect_text_err(*state, "[source r]\ntype = replay\nfile = builtin:cmu_141_16.csv\n[avatar c]\nperson = r\ncount = 2\n",
+	expect_text_err(*state,
+			"[source r]\ntype = replay\nfile = builtin:cmu_141_16.csv\n[avatar c]\nperson = r\ncount = 2\n",
 			"e.conf:5: [avatar c] person: count = 2 needs a numbered person (SOURCE/p0)", NULL);
 	expect_text_err(*state, "[source sim]\ntype = sim\n[avatar c]\nhead = sim/p0.head\ncount = 2\n",
 			"e.conf:5: [avatar c] count: needs person = SOURCE/p0", NULL);
 	expect_text_err(*state, "[source sim]\ntype = sim\n[avatar c]\nperson = sim/p0\ncount = 0\n",
 			"e.conf:5: [avatar c] count: '0' is not a whole number in [1, 4096]", NULL);
-	expect_text_err(*state, "[source sim]\ntype = sim\npeople = 3\n[avatar c]\nperson = sim/p0\ncount = 3\nid = 65534\n",
+	expect_text_err(*state,
+			"[source sim]\ntype = sim\npeople = 3\n[avatar c]\nperson = sim/p0\ncount = 3\nid = 65534\n",
 			"e.conf:7: [avatar c] id: '65534' is not a whole number in [0, 65533]", NULL);
 }
 
@@ -1599,8 +1623,9 @@ static void test_daemon_set(void **state)
 	assert_has(f->out, "\npeople = 2    ; --set:2\n");
 	run_daemon(f, "-c", path, "--set", "rate=480", "--check-config", NULL);
 	assert_int_equal(f->rc, 78);
-	assert_string_equal(f->errout,
-			    "avatargw: configuration error: (command line): --set rate=480: expected SECTION.KEY=VALUE\n");
+	assert_string_equal(
+		f->errout,
+		"avatargw: configuration error: (command line): --set rate=480: expected SECTION.KEY=VALUE\n");
 }
 
 static void test_daemon_shipped_config(void **state)
@@ -1626,8 +1651,8 @@ static void test_dropin_key_twice(void **state)
 
 	put(f, "main.conf", "[daemon]\nrate = 100\n[source s]\ntype = sim\n");
 	put(f, "conf.d/10-a.conf", "[daemon]\nrate = 200\nrate = 300\n");
-	expect_file_err(f, "main.conf",
-			"%s/conf.d/10-a.conf:3: [daemon] rate: given twice in one file (first at ", "10-a.conf:2)", NULL);
+	expect_file_err(f, "main.conf", "%s/conf.d/10-a.conf:3: [daemon] rate: given twice in one file (first at ",
+			"10-a.conf:2)", NULL);
 }
 
 /* control_socket = auto is a word (ctl_resolve_path picks the directory), not a path beside the file */
@@ -1643,7 +1668,8 @@ static void test_control_socket_auto(void **state)
 static void test_print_counted_avatar_origin(void **state)
 {
 	struct fx *f = *state;
-	load_text_ok(f, "[source s]\ntype = sim\npeople = 2\n[avatar crowd]\nperson = s/p0\ncount = 2\nshoulder = 0.2\n");
+	load_text_ok(f,
+		     "[source s]\ntype = sim\npeople = 2\n[avatar crowd]\nperson = s/p0\ncount = 2\nshoulder = 0.2\n");
 	assert_has(print_config(f), "\n[avatar crowd-1]\nshoulder = 0.2    ; e.conf:7\n");
 }
 
@@ -1680,19 +1706,20 @@ static void test_first_error_reported(void **state)
 static void test_values_renderer_outputs(void **state)
 {
 	struct fx *f = *state;
-	const struct config *c = load_text_ok(f, "[source s]\ntype = sim\npeople = 2\n"
-						 "[avatar a]\nperson = s/p0\n"
-						 "[avatar b]\nperson = s/p1\n"
-						 "[output v]\ntype = vrpn\n"
-						 "[output v2]\ntype = vrpn\naddress = ::\nport = 3884\ndevice = Body%d\nudp = no\n"
-						 "client_timeout = 0.5\nmax_clients = 2\nclient_buffer = 4096\n"
-						 "[output m]\ntype = vmc\navatars = b\n"
-						 "[output m2]\ntype = vmc\naddress = 10.0.0.2\nport = 39540\nrate = 120\n"
-						 "torso = 0.45\navatars = a\n"
-						 "[output r]\ntype = vrchat\navatars = a\nhead = no\nrate = 240\n"
-						 "[output w]\ntype = websocket\n"
-						 "[output w2]\ntype = websocket\naddress = 0.0.0.0\nport = 8080\nrate = 60\n"
-						 "www = /srv/www\nthree = /opt/three\n");
+	const struct config *c =
+		load_text_ok(f, "[source s]\ntype = sim\npeople = 2\n"
+				"[avatar a]\nperson = s/p0\n"
+				"[avatar b]\nperson = s/p1\n"
+				"[output v]\ntype = vrpn\n"
+				"[output v2]\ntype = vrpn\naddress = ::\nport = 3884\ndevice = Body%d\nudp = no\n"
+				"client_timeout = 0.5\nmax_clients = 2\nclient_buffer = 4096\n"
+				"[output m]\ntype = vmc\navatars = b\n"
+				"[output m2]\ntype = vmc\naddress = 10.0.0.2\nport = 39540\nrate = 120\n"
+				"torso = 0.45\navatars = a\n"
+				"[output r]\ntype = vrchat\navatars = a\nhead = no\nrate = 240\n"
+				"[output w]\ntype = websocket\n"
+				"[output w2]\ntype = websocket\naddress = 0.0.0.0\nport = 8080\nrate = 60\n"
+				"www = /srv/www\nthree = /opt/three\n");
 	const struct cfg_output *o = c->output;
 
 	assert_int_equal(c->n_outputs, 7);
@@ -1745,10 +1772,12 @@ static void test_values_renderer_outputs(void **state)
 static void test_err_renderer_outputs(void **state)
 {
 	/* keys of one renderer are unknown to the others */
-	expect_text_err(*state, "[output o]\ntype = tcp\ndevice = X%d\n", "e.conf:3: [output o] device: unknown key for type tcp",
-			NULL);
-	expect_text_err(*state, "[output o]\ntype = vrpn\nrate = 30\n", "e.conf:3: [output o] rate: unknown key for type vrpn",
-			"(known: type, address, port, max_clients, client_buffer, device, udp, client_timeout, decimate, avatars)",
+	expect_text_err(*state, "[output o]\ntype = tcp\ndevice = X%d\n",
+			"e.conf:3: [output o] device: unknown key for type tcp", NULL);
+	expect_text_err(*state, "[output o]\ntype = vrpn\nrate = 30\n",
+			"e.conf:3: [output o] rate: unknown key for type vrpn",
+			"(known: type, address, port, max_clients, client_buffer, device, udp, client_timeout, "
+			"decimate, avatars)",
 			NULL);
 	expect_text_err(*state, "[output o]\ntype = websocket\nclient_buffer = 4096\n",
 			"e.conf:3: [output o] client_buffer: unknown key for type websocket", NULL);
@@ -1760,13 +1789,17 @@ static void test_err_renderer_outputs(void **state)
 	expect_text_err(*state, "[output o]\ntype = vrpn\nclient_timeout = 0\n",
 			"e.conf:3: [output o] client_timeout: 0 is out of range", NULL);
 	/* VMC and VRChat carry one avatar */
-	expect_text_err(*state, "[source s]\ntype = sim\npeople = 2\n[avatar a]\nperson = s/p0\ncount = 2\n"
+	expect_text_err(*state,
+			"[source s]\ntype = sim\npeople = 2\n[avatar a]\nperson = s/p0\ncount = 2\n"
 			"[output o]\ntype = vmc\n",
 			"e.conf:8: [output o] avatars: a vmc output carries one avatar, not 2 (avatars = NAME)", NULL);
-	expect_text_err(*state, "[source s]\ntype = sim\npeople = 2\n[avatar a]\nperson = s/p0\ncount = 2\n"
+	expect_text_err(*state,
+			"[source s]\ntype = sim\npeople = 2\n[avatar a]\nperson = s/p0\ncount = 2\n"
 			"[output o]\ntype = vrchat\navatars = a\n",
 			"e.conf:9: [output o] avatars: a vrchat output carries one avatar, not 2", NULL);
-	expect_text_err(*state, "[output o]\ntype = osc\n", "e.conf:2: [output o] type: 'osc' is not one of: udp, multicast, tcp, unix, modbus, can, vrpn, vmc, vrchat, websocket",
+	expect_text_err(*state, "[output o]\ntype = osc\n",
+			"e.conf:2: [output o] type: 'osc' is not one of: udp, multicast, tcp, unix, modbus, can, vrpn, "
+			"vmc, vrchat, websocket",
 			NULL);
 }
 

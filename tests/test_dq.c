@@ -64,7 +64,6 @@
 		assert_finite((a).d.z);                                                                                \
 	} while (0)
 
-
 static struct vec3 rnd_vec(double scale)
 {
 	return (struct vec3){ rnd_range(-scale, scale), rnd_range(-scale, scale), rnd_range(-scale, scale) };

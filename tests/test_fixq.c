@@ -828,8 +828,14 @@ static void test_avatar_straight_arms(void **state)
 	(void)state;
 	for (int i = 0; i < N; i++) {
 		/* the arm from down and out to forward and up, its upper arm turning, the elbow nearly straight */
-		const double q[ARM_DOF] = { 0, (-60 + 1.5 * i) * DEG, (-20 + 2.5 * i) * DEG, (30 - i) * DEG,
-					    (-90 + 0.2 + 1.3 * (i % 5) / 4) * DEG, 0, 0, 0 };
+		const double q[ARM_DOF] = { 0,
+					    (-60 + 1.5 * i) * DEG,
+					    (-20 + 2.5 * i) * DEG,
+					    (30 - i) * DEG,
+					    (-90 + 0.2 + 1.3 * (i % 5) / 4) * DEG,
+					    0,
+					    0,
+					    0 };
 
 		memcpy(in[i].head, head, sizeof(head));
 		in[i].head[3] = 1;
@@ -868,15 +874,13 @@ static void test_avatar_straight_arms(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_avatar_bow),	cmocka_unit_test(test_avatar_clip),
-		cmocka_unit_test(test_avatar_clip_turned),
-		cmocka_unit_test(test_avatar_clip_bench_arm),
-		cmocka_unit_test(test_avatar_straight_arms),
-		cmocka_unit_test(test_swivel_inside),
-		cmocka_unit_test(test_mul_div_sqrt),	cmocka_unit_test(test_trig),
-		cmocka_unit_test(test_fk_jacobian),	cmocka_unit_test(test_lsq),
-		cmocka_unit_test(test_random_reset),	cmocka_unit_test(test_trajectory_warm),
-		cmocka_unit_test(test_matrix_and_left), cmocka_unit_test(test_paper_newton),
+		cmocka_unit_test(test_avatar_bow),	     cmocka_unit_test(test_avatar_clip),
+		cmocka_unit_test(test_avatar_clip_turned),   cmocka_unit_test(test_avatar_clip_bench_arm),
+		cmocka_unit_test(test_avatar_straight_arms), cmocka_unit_test(test_swivel_inside),
+		cmocka_unit_test(test_mul_div_sqrt),	     cmocka_unit_test(test_trig),
+		cmocka_unit_test(test_fk_jacobian),	     cmocka_unit_test(test_lsq),
+		cmocka_unit_test(test_random_reset),	     cmocka_unit_test(test_trajectory_warm),
+		cmocka_unit_test(test_matrix_and_left),	     cmocka_unit_test(test_paper_newton),
 		cmocka_unit_test(test_hopeless_input),
 	};
 

@@ -41,7 +41,6 @@ static const double bench_dims[4] = { 0.18, 0.30, 0.26, 0.08 };
 
 /* ---- checks ---------------------------------------------------------------- */
 
-
 /* ours and GLM's hold the same eight numbers, up to the sign of the whole */
 static void assert_same_dq(const struct dq *a, const gdq &g, double tol)
 {
@@ -64,7 +63,6 @@ static void assert_same_mat4(const double m[4][4], const glm::dmat4 &g, double t
 		for (int c = 0; c < 4; c++)
 			assert_near(m[r][c], g[c][r], tol);
 }
-
 
 static glm::dvec3 rnd_dvec3(double scale)
 {

@@ -56,21 +56,21 @@ static const double base_origin[3] = { 0, 0.5, 1.45 };
 
 static const struct hydra_timing default_timing = { 250, 5000, 500, 200, 25 };
 
-#define CONF_HEAD_S(stale_ms)                                                                                   \
-	"[daemon]\n"                                                                                            \
-	"rate = 500\n"                                                                                          \
-	"control_socket =\n"                                                                                    \
-	"stale_ms = " stale_ms "\n"                                                                             \
-	"[avatar a]\n"                                                                                          \
-	"head = clip/head\n"                                                                                    \
-	"left_hand = hydra/left\n"                                                                              \
-	"right_hand = hydra/right\n"                                                                            \
-	"[source clip]\n"                                                                                       \
-	"type = replay\n"                                                                                       \
-	"file = builtin:cmu_141_16.csv\n"                                                                       \
-	"[source hydra]\n"                                                                                      \
-	"type = hydra\n"                                                                                        \
-	"origin = 0 0.5 1.45\n"                                                                                 \
+#define CONF_HEAD_S(stale_ms)                                                                                          \
+	"[daemon]\n"                                                                                                   \
+	"rate = 500\n"                                                                                                 \
+	"control_socket =\n"                                                                                           \
+	"stale_ms = " stale_ms "\n"                                                                                    \
+	"[avatar a]\n"                                                                                                 \
+	"head = clip/head\n"                                                                                           \
+	"left_hand = hydra/left\n"                                                                                     \
+	"right_hand = hydra/right\n"                                                                                   \
+	"[source clip]\n"                                                                                              \
+	"type = replay\n"                                                                                              \
+	"file = builtin:cmu_141_16.csv\n"                                                                              \
+	"[source hydra]\n"                                                                                             \
+	"type = hydra\n"                                                                                               \
+	"origin = 0 0.5 1.45\n"                                                                                        \
 	"yaw = -20\n"
 
 #define CONF_HEAD CONF_HEAD_S("100")
@@ -577,8 +577,8 @@ static void test_every_number_once(void **state)
 		}
 		seq++;
 	}
-	print_message("%" PRIu64 " good, %" PRIu64 " rejected, %" PRIu64 " lost, %" PRIu64 " without a number\n",
-		      good, bad, gone, extra);
+	print_message("%" PRIu64 " good, %" PRIu64 " rejected, %" PRIu64 " lost, %" PRIu64 " without a number\n", good,
+		      bad, gone, extra);
 	assert_int_equal(k.c->reports, good);
 	assert_int_equal(k.c->malformed, bad + extra);
 	assert_int_equal(k.c->lost, gone);
@@ -713,13 +713,12 @@ static bool motion_requested(void)
 }
 
 /* the Hydra for the steps every device goes through (fake/devtest.h), plugged in by plug_fn */
-#define HYDRA_DEVTEST(plug_fn)                                                                                  \
-	{                                                                                                       \
-		.source = "hydra", .conf = conf_device,                                                         \
-		.sensors = 1u << WIRE_S_LEFT_HAND | 1u << WIRE_S_RIGHT_HAND, .inputs = true,                    \
-		.drv = &hydra_driver, .plug = plug_fn, .unplug = fake_hid_unplug, .deny_open = deny_open,       \
-		.denied = "Permission denied", .stepped = fake_hid_stepped, .set_up = motion_requested,         \
-		.reads = reads,                                                                                 \
+#define HYDRA_DEVTEST(plug_fn)                                                                                         \
+	{                                                                                                              \
+		.source = "hydra", .conf = conf_device, .sensors = 1u << WIRE_S_LEFT_HAND | 1u << WIRE_S_RIGHT_HAND,   \
+		.inputs = true, .drv = &hydra_driver, .plug = plug_fn, .unplug = fake_hid_unplug,                      \
+		.deny_open = deny_open, .denied = "Permission denied", .stepped = fake_hid_stepped,                    \
+		.set_up = motion_requested, .reads = reads,                                                            \
 	}
 
 /* found streaming (left in motion mode by a program before us) */
@@ -764,14 +763,15 @@ static void test_published_poses_and_inputs(void **state)
 			assert_true(t.f.h.flags & WIRE_F_INPUTS);
 			assert_int_equal(t.f.in.present, 1u << WIRE_S_LEFT_HAND | 1u << WIRE_S_RIGHT_HAND);
 			assert_float_equal(t.f.in.analog[wire_of[w]][2], blk[19] / 255.0, 1e-6);
-			assert_float_equal(t.f.in.analog[wire_of[w]][0], (int16_t)(blk[15] | blk[16] << 8) / 32768.0, 1e-6);
+			assert_float_equal(t.f.in.analog[wire_of[w]][0], (int16_t)(blk[15] | blk[16] << 8) / 32768.0,
+					   1e-6);
 			assert_int_equal(!!(t.f.in.buttons[wire_of[w]] & HYDRA_BTN_BUMPER), !!(blk[14] & 0x01));
 			assert_int_equal(!!(t.f.in.buttons[wire_of[w]] & HYDRA_BTN_START), !!(blk[14] & 0x20));
 		}
 		assert_int_equal(gwt_state(&t, "hydra"), TRACKER_OK);
 	}
-	print_message("published: worst position error %.3f mm, angle %.5f rad (float32 on the wire)\n",
-		      worst_p * 1e3, worst_a);
+	print_message("published: worst position error %.3f mm, angle %.5f rad (float32 on the wire)\n", worst_p * 1e3,
+		      worst_a);
 	assert_true(worst_p <= POS_TOL + 2e-6);
 	assert_true(worst_a <= ANG_TOL + 1e-6);
 	assert_int_equal(ctr_get(&gwt_tracker(&t, "hydra")->st.malformed), 0);
@@ -1061,9 +1061,10 @@ static void test_capture_source_and_mount(void **state)
 	off[2] = 2 * (q[2] * q[3] + q[0] * q[1]) * 0.1;
 	for (int k = 0; k < 3; k++)
 		want_p[k] = want.p[k] + off[k];
-	assert_true(clip_dist((double[3]){ t.f.sensor[WIRE_S_LEFT_HAND].pose.p[0], t.f.sensor[WIRE_S_LEFT_HAND].pose.p[1],
-					   t.f.sensor[WIRE_S_LEFT_HAND].pose.p[2] },
-			      want_p) < POS_TOL + 1e-5);
+	assert_true(
+		clip_dist((double[3]){ t.f.sensor[WIRE_S_LEFT_HAND].pose.p[0], t.f.sensor[WIRE_S_LEFT_HAND].pose.p[1],
+				       t.f.sensor[WIRE_S_LEFT_HAND].pose.p[2] },
+			  want_p) < POS_TOL + 1e-5);
 	gwt_close(&t);
 	clip_free(&clip);
 }

@@ -275,7 +275,8 @@ static void test_no_search(void **state)
 		}
 		assert_true(rd.flags & IK_REACHED);
 	}
-	print_message("random targets from the previous row's posture, Newton only: %d of %zu short\n", short_of, n - 1);
+	print_message("random targets from the previous row's posture, Newton only: %d of %zu short\n", short_of,
+		      n - 1);
 	assert_true(short_of > 0);
 }
 
@@ -284,8 +285,8 @@ static void test_no_search(void **state)
  * for bit, to arm_fk_pose at it, whichever way the solve ended (tracking,
  * reset, the matrix backend, an unreachable or invalid target).
  */
-static void expect_pose_of(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t,
-			   const double *seed, const struct ik_opts *o)
+static void expect_pose_of(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t, const double *seed,
+			   const struct ik_opts *o)
 {
 	struct ik_result r1, r2;
 	struct arm_pose got, want;
@@ -344,7 +345,8 @@ static void test_sincos8_same_bits(void **state)
 			/* spread over [-8, 8], with exact multiples of pi/4 and tiny values among them */
 			uint32_t h = (uint32_t)(k * 8 + i) * 2654435761u;
 
-			a[i] = (i == 3) ? (double)(int)(h % 41 - 20) * (M_PI / 4) : ((double)h / 4294967295.0 - 0.5) * 16;
+			a[i] = (i == 3) ? (double)(int)(h % 41 - 20) * (M_PI / 4)
+					: ((double)h / 4294967295.0 - 0.5) * 16;
 			if (i == 5)
 				a[i] *= 1e-9;
 		}
@@ -483,12 +485,9 @@ static void test_bad_targets(void **state)
 		struct vec3 p;
 		struct quat r;
 	} bad[] = {
-		{ { nan, 0, 0 }, { 1, 0, 0, 0 } },
-		{ { 0.2, 0.3, -0.1 }, { nan, 0, 0, 0 } },
-		{ { inf, 0, 0 }, { 1, 0, 0, 0 } },
-		{ { 0.2, 0.3, -0.1 }, { 0, 0, 0, 0 } },
-		{ { 0.2, 0.3, -0.1 }, { inf, inf, 0, 0 } },
-		{ { -inf, nan, inf }, { nan, nan, nan, nan } },
+		{ { nan, 0, 0 }, { 1, 0, 0, 0 } },	    { { 0.2, 0.3, -0.1 }, { nan, 0, 0, 0 } },
+		{ { inf, 0, 0 }, { 1, 0, 0, 0 } },	    { { 0.2, 0.3, -0.1 }, { 0, 0, 0, 0 } },
+		{ { 0.2, 0.3, -0.1 }, { inf, inf, 0, 0 } }, { { -inf, nan, inf }, { nan, nan, nan, nan } },
 	};
 	struct arm a;
 	struct ik_opts o;
@@ -745,22 +744,14 @@ static void test_swivel_inside(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_solve_random_dq),
-		cmocka_unit_test(test_solve_random_matrix),
-		cmocka_unit_test(test_paper_newton),
-		cmocka_unit_test(test_trajectory_warm),
-		cmocka_unit_test(test_no_search),
-		cmocka_unit_test(test_solve_pose),
-		cmocka_unit_test(test_sincos8_same_bits),
-		cmocka_unit_test(test_atan2_accuracy),
-		cmocka_unit_test(test_left_arm),
-		cmocka_unit_test(test_unreachable),
-		cmocka_unit_test(test_bad_targets),
-		cmocka_unit_test(test_wrap_and_clamp),
-		cmocka_unit_test(test_garbage_fuzz),
-		cmocka_unit_test(test_lsq_step),
-		cmocka_unit_test(test_float_agrees),
-		cmocka_unit_test(test_swivel_inside),
+		cmocka_unit_test(test_solve_random_dq),	  cmocka_unit_test(test_solve_random_matrix),
+		cmocka_unit_test(test_paper_newton),	  cmocka_unit_test(test_trajectory_warm),
+		cmocka_unit_test(test_no_search),	  cmocka_unit_test(test_solve_pose),
+		cmocka_unit_test(test_sincos8_same_bits), cmocka_unit_test(test_atan2_accuracy),
+		cmocka_unit_test(test_left_arm),	  cmocka_unit_test(test_unreachable),
+		cmocka_unit_test(test_bad_targets),	  cmocka_unit_test(test_wrap_and_clamp),
+		cmocka_unit_test(test_garbage_fuzz),	  cmocka_unit_test(test_lsq_step),
+		cmocka_unit_test(test_float_agrees),	  cmocka_unit_test(test_swivel_inside),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

@@ -355,8 +355,9 @@ static void test_clip_10hz(void **state)
 			struct kf_pose o;
 
 			kf_eval(&tr, t[i], &o);
-			errs[i] = sqrt((o.p[0] - p[i][0]) * (o.p[0] - p[i][0]) + (o.p[1] - p[i][1]) * (o.p[1] - p[i][1]) +
-				       (o.p[2] - p[i][2]) * (o.p[2] - p[i][2]));
+			errs[i] =
+				sqrt((o.p[0] - p[i][0]) * (o.p[0] - p[i][0]) + (o.p[1] - p[i][1]) * (o.p[1] - p[i][1]) +
+				     (o.p[2] - p[i][2]) * (o.p[2] - p[i][2]));
 			worst = fmax(worst, errs[i]);
 			sum += errs[i];
 		}
@@ -371,10 +372,10 @@ static void test_clip_10hz(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_through_keys),	  cmocka_unit_test(test_polynomials),
-		cmocka_unit_test(test_natural_smooth),	  cmocka_unit_test(test_squad_great_circle),
-		cmocka_unit_test(test_slerp),		  cmocka_unit_test(test_segment_and_names),
-		cmocka_unit_test(test_rejects),		  cmocka_unit_test(test_clip_10hz),
+		cmocka_unit_test(test_through_keys),   cmocka_unit_test(test_polynomials),
+		cmocka_unit_test(test_natural_smooth), cmocka_unit_test(test_squad_great_circle),
+		cmocka_unit_test(test_slerp),	       cmocka_unit_test(test_segment_and_names),
+		cmocka_unit_test(test_rejects),	       cmocka_unit_test(test_clip_10hz),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

@@ -46,7 +46,8 @@ static void test_float_vectors(void **state)
 			set_ctx("%g in %s", vecs[i].f, regcodec_order_name(o));
 			regcodec_put_f32(r, vecs[i].f, o);
 			if (r[0] != vecs[i].r[o][0] || r[1] != vecs[i].r[o][1])
-				fail_msg("%s: %04X %04X, want %04X %04X", ctx, r[0], r[1], vecs[i].r[o][0], vecs[i].r[o][1]);
+				fail_msg("%s: %04X %04X, want %04X %04X", ctx, r[0], r[1], vecs[i].r[o][0],
+					 vecs[i].r[o][1]);
 			assert_true(regcodec_get_f32(vecs[i].r[o], o) == vecs[i].f);
 		}
 	}
@@ -54,7 +55,9 @@ static void test_float_vectors(void **state)
 
 static void test_u32_vectors(void **state)
 {
-	static const uint16_t want[4][2] = { { 0x0102, 0x0304 }, { 0x0304, 0x0102 }, { 0x0201, 0x0403 }, { 0x0403, 0x0201 } };
+	static const uint16_t want[4][2] = {
+		{ 0x0102, 0x0304 }, { 0x0304, 0x0102 }, { 0x0201, 0x0403 }, { 0x0403, 0x0201 }
+	};
 
 	(void)state;
 	for (int o = 0; o < 4; o++) {
@@ -145,7 +148,8 @@ static void test_map_block(void **state)
 		/* 1700000000123 ms, low 32 bits */
 		assert_int_equal(regcodec_get_u32(&r[MODBUS_MAP_R_TIME], o), (uint32_t)1700000000123ull);
 		assert_int_equal(r[MODBUS_MAP_R_AGE], 0);
-		assert_int_equal(r[MODBUS_MAP_R_STATUS], MODBUS_MAP_S_VALID | MODBUS_MAP_S_NEW_SAMPLE | MODBUS_MAP_S_UNREACHED);
+		assert_int_equal(r[MODBUS_MAP_R_STATUS],
+				 MODBUS_MAP_S_VALID | MODBUS_MAP_S_NEW_SAMPLE | MODBUS_MAP_S_UNREACHED);
 		assert_int_equal(r[MODBUS_MAP_R_SENSORS], 0 | 1 << 2 | 2 << 4);
 		assert_int_equal(r[MODBUS_MAP_R_IK_RIGHT], IK_REACHED | IK_ANALYTIC);
 		assert_int_equal(r[MODBUS_MAP_R_IK_LEFT], IK_UNREACHABLE | IK_LIMITED);

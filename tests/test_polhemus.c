@@ -56,18 +56,18 @@ static const double src_origin[3] = { 0.1, 0.6, 2.2 };
 
 static const struct polhemus_timing default_timing = { 50, 500, 200, 2, 3 };
 
-#define CONF_S(stale_ms)                                                                                        \
-	"[daemon]\n"                                                                                            \
-	"rate = 500\n"                                                                                          \
-	"control_socket =\n"                                                                                    \
-	"stale_ms = " stale_ms "\n"                                                                             \
-	"[avatar a]\n"                                                                                          \
-	"person = polhemus\n"                                                                                   \
-	"[source polhemus]\n"                                                                                   \
-	"type = polhemus\n"                                                                                     \
-	"origin = 0.1 0.6 2.2\n"                                                                                \
-	"yaw = 30\n"                                                                                            \
-	"model = liberty_hs\n"                                                                                  \
+#define CONF_S(stale_ms)                                                                                               \
+	"[daemon]\n"                                                                                                   \
+	"rate = 500\n"                                                                                                 \
+	"control_socket =\n"                                                                                           \
+	"stale_ms = " stale_ms "\n"                                                                                    \
+	"[avatar a]\n"                                                                                                 \
+	"person = polhemus\n"                                                                                          \
+	"[source polhemus]\n"                                                                                          \
+	"type = polhemus\n"                                                                                            \
+	"origin = 0.1 0.6 2.2\n"                                                                                       \
+	"yaw = 30\n"                                                                                                   \
+	"model = liberty_hs\n"                                                                                         \
 	"hemisphere = 0 0 1\n"
 
 #define CONF CONF_S("100")
@@ -269,7 +269,10 @@ static void test_resync(void **state)
 	/* garbage, then header look-alikes: a bad station, a size that is not ours, no trailing space */
 	memcpy(b, "\x01\x02garbage\xff", 10);
 	n = 10;
-	memcpy(b + n, "LY\x00" "C \x00\x21\x00", 8); /* station 0 */
+	memcpy(b + n,
+	       "LY\x00"
+	       "C \x00\x21\x00",
+	       8); /* station 0 */
 	n += 8;
 	n += record(b + n, "LY", 1, ' ', p, q, 5);
 	b[n - 1] = 'x'; /* no space at the end: not a record */
@@ -341,9 +344,9 @@ static void test_product_headers(void **state)
 		const char *hdr;
 		int ok;
 	} cases[] = {
-		{ CFG_PH_AUTO, "LY", 1 },	{ CFG_PH_AUTO, "PA", 1 },	   { CFG_PH_AUTO, "LU", 1 },
-		{ CFG_PH_LIBERTY, "LY", 1 },	{ CFG_PH_LIBERTY, "PA", 0 },	   { CFG_PH_LIBERTY_HS, "LU", 1 },
-		{ CFG_PH_PATRIOT, "PA", 1 },	{ CFG_PH_PATRIOT, "LY", 0 },	   { CFG_PH_PATRIOT_HS, "PA", 1 },
+		{ CFG_PH_AUTO, "LY", 1 },    { CFG_PH_AUTO, "PA", 1 },	  { CFG_PH_AUTO, "LU", 1 },
+		{ CFG_PH_LIBERTY, "LY", 1 }, { CFG_PH_LIBERTY, "PA", 0 }, { CFG_PH_LIBERTY_HS, "LU", 1 },
+		{ CFG_PH_PATRIOT, "PA", 1 }, { CFG_PH_PATRIOT, "LY", 0 }, { CFG_PH_PATRIOT_HS, "PA", 1 },
 	};
 
 	(void)state;
@@ -691,7 +694,10 @@ static void test_garbage_bytes(void **state)
 	srand(3);
 	for (size_t i = 0; i < sizeof(junk); i++)
 		junk[i] = (uint8_t)(rand() >> 4);
-	memcpy(junk + 100, "LY\x02" "C ", 5); /* a header look-alike inside */
+	memcpy(junk + 100,
+	       "LY\x02"
+	       "C ",
+	       5); /* a header look-alike inside */
 	fake_usb_inject(junk, sizeof(junk));
 	fake_usb_inject(junk + 7, 17);
 	s0 = ctr_get(&p->st.samples);
@@ -764,9 +770,10 @@ static void test_access_denied(void **state)
 
 static void test_list_devices(void **state)
 {
-	static const char *const says[] = { "Polhemus Liberty HS (0f44:ff20) on USB port 1-4",
-					    "[source polhemus]\n  type = polhemus\n  model = liberty_hs\n  device = 1-4\n",
-					    NULL };
+	static const char *const says[] = {
+		"Polhemus Liberty HS (0f44:ff20) on USB port 1-4",
+		"[source polhemus]\n  type = polhemus\n  model = liberty_hs\n  device = 1-4\n", NULL
+	};
 	char *text;
 
 	(void)state;

@@ -86,8 +86,15 @@ static void put_session(struct rec_buf *r, bool swapped)
 
 static void put_sample(struct rec_buf *r, uint16_t src, uint16_t sensor, uint64_t t, bool analog)
 {
-	struct recfile_sample s = { src, sensor, 0x5, t + 7, t, { 1.5f, -2.25f, 0.125f + (float)t * 1e-9f },
-				    { 1, 0, 0, 0 }, analog, { 0.5f, -1, 0, 0.25f } };
+	struct recfile_sample s = { src,
+				    sensor,
+				    0x5,
+				    t + 7,
+				    t,
+				    { 1.5f, -2.25f, 0.125f + (float)t * 1e-9f },
+				    { 1, 0, 0, 0 },
+				    analog,
+				    { 0.5f, -1, 0, 0.25f } };
 	uint8_t p[RECFILE_SAMPLE_LEN_ANALOG];
 	size_t n = recfile_sample_encode(&s, p);
 
@@ -102,7 +109,10 @@ static void test_layout(void **state)
 
 	(void)state;
 	put_header(&r);
-	assert_memory_equal(b, "\x89" "AGWR\r\n\x1a", 8);
+	assert_memory_equal(b,
+			    "\x89"
+			    "AGWR\r\n\x1a",
+			    8);
 	assert_int_equal(recfile_get16(b + 8), 1);
 	assert_int_equal(recfile_get16(b + 10), 32);
 	assert_int_equal(recfile_get32(b + 12), RECFILE_F_MESSAGES);
@@ -180,8 +190,16 @@ static void test_header(void **state)
 
 static void test_sample_round_trip(void **state)
 {
-	struct recfile_sample a = { 3, 40000, 0xdeadbeef, 1ull << 62, 12345, { 1.0f / 3, -7.5f, 1e-7f },
-				    { 0.5f, 0.5f, -0.5f, 0.5f }, true, { 1, -1, 0.25f, 0 } }, b;
+	struct recfile_sample a = { 3,
+				    40000,
+				    0xdeadbeef,
+				    1ull << 62,
+				    12345,
+				    { 1.0f / 3, -7.5f, 1e-7f },
+				    { 0.5f, 0.5f, -0.5f, 0.5f },
+				    true,
+				    { 1, -1, 0.25f, 0 } },
+			      b;
 	uint8_t p[RECFILE_SAMPLE_LEN_ANALOG];
 
 	(void)state;
@@ -378,10 +396,10 @@ static void test_no_session(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_layout),		 cmocka_unit_test(test_layout_crc),
-		cmocka_unit_test(test_header),		 cmocka_unit_test(test_sample_round_trip),
-		cmocka_unit_test(test_index),		 cmocka_unit_test(test_damage_resync),
-		cmocka_unit_test(test_truncated),	 cmocka_unit_test(test_second_session),
+		cmocka_unit_test(test_layout),		cmocka_unit_test(test_layout_crc),
+		cmocka_unit_test(test_header),		cmocka_unit_test(test_sample_round_trip),
+		cmocka_unit_test(test_index),		cmocka_unit_test(test_damage_resync),
+		cmocka_unit_test(test_truncated),	cmocka_unit_test(test_second_session),
 		cmocka_unit_test(test_gap_unknown_bad), cmocka_unit_test(test_no_session),
 	};
 

@@ -344,10 +344,9 @@ static void test_apply(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_round_trip),   cmocka_unit_test(test_rotation_size),
-		cmocka_unit_test(test_rotation_time),
-		cmocka_unit_test(test_overflow_marked), cmocka_unit_test(test_unwritable),
-		cmocka_unit_test(test_apply),
+		cmocka_unit_test(test_round_trip),    cmocka_unit_test(test_rotation_size),
+		cmocka_unit_test(test_rotation_time), cmocka_unit_test(test_overflow_marked),
+		cmocka_unit_test(test_unwritable),    cmocka_unit_test(test_apply),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

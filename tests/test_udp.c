@@ -30,7 +30,7 @@ int __real_sendmmsg(int fd, struct mmsghdr *v, unsigned n, int flags);
 /* what the wrapped sendmmsg() does */
 static struct {
 	bool refuse_gso; /* fail with EIO on a header that carries UDP_SEGMENT */
-	bool eagain;     /* fail every call with EAGAIN */
+	bool eagain;	 /* fail every call with EAGAIN */
 	int calls;
 	int gso_headers; /* headers seen with a control message */
 } fake;

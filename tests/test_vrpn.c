@@ -42,7 +42,7 @@ struct peer {
 	int fd;
 	uint8_t buf[1 << 16];
 	size_t len;
-	char types[16][100];   /* the server's ids -> names */
+	char types[16][100]; /* the server's ids -> names */
 	char senders[16][100];
 };
 
@@ -80,7 +80,8 @@ static int free_port(void)
 
 static void peer_connect(struct peer *p, int port)
 {
-	struct sockaddr_in a = { .sin_family = AF_INET, .sin_port = htons((uint16_t)port),
+	struct sockaddr_in a = { .sin_family = AF_INET,
+				 .sin_port = htons((uint16_t)port),
 				 .sin_addr.s_addr = htonl(INADDR_LOOPBACK) };
 	char ck[24] = "vrpn: ver. 07.35  0";
 
@@ -162,7 +163,8 @@ static void open_output(struct fixture *fx, const char *device, struct output *o
 
 	fx->port = old ? fx->port : free_port();
 	snprintf(text, sizeof(text),
-		 "[source s]\ntype = sim\npeople = 2\n[avatar a]\nid = 3\nperson = s/p0\n[avatar b]\nid = 9\nperson = s/p1\n"
+		 "[source s]\ntype = sim\npeople = 2\n[avatar a]\nid = 3\nperson = s/p0\n[avatar b]\nid = 9\nperson = "
+		 "s/p1\n"
 		 "[output v]\ntype = vrpn\naddress = 127.0.0.1\nport = %d\ndevice = %s\nclient_timeout = 1\n",
 		 fx->port, device);
 	assert_int_equal(config_load_text(&fx->cfg, "vrpn.conf", text, err, sizeof(err)), 0);
@@ -234,7 +236,7 @@ static void test_reports_buttons_and_analog(void **state)
 		m[a] = (struct out_msg){ frames[a], make_frame(frames[a], fx.ids[a]), (uint16_t)a, &pf[a] };
 	pf[0].analog[2][1] = 0.75f; /* right hand, second value */
 	pf[0].buttons[1] = 1u << 4; /* left hand, button 4: held from the start */
-	cycle(&fx.o, m, 2);         /* the server knows the buttons before the client comes */
+	cycle(&fx.o, m, 2);	    /* the server knows the buttons before the client comes */
 	peer_connect(&p, fx.port);
 	for (int i = 0; i < 5; i++)
 		cycle(&fx.o, m, 2);

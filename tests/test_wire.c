@@ -529,11 +529,11 @@ static void test_inputs_golden_layout(void **state)
 	assert_int_equal(buf[501], 4);			       /* n_analog */
 	assert_memory_equal(buf + 502, "\x00\x00", 2);	       /* reserved */
 	assert_memory_equal(buf + 504, "\0\0\0\0", 4);	       /* head: buttons 0 */
-	assert_memory_equal(buf + 524, "\x21\0\0\0", 4);	       /* left hand buttons */
-	assert_memory_equal(buf + 528, "\x00\x00\x00\xbf", 4);   /* left joystick x -0.5 */
-	assert_memory_equal(buf + 536, "\x00\x00\x80\x3f", 4);   /* left trigger 1.0 */
-	assert_memory_equal(buf + 544, "\x44\0\0\0", 4);	       /* right hand buttons */
-	assert_memory_equal(buf + 552, "\x00\x00\x80\x3e", 4);   /* right joystick y 0.25 */
+	assert_memory_equal(buf + 524, "\x21\0\0\0", 4);       /* left hand buttons */
+	assert_memory_equal(buf + 528, "\x00\x00\x00\xbf", 4); /* left joystick x -0.5 */
+	assert_memory_equal(buf + 536, "\x00\x00\x80\x3f", 4); /* left trigger 1.0 */
+	assert_memory_equal(buf + 544, "\x44\0\0\0", 4);       /* right hand buttons */
+	assert_memory_equal(buf + 552, "\x00\x00\x80\x3e", 4); /* right joystick y 0.25 */
 	memset(&g, 0x5a, sizeof(g));
 	assert_int_equal(wire_decode_frame(buf, len, &g), 0);
 	assert_frame_same(&g, &f);

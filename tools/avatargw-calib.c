@@ -516,9 +516,12 @@ static void usage(FILE *f)
 int main(int argc, char **argv)
 {
 	static const struct option longopts[] = {
-		{ "trials", required_argument, NULL, 't' },   { "pose-deg", required_argument, NULL, 'p' },
-		{ "noise-mm", required_argument, NULL, 'n' }, { "seed", required_argument, NULL, 's' },
-		{ "rounds", required_argument, NULL, 'r' },   { "help", no_argument, NULL, 'h' },
+		{ "trials", required_argument, NULL, 't' },
+		{ "pose-deg", required_argument, NULL, 'p' },
+		{ "noise-mm", required_argument, NULL, 'n' },
+		{ "seed", required_argument, NULL, 's' },
+		{ "rounds", required_argument, NULL, 'r' },
+		{ "help", no_argument, NULL, 'h' },
 		{ NULL, 0, NULL, 0 },
 	};
 	struct noise none = { 0, 0 }, noisy = { 5 * DEG2RAD, 0.002 };

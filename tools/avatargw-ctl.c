@@ -153,14 +153,15 @@ struct reading {
 	double p[3][3]; /* head, left hand, right hand */
 	char state[3][16];
 	char section[64]; /* the [avatar SECTION] the avatar comes from */
-	int shared;       /* the avatars that section makes (count = N) */
-	double hand;      /* its configured hand length */
+	int shared;	  /* the avatars that section makes (count = N) */
+	double hand;	  /* its configured hand length */
 };
 
 /* a `sensors` answer: the three sensors' states and positions; false if it is not one */
 static bool parse_sensors(const char *s, struct reading *r)
 {
-	static const char *const roles[3] = { "\"role\":\"head\"", "\"role\":\"left_hand\"", "\"role\":\"right_hand\"" };
+	static const char *const roles[3] = { "\"role\":\"head\"", "\"role\":\"left_hand\"",
+					      "\"role\":\"right_hand\"" };
 
 	const char *sec = strstr(s, "\"section\":\""), *sh = strstr(s, "\"section_avatars\":");
 	const char *hd = strstr(s, "\"hand\":");
@@ -188,10 +189,12 @@ static const struct {
 	{ CALIB_POSE_INITIAL, "initial",
 	  "stand upright, look straight ahead; upper arms hanging at your sides, elbows bent 90 degrees, forearms "
 	  "pointing forward, hands straight" },
-	{ CALIB_POSE_DOWN, "down", "stand upright, look straight ahead; both arms hanging straight down at your sides" },
+	{ CALIB_POSE_DOWN, "down",
+	  "stand upright, look straight ahead; both arms hanging straight down at your sides" },
 	{ CALIB_POSE_FORWARD, "forward",
 	  "stand upright, look straight ahead; both arms straight and level, pointing forward, shoulder-width apart" },
-	{ CALIB_POSE_SIDE, "side", "stand upright, look straight ahead; both arms straight and level, out to the sides" },
+	{ CALIB_POSE_SIDE, "side",
+	  "stand upright, look straight ahead; both arms straight and level, out to the sides" },
 };
 
 /* one pose read: samples readings 20 ms apart, every sensor OK, none moving more than still_m; 0 or exit status */
@@ -231,7 +234,8 @@ static int read_pose(char *path, size_t plen, const char *avatar, int samples, d
 	}
 	for (int i = 0; i < samples; i++)
 		for (int k = 0; k < 3; k++) {
-			double dx = r[i].p[k][0] - mean[k][0], dy = r[i].p[k][1] - mean[k][1], dz = r[i].p[k][2] - mean[k][2];
+			double dx = r[i].p[k][0] - mean[k][0], dy = r[i].p[k][1] - mean[k][1],
+			       dz = r[i].p[k][2] - mean[k][2];
 			double d = sqrt(dx * dx + dy * dy + dz * dz);
 
 			worst = d > worst ? d : worst;
@@ -279,9 +283,12 @@ static int write_file(const char *file, const char *text)
 static int calibrate(char *path, size_t plen, int argc, char **argv)
 {
 	static const struct option opts[] = {
-		{ "rounds", required_argument, NULL, 'r' }, { "side", no_argument, NULL, 'S' },
-		{ "hand", required_argument, NULL, 'H' },   { "samples", required_argument, NULL, 'n' },
-		{ "still", required_argument, NULL, 't' },  { "write", required_argument, NULL, 'w' },
+		{ "rounds", required_argument, NULL, 'r' },
+		{ "side", no_argument, NULL, 'S' },
+		{ "hand", required_argument, NULL, 'H' },
+		{ "samples", required_argument, NULL, 'n' },
+		{ "still", required_argument, NULL, 't' },
+		{ "write", required_argument, NULL, 'w' },
 		{ NULL, 0, NULL, 0 },
 	};
 	long rounds = 2, samples = 25;
@@ -328,8 +335,8 @@ static int calibrate(char *path, size_t plen, int argc, char **argv)
 			return 64;
 		}
 	}
-	if (optind + 1 != argc || rounds < 1 || rounds > 10 || samples < 1 || samples > 200 || !(hand >= 0 && hand < 0.5) ||
-	    !(still > 0)) {
+	if (optind + 1 != argc || rounds < 1 || rounds > 10 || samples < 1 || samples > 200 ||
+	    !(hand >= 0 && hand < 0.5) || !(still > 0)) {
 		usage(stderr);
 		return 64;
 	}
@@ -355,8 +362,9 @@ static int calibrate(char *path, size_t plen, int argc, char **argv)
 	if (!hand_given)
 		hand = first.hand; /* the configured one: the fit's forearm is then the configuration's */
 	if (file && first.shared > 1) {
-		fprintf(stderr, "avatargw-ctl: %s is one of the %d avatars of [avatar %s] (count = %d), which share one body: "
-				"not written (the keys are printed; put them in that section by hand if they fit them all)\n",
+		fprintf(stderr,
+			"avatargw-ctl: %s is one of the %d avatars of [avatar %s] (count = %d), which share one body: "
+			"not written (the keys are printed; put them in that section by hand if they fit them all)\n",
 			avatar, first.shared, first.section, first.shared);
 		file = NULL;
 	}
@@ -374,8 +382,8 @@ static int calibrate(char *path, size_t plen, int argc, char **argv)
 		fclose(f);
 		unlink(tmp);
 	}
-	fprintf(stderr, "Calibrating %s: %d poses, %ld time%s round. Hold each pose, then press Enter.\n", avatar, n_poses,
-		rounds, rounds > 1 ? "s" : "");
+	fprintf(stderr, "Calibrating %s: %d poses, %ld time%s round. Hold each pose, then press Enter.\n", avatar,
+		n_poses, rounds, rounds > 1 ? "s" : "");
 	for (long round = 0; round < rounds; round++)
 		for (int k = 0; k < n_poses; k++) {
 			for (;;) {
@@ -401,8 +409,10 @@ static int calibrate(char *path, size_t plen, int argc, char **argv)
 		return 65;
 	}
 	if (b.rms > 0.02)
-		fprintf(stderr, "avatargw-ctl: the readings fit the poses only to %.1f cm (rms): a pose was not held as "
-				"asked; consider calibrating again\n", b.rms * 100);
+		fprintf(stderr,
+			"avatargw-ctl: the readings fit the poses only to %.1f cm (rms): a pose was not held as "
+			"asked; consider calibrating again\n",
+			b.rms * 100);
 	/* the hand's length only when given: a drop-in would otherwise reset the configured one */
 	len = (size_t)snprintf(text, sizeof(text),
 			       "; avatargw-ctl calibrate %s: %d readings, the fit's rms %.1f mm\n"

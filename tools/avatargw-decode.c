@@ -137,7 +137,8 @@ int main(int argc, char **argv)
 			fprintf(stderr, "avatargw-decode: --set %s: expected KEY=VALUE\n", sets[i]);
 			return 2;
 		}
-		tl += (size_t)snprintf(text + tl, sizeof(text) - tl, "%.*s = %s\n", (int)(eq - sets[i]), sets[i], eq + 1);
+		tl += (size_t)snprintf(text + tl, sizeof(text) - tl, "%.*s = %s\n", (int)(eq - sets[i]), sets[i],
+				       eq + 1);
 	}
 	if (config_load_text(&cfg, "--set", text, err, sizeof(err))) {
 		fprintf(stderr, "avatargw-decode: %s\n", err);

@@ -509,7 +509,8 @@ static void dump_stats_print(struct dump *d, bool final)
 		fputs(",\"total\":{", stdout);
 		dump_json_count(&a->total);
 		printf(",\"restarts\":%" PRIu64 "},\"malformed\":%" PRIu64 ",\"kernel_drops\":%" PRIu32
-		       ",\"coalesced\":%" PRIu64, a->restarts, d->malformed, d->kernel_drops, d->coalesced);
+		       ",\"coalesced\":%" PRIu64,
+		       a->restarts, d->malformed, d->kernel_drops, d->coalesced);
 		if (d->untracked) /* FRAMEs of avatars beyond the table: counted, not analysed */
 			printf(",\"untracked\":%" PRIu64, d->untracked);
 		fputs(final ? ",\"final\":true}\n" : "}\n", stdout);

@@ -253,8 +253,8 @@ static int keyframe_rows(struct row *rows, size_t n, double hz, enum kf_interp m
 	size_t *idx = calloc(n, sizeof(*idx)), nk = 0;
 	double *kt = calloc(n, sizeof(*kt));
 	struct kf_pose *key = calloc(n, sizeof(*key));
-	double (*d2)[3] = calloc(n, sizeof(*d2));
-	double (*s)[4] = calloc(n, sizeof(*s));
+	double(*d2)[3] = calloc(n, sizeof(*d2));
+	double(*s)[4] = calloc(n, sizeof(*s));
 	double *work = calloc(n, sizeof(*work));
 	int rc = -1;
 
@@ -276,7 +276,12 @@ static int keyframe_rows(struct row *rows, size_t n, double hz, enum kf_interp m
 	}
 	fprintf(stderr, "avatargw-eval: %zu keyframes at %g Hz (%s) for %zu rows\n", nk, hz, kf_interp_name(m), n);
 	for (int j = 0; j < 3; j++) {
-		struct kf_track tr = { m, nk, kt, key, m == KF_NATURAL ? d2 : NULL, m != KF_LINEAR ? s : NULL,
+		struct kf_track tr = { m,
+				       nk,
+				       kt,
+				       key,
+				       m == KF_NATURAL ? d2 : NULL,
+				       m != KF_LINEAR ? s : NULL,
 				       m == KF_NATURAL ? work : NULL };
 
 		for (size_t k = 0; k < nk; k++) {
@@ -366,8 +371,9 @@ static void print_frame(size_t i, const struct row *r, const struct avatar *av, 
 			printf(",%.6f,%.6f,%.6f", w[m].x, w[m].y, w[m].z);
 		}
 		dq_translation(&hand[s], &hs);
-		printf(",%.7f,%.3f", sqrt((w[3].x - hs.x) * (w[3].x - hs.x) + (w[3].y - hs.y) * (w[3].y - hs.y) +
-					 (w[3].z - hs.z) * (w[3].z - hs.z)),
+		printf(",%.7f,%.3f",
+		       sqrt((w[3].x - hs.x) * (w[3].x - hs.x) + (w[3].y - hs.y) * (w[3].y - hs.y) +
+			    (w[3].z - hs.z) * (w[3].z - hs.z)),
 		       (double)p->hand_misfit[s]);
 		for (int j = 0; j < ARM_DOF; j++)
 			printf(",%.4f", p->q[s][j] * RAD2DEG);
@@ -429,9 +435,12 @@ static int parse_model(const char *s)
 	static const struct {
 		const char *name;
 		unsigned bit;
-	} names[] = { { "hand-elbow", AVATAR_HAND_ELBOW }, { "reach-first", AVATAR_REACH_FIRST },
-		      { "yaw-hands", AVATAR_YAW_HANDS }, { "reach-chest", AVATAR_REACH_CHEST },
-		      { "neck", AVATAR_NECK }, { "bow", AVATAR_BOW } };
+	} names[] = { { "hand-elbow", AVATAR_HAND_ELBOW },
+		      { "reach-first", AVATAR_REACH_FIRST },
+		      { "yaw-hands", AVATAR_YAW_HANDS },
+		      { "reach-chest", AVATAR_REACH_CHEST },
+		      { "neck", AVATAR_NECK },
+		      { "bow", AVATAR_BOW } };
 	unsigned m = 0;
 
 	if (!strcmp(s, "paper"))
@@ -477,13 +486,20 @@ static int parse_list(const char *s, double *v, int n)
 int main(int argc, char **argv)
 {
 	static const struct option opts[] = {
-		{ "dims", required_argument, NULL, 'd' },   { "head-offset", required_argument, NULL, 'o' },
-		{ "limits", required_argument, NULL, 'l' }, { "solver", required_argument, NULL, 's' },
-		{ "reset", no_argument, NULL, 'r' },        { "keyframes", required_argument, NULL, 'k' },
-		{ "interp", required_argument, NULL, 'i' }, { "person", required_argument, NULL, 'p' },
-		{ "chest-truth", required_argument, NULL, 'c' }, { "model", required_argument, NULL, 'm' },
-		{ "left-arm", required_argument, NULL, 'L' }, { "chest-part", required_argument, NULL, 'P' },
-		{ "help", no_argument, NULL, 'h' },         { NULL, 0, NULL, 0 },
+		{ "dims", required_argument, NULL, 'd' },
+		{ "head-offset", required_argument, NULL, 'o' },
+		{ "limits", required_argument, NULL, 'l' },
+		{ "solver", required_argument, NULL, 's' },
+		{ "reset", no_argument, NULL, 'r' },
+		{ "keyframes", required_argument, NULL, 'k' },
+		{ "interp", required_argument, NULL, 'i' },
+		{ "person", required_argument, NULL, 'p' },
+		{ "chest-truth", required_argument, NULL, 'c' },
+		{ "model", required_argument, NULL, 'm' },
+		{ "left-arm", required_argument, NULL, 'L' },
+		{ "chest-part", required_argument, NULL, 'P' },
+		{ "help", no_argument, NULL, 'h' },
+		{ NULL, 0, NULL, 0 },
 	};
 	double dims[4] = { 0.1732, 0.2886, 0.1955, 0.0 }, off[3] = { 0.008, -0.0386, 0.0967 }, kf_hz = 0;
 	double truth[3];
@@ -573,7 +589,8 @@ int main(int argc, char **argv)
 			break;
 		case 'c':
 			if (parse_list(optarg, truth, 3)) {
-				fprintf(stderr, "avatargw-eval: --chest-truth wants the chain origin X,Y,Z in the chest frame\n");
+				fprintf(stderr, "avatargw-eval: --chest-truth wants the chain origin X,Y,Z in the "
+						"chest frame\n");
 				return 2;
 			}
 			chest_truth = true;
@@ -649,7 +666,8 @@ int main(int argc, char **argv)
 		pose_dq(rows[i].s[1], &hand[ARM_LEFT]);
 		pose_dq(rows[i].s[2], &hand[ARM_RIGHT]);
 		if (chest_truth && rows[i].has_chest)
-			solve_true_chest(&av, kin, &o, &rows[i], truth, part, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], prev, cur);
+			solve_true_chest(&av, kin, &o, &rows[i], truth, part, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT],
+					 prev, cur);
 		else
 			avatar_solve(&av, kin, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], prev, cur);
 		print_frame(i, &rows[i], &av, cur, hand);

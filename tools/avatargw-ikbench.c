@@ -68,12 +68,11 @@ static int iteration_cost(const struct arm *arm, const struct ik_kin *kin, const
 int main(int argc, char **argv)
 {
 	static const struct option longopts[] = {
-		{ "targets", required_argument, NULL, 't' }, { "mode", required_argument, NULL, 'm' },
-		{ "dims", required_argument, NULL, 'd' },    { "limits", required_argument, NULL, 'l' },
-		{ "solver", required_argument, NULL, 's' },  { "solutions", required_argument, NULL, 'o' },
-		{ "quiet", no_argument, NULL, 'q' },         { "help", no_argument, NULL, 'h' },
-		{ "iteration-cost", no_argument, NULL, 'i' },
-		{ NULL, 0, NULL, 0 },
+		{ "targets", required_argument, NULL, 't' },  { "mode", required_argument, NULL, 'm' },
+		{ "dims", required_argument, NULL, 'd' },     { "limits", required_argument, NULL, 'l' },
+		{ "solver", required_argument, NULL, 's' },   { "solutions", required_argument, NULL, 'o' },
+		{ "quiet", no_argument, NULL, 'q' },	      { "help", no_argument, NULL, 'h' },
+		{ "iteration-cost", no_argument, NULL, 'i' }, { NULL, 0, NULL, 0 },
 	};
 	const char *targets = NULL, *mode = "reset", *solver = "dq", *solutions = NULL, *limits = NULL;
 	struct arm_dims dims = { 0.18, 0.30, 0.26, 0.08 };
@@ -97,9 +96,11 @@ int main(int argc, char **argv)
 			mode = optarg;
 			break;
 		case 'd':
-			if (sscanf(optarg, "%lf,%lf,%lf,%lf", &dims.shoulder, &dims.arm, &dims.forearm, &dims.hand) != 4 ||
+			if (sscanf(optarg, "%lf,%lf,%lf,%lf", &dims.shoulder, &dims.arm, &dims.forearm, &dims.hand) !=
+				    4 ||
 			    dims.shoulder < 0 || dims.arm <= 0 || dims.forearm <= 0 || dims.hand < 0) {
-				fprintf(stderr, "avatargw-ikbench: --dims S,A,F,H: four lengths in metres, A and F > 0\n");
+				fprintf(stderr,
+					"avatargw-ikbench: --dims S,A,F,H: four lengths in metres, A and F > 0\n");
 				return 2;
 			}
 			break;
@@ -208,7 +209,8 @@ int main(int argc, char **argv)
 
 		arm_fk(&arm, sol[i], &fk);
 		dq_translation(&fk, &pc);
-		ep = sqrt((pc.x - rows[i].p[0]) * (pc.x - rows[i].p[0]) + (pc.y - rows[i].p[1]) * (pc.y - rows[i].p[1]) +
+		ep = sqrt((pc.x - rows[i].p[0]) * (pc.x - rows[i].p[0]) +
+			  (pc.y - rows[i].p[1]) * (pc.y - rows[i].p[1]) +
 			  (pc.z - rows[i].p[2]) * (pc.z - rows[i].p[2]));
 		quat_normalize(&rt, &rt);
 		er = quat_angle_between(&fk.r, &rt) / DEG2RAD;
@@ -265,8 +267,8 @@ int main(int argc, char **argv)
 		max = sorted[n - 1];
 		if (!quiet) {
 			printf("targets      %s\n", targets);
-			printf("solver       %s (%s kinematics), mode %s, scalar %s\n", newton ? "paper Newton" : "avatargw",
-			       kin->name, mode, SC_NAME);
+			printf("solver       %s (%s kinematics), mode %s, scalar %s\n",
+			       newton ? "paper Newton" : "avatargw", kin->name, mode, SC_NAME);
 			printf("dims         S=%.4g A=%.4g F=%.4g H=%.4g m\n", dims.shoulder, dims.arm, dims.forearm,
 			       dims.hand);
 			printf("rows         %zu\n", n);

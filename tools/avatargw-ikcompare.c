@@ -73,8 +73,8 @@ struct judged {
  * them (the degrees of the table rounded to its type: a float or Q5.26
  * posture held at a limit sits on that rounded value).
  */
-static void run(const struct backend *be, const struct ikx_setup *setup, const struct bench_row *rows, size_t n, bool warm,
-		struct judged *out)
+static void run(const struct backend *be, const struct ikx_setup *setup, const struct bench_row *rows, size_t n,
+		bool warm, struct judged *out)
 {
 	double lo[IKX_DOF], hi[IKX_DOF];
 	size_t i;

@@ -127,7 +127,7 @@ static int cmd_info(const char *path, bool json)
 			       ix.damage[i].truncated ? "cut-off record" : "damaged region", ix.damage[i].off,
 			       ix.damage[i].off + ix.damage[i].len, ix.damage[i].len);
 		printf("%s\n", ix.clean_end ? "closed cleanly (END record)"
-					   : "no END record: the recording daemon stopped without closing the file");
+					    : "no END record: the recording daemon stopped without closing the file");
 	}
 	rc = ix.n_damage ? 1 : 0;
 	rec_index_free(&ix);
@@ -155,7 +155,8 @@ static int cmd_csv(const char *path, const char *person)
 	}
 	printf("frame,t");
 	for (int r = 0; r < 3; r++)
-		printf(",%s_x,%s_y,%s_z,%s_qw,%s_qx,%s_qy,%s_qz", pre[r], pre[r], pre[r], pre[r], pre[r], pre[r], pre[r]);
+		printf(",%s_x,%s_y,%s_z,%s_qw,%s_qx,%s_qy,%s_qz", pre[r], pre[r], pre[r], pre[r], pre[r], pre[r],
+		       pre[r]);
 	putchar('\n');
 	for (size_t i = 0; i < ix.n_events; i++) {
 		const struct rec_event *e = &ix.events[i];
@@ -297,8 +298,10 @@ out:
 int main(int argc, char **argv)
 {
 	static const struct option opts[] = {
-		{ "json", no_argument, NULL, 'j' },        { "person", required_argument, NULL, 'p' },
-		{ "rate", required_argument, NULL, 'r' }, { "help", no_argument, NULL, 'h' },
+		{ "json", no_argument, NULL, 'j' },
+		{ "person", required_argument, NULL, 'p' },
+		{ "rate", required_argument, NULL, 'r' },
+		{ "help", no_argument, NULL, 'h' },
 		{ NULL, 0, NULL, 0 },
 	};
 	const char *person = NULL, *cmd;

@@ -26,8 +26,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#define W 36  /* columns per view */
-#define H 22  /* rows */
+#define W 36	   /* columns per view */
+#define H 22	   /* rows */
 #define SPAN_X 1.4 /* metres across a view */
 
 static volatile sig_atomic_t quit;
@@ -109,11 +109,13 @@ static void line(char g[H][W + 1], int c0, int r0, int c1, int r1, char ch)
 /* one view: horizontal axis u (0 = x across, 1 = y forward), vertical z; points relative to the chest */
 static void draw(char g[H][W + 1], const double pts[WIRE_SEGMENTS][3], int u)
 {
-	static const int bones[][2] = { { WIRE_SEG_CHEST, WIRE_SEG_HEAD },
-					{ WIRE_SEG_CHEST, WIRE_SEG_R_SHOULDER }, { WIRE_SEG_R_SHOULDER, WIRE_SEG_R_ELBOW },
-					{ WIRE_SEG_R_ELBOW, WIRE_SEG_R_WRIST },    { WIRE_SEG_R_WRIST, WIRE_SEG_R_HAND },
-					{ WIRE_SEG_CHEST, WIRE_SEG_L_SHOULDER }, { WIRE_SEG_L_SHOULDER, WIRE_SEG_L_ELBOW },
-					{ WIRE_SEG_L_ELBOW, WIRE_SEG_L_WRIST },    { WIRE_SEG_L_WRIST, WIRE_SEG_L_HAND } };
+	static const int bones[][2] = {
+		{ WIRE_SEG_CHEST, WIRE_SEG_HEAD },	   { WIRE_SEG_CHEST, WIRE_SEG_R_SHOULDER },
+		{ WIRE_SEG_R_SHOULDER, WIRE_SEG_R_ELBOW }, { WIRE_SEG_R_ELBOW, WIRE_SEG_R_WRIST },
+		{ WIRE_SEG_R_WRIST, WIRE_SEG_R_HAND },	   { WIRE_SEG_CHEST, WIRE_SEG_L_SHOULDER },
+		{ WIRE_SEG_L_SHOULDER, WIRE_SEG_L_ELBOW }, { WIRE_SEG_L_ELBOW, WIRE_SEG_L_WRIST },
+		{ WIRE_SEG_L_WRIST, WIRE_SEG_L_HAND }
+	};
 	int col[WIRE_SEGMENTS], row[WIRE_SEGMENTS];
 
 	for (int r = 0; r < H; r++) {
@@ -175,7 +177,7 @@ int main(int argc, char **argv)
 	static const struct option opts[] = {
 		{ "tcp", required_argument, NULL, 't' },    { "unix", required_argument, NULL, 'u' },
 		{ "avatar", required_argument, NULL, 'a' }, { "frames", required_argument, NULL, 'n' },
-		{ "help", no_argument, NULL, 'h' },         { NULL, 0, NULL, 0 },
+		{ "help", no_argument, NULL, 'h' },	    { NULL, 0, NULL, 0 },
 	};
 	const char *tcp = "127.0.0.1:7771", *unix_path = NULL;
 	long want = -1, frames = -1;
@@ -188,10 +190,18 @@ int main(int argc, char **argv)
 
 	while ((opt = getopt_long(argc, argv, "t:u:a:n:h", opts, NULL)) != -1) {
 		switch (opt) {
-		case 't': tcp = optarg; break;
-		case 'u': unix_path = optarg; break;
-		case 'a': want = strtol(optarg, NULL, 10); break;
-		case 'n': frames = strtol(optarg, NULL, 10); break;
+		case 't':
+			tcp = optarg;
+			break;
+		case 'u':
+			unix_path = optarg;
+			break;
+		case 'a':
+			want = strtol(optarg, NULL, 10);
+			break;
+		case 'n':
+			frames = strtol(optarg, NULL, 10);
+			break;
 		case 'h':
 			printf("usage: avatargw-view [--tcp HOST:PORT | --unix PATH] [--avatar ID] [--frames N]\n");
 			return 0;

@@ -9,6 +9,7 @@ build-essential
 g++
 make
 pkg-config
+clang-format
 libcmocka-dev
 libglm-dev
 libinih-dev

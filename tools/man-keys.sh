@@ -64,7 +64,9 @@ BEGIN {
 }
 /^static const char \*const e_[a-z_]+\[\] = \{/ {
 	name = $0; sub(/^static const char \*const /, "", name); sub(/\[.*/, "", name)
-	body = $0; sub(/^[^{]*\{/, "", body); sub(/NULL.*/, "", body)
+	body = $0
+	while (body !~ /NULL/ && (getline l) > 0) body = body " " l
+	sub(/^[^{]*\{/, "", body); sub(/NULL.*/, "", body)
 	gsub(/[" \t]/, "", body); sub(/,$/, "", body); gsub(/,/, " ", body)
 	words[name] = body
 	next

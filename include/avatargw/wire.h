@@ -31,30 +31,30 @@ extern "C" {
 #define WIRE_DEFAULT_PORT 7770
 
 enum wire_type {
-	WIRE_FRAME = 1,    /* one solved avatar */
+	WIRE_FRAME = 1,	   /* one solved avatar */
 	WIRE_DESCRIBE = 2, /* an avatar's skeleton: names, limits, lengths, axes */
 };
 
 /* header flags of a FRAME */
 enum wire_flag {
-	WIRE_F_STALE = 1u << 0,     /* a sensor is stale or missing (see its state) */
-	WIRE_F_UNREACHED = 1u << 1, /* an arm's target was out of reach or invalid: closest posture */
-	WIRE_F_HELD = 1u << 2,      /* no valid head: the previous frame's posture, repeated */
+	WIRE_F_STALE = 1u << 0,	     /* a sensor is stale or missing (see its state) */
+	WIRE_F_UNREACHED = 1u << 1,  /* an arm's target was out of reach or invalid: closest posture */
+	WIRE_F_HELD = 1u << 2,	     /* no valid head: the previous frame's posture, repeated */
 	WIRE_F_NEW_SAMPLE = 1u << 3, /* a sensor sample arrived since the previous frame */
-	WIRE_F_INPUTS = 1u << 4,    /* the FRAME ends with an input block (buttons, analog values) */
+	WIRE_F_INPUTS = 1u << 4,     /* the FRAME ends with an input block (buttons, analog values) */
 };
 
 /* per-sensor state in a FRAME */
 enum wire_sensor_state {
 	WIRE_SENSOR_OK = 0,
-	WIRE_SENSOR_STALE = 1,   /* no new sample for longer than the configured stale time */
+	WIRE_SENSOR_STALE = 1,	 /* no new sample for longer than the configured stale time */
 	WIRE_SENSOR_MISSING = 2, /* never seen, or its tracker is FAULTY; pose is NaN */
 };
 
 /* the fixed content of version 1 */
-#define WIRE_SENSORS 3  /* head, left hand, right hand */
-#define WIRE_ARMS 2     /* right, left */
-#define WIRE_JOINTS 17  /* chest_yaw, then 8 right-arm and 8 left-arm joints */
+#define WIRE_SENSORS 3 /* head, left hand, right hand */
+#define WIRE_ARMS 2    /* right, left */
+#define WIRE_JOINTS 17 /* chest_yaw, then 8 right-arm and 8 left-arm joints */
 #define WIRE_SEGMENTS 10
 /*
  * Longest name, bytes; the conventions string may hold 4 times as many.
@@ -79,8 +79,8 @@ enum wire_segment {
 };
 
 struct wire_pose {
-	float p[3];    /* metres */
-	float q[4];    /* w, x, y, z */
+	float p[3]; /* metres */
+	float q[4]; /* w, x, y, z */
 };
 
 struct wire_header {
@@ -89,9 +89,9 @@ struct wire_header {
 	uint16_t header_len;
 	uint16_t payload_len;
 	uint16_t flags;
-	uint32_t source_id;      /* random, chosen at each start of the daemon */
-	uint32_t seq;            /* per avatar and message type, +1 per message */
-	uint32_t describe_rev;   /* the DESCRIBE revision this message belongs to */
+	uint32_t source_id;	 /* random, chosen at each start of the daemon */
+	uint32_t seq;		 /* per avatar and message type, +1 per message */
+	uint32_t describe_rev;	 /* the DESCRIBE revision this message belongs to */
 	uint64_t sample_time_ns; /* CLOCK_REALTIME of the newest tracker sample used */
 	uint16_t avatar_id;
 	uint8_t n_joints;
@@ -100,20 +100,20 @@ struct wire_header {
 };
 
 struct wire_sensor_sample {
-	uint8_t state;       /* enum wire_sensor_state */
-	uint16_t age_100us;  /* age of the sample at publication, 0.1 ms, saturating */
+	uint8_t state;	       /* enum wire_sensor_state */
+	uint16_t age_100us;    /* age of the sample at publication, 0.1 ms, saturating */
 	struct wire_pose pose; /* world, NaN when MISSING */
 };
 
 struct wire_arm_result {
 	uint16_t ik_flags; /* the IK core's IK_* flags */
-	uint8_t iters;     /* Newton iterations */
-	float pos_err;     /* hand position residual, metres */
+	uint8_t iters;	   /* Newton iterations */
+	float pos_err;	   /* hand position residual, metres */
 };
 
-#define WIRE_ANALOG 4       /* analog values per sensor in an input block */
-#define WIRE_FRAME_LEN 500   /* a FRAME without input block */
-#define WIRE_INPUTS_LEN 64   /* the input block that follows it when WIRE_F_INPUTS is set */
+#define WIRE_ANALOG 4	   /* analog values per sensor in an input block */
+#define WIRE_FRAME_LEN 500 /* a FRAME without input block */
+#define WIRE_INPUTS_LEN 64 /* the input block that follows it when WIRE_F_INPUTS is set */
 
 /*
  * Buttons and analog values of the sensors that have them (a Razer Hydra
@@ -122,8 +122,8 @@ struct wire_arm_result {
  * fields when the header's flags have WIRE_F_INPUTS.
  */
 struct wire_inputs {
-	uint8_t present;                 /* bit i: sensor i's buttons and analog values are current */
-	uint32_t buttons[WIRE_SENSORS];  /* bit k: button k pressed */
+	uint8_t present;			 /* bit i: sensor i's buttons and analog values are current */
+	uint32_t buttons[WIRE_SENSORS];		 /* bit k: button k pressed */
 	float analog[WIRE_SENSORS][WIRE_ANALOG]; /* -1..1 (axes), 0..1 (triggers), 0 when unused */
 };
 
@@ -131,7 +131,7 @@ struct wire_frame {
 	struct wire_header h;
 	struct wire_sensor_sample sensor[WIRE_SENSORS];
 	struct wire_arm_result arm[WIRE_ARMS];
-	float joint[WIRE_JOINTS];               /* radians, NaN = unknown */
+	float joint[WIRE_JOINTS];		 /* radians, NaN = unknown */
 	struct wire_pose segment[WIRE_SEGMENTS]; /* world */
 	/*
 	 * Encoded only when h.flags has WIRE_F_INPUTS; the decoder fills it
@@ -143,10 +143,10 @@ struct wire_frame {
 
 struct wire_joint_desc {
 	char name[WIRE_NAME_MAX + 1];
-	uint8_t segment;   /* the segment this joint moves */
-	float lo, hi;      /* limits, radians */
-	float axis[3];     /* rotation axis, in the frame of the joints before it */
-	float trans[3];    /* translation after the rotation, metres */
+	uint8_t segment; /* the segment this joint moves */
+	float lo, hi;	 /* limits, radians */
+	float axis[3];	 /* rotation axis, in the frame of the joints before it */
+	float trans[3];	 /* translation after the rotation, metres */
 };
 
 struct wire_segment_desc {
@@ -157,7 +157,7 @@ struct wire_segment_desc {
 struct wire_describe {
 	struct wire_header h;
 	float rate_hz;
-	float dims[4];        /* shoulder, upper arm, forearm, hand: metres */
+	float dims[4];	      /* shoulder, upper arm, forearm, hand: metres */
 	float head_offset[3]; /* head sensor from the chest origin, chest frame */
 	char avatar_name[WIRE_NAME_MAX + 1];
 	char conventions[WIRE_NAME_MAX * 4 + 1];
@@ -168,13 +168,13 @@ struct wire_describe {
 
 /* errors of the decoders (returned negated) */
 enum wire_error {
-	WIRE_ESHORT = 1,  /* shorter than its header says */
-	WIRE_EMAGIC,      /* not an avatargw message */
-	WIRE_EVERSION,    /* a version this decoder does not read */
-	WIRE_ETYPE,       /* not the message type asked for */
-	WIRE_ECOUNT,      /* counts that do not fit this version */
-	WIRE_ELONG,       /* header_len + payload_len above WIRE_MAX_MSG */
-	WIRE_ESTRING,     /* a name longer than WIRE_NAME_MAX */
+	WIRE_ESHORT = 1, /* shorter than its header says */
+	WIRE_EMAGIC,	 /* not an avatargw message */
+	WIRE_EVERSION,	 /* a version this decoder does not read */
+	WIRE_ETYPE,	 /* not the message type asked for */
+	WIRE_ECOUNT,	 /* counts that do not fit this version */
+	WIRE_ELONG,	 /* header_len + payload_len above WIRE_MAX_MSG */
+	WIRE_ESTRING,	 /* a name longer than WIRE_NAME_MAX */
 };
 
 const char *wire_strerror(int err);

@@ -55,21 +55,21 @@ extern "C" {
 #endif
 
 /* struct avatar_body.model */
-#define AVATAR_PAPER 0x0          /* the paper's avatar: chest from the head's yaw, arms tracked from the last frame */
+#define AVATAR_PAPER 0x0 /* the paper's avatar: chest from the head's yaw, arms tracked from the last frame */
 #define AVATAR_HAND_ELBOW 0x1
 #define AVATAR_REACH_FIRST 0x2
 #define AVATAR_YAW_HANDS 0x4
 #define AVATAR_REACH_CHEST 0x8
 #define AVATAR_NECK 0x10
 #define AVATAR_BOW 0x20
-#define AVATAR_MODEL_DEFAULT \
+#define AVATAR_MODEL_DEFAULT                                                                                           \
 	(AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_NECK | AVATAR_BOW)
 
 struct avatar_body {
-	struct arm_dims dims;     /* the right arm (and the left one unless avatar_set_left_arm() says otherwise) */
-	struct vec3 head_offset;  /* head sensor from the chain origin, chest frame (paper: 0, 0, Neck) */
-	struct arm_limits lim;    /* both arms (the left is mirrored) */
-	unsigned model;           /* AVATAR_* choices, AVATAR_MODEL_DEFAULT after avatar_init() */
+	struct arm_dims dims;	 /* the right arm (and the left one unless avatar_set_left_arm() says otherwise) */
+	struct vec3 head_offset; /* head sensor from the chain origin, chest frame (paper: 0, 0, Neck) */
+	struct arm_limits lim;	 /* both arms (the left is mirrored) */
+	unsigned model;		 /* AVATAR_* choices, AVATAR_MODEL_DEFAULT after avatar_init() */
 };
 
 struct avatar {
@@ -79,17 +79,17 @@ struct avatar {
 
 /* One solved frame. */
 struct avatar_pose {
-	struct dq chest;             /* chest frame in the world */
-	sc_t head_yaw;               /* radians about world z */
-	sc_t q[2][ARM_DOF];          /* joint angles per arm */
-	struct ik_result res[2];     /* per arm */
+	struct dq chest;	 /* chest frame in the world */
+	sc_t head_yaw;		 /* radians about world z */
+	sc_t q[2][ARM_DOF];	 /* joint angles per arm */
+	struct ik_result res[2]; /* per arm */
 	/*
 	 * AVATAR_HAND_ELBOW, per arm: running mean of the least cost of the
 	 * elbow's placement (the wrist's cost and the pulls; 1 is about one
 	 * natural range of one wrist joint). A diagnostic only.
 	 */
 	sc_t hand_misfit[2];
-	struct arm_pose seg[2];      /* per arm, the segment poses at q (arm_fk_pose), for publishing */
+	struct arm_pose seg[2]; /* per arm, the segment poses at q (arm_fk_pose), for publishing */
 };
 
 #define avatar_init SCN(avatar_init)
@@ -144,9 +144,9 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
  * to track from (NULL: reset to the rest posture). Returns the flags of both
  * arms or'ed.
  */
-unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const struct ik_opts *o,
-		      const struct dq *head, const struct dq *lhand, const struct dq *rhand,
-		      const struct avatar_pose *prev, struct avatar_pose *out);
+unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const struct ik_opts *o, const struct dq *head,
+		      const struct dq *lhand, const struct dq *rhand, const struct avatar_pose *prev,
+		      struct avatar_pose *out);
 
 #ifdef __cplusplus
 }

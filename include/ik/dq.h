@@ -41,7 +41,7 @@ struct screw {
 	struct vec3 l; /* unit direction of the axis */
 	struct vec3 m; /* moment of the axis: p x l for any point p on it */
 	sc_t angle;    /* rotation about l, radians, in [0, pi] */
-	sc_t d;        /* translation along l, metres */
+	sc_t d;	       /* translation along l, metres */
 };
 
 /* A twist: angular and linear velocity (the paper's V = {av, lv}). */
@@ -261,7 +261,7 @@ bool quat_normalize(const struct quat *a, struct quat *out);
 /* out = q v q*, q a unit quaternion */
 DQ_INL void quat_rotate(const struct quat *q, const struct vec3 *v, struct vec3 *out)
 #if DQ_PROTO
-;
+	;
 #else
 {
 	/* v' = v + 2w (u x v) + 2 u x (u x v), u the vector part */
@@ -337,7 +337,7 @@ bool dq_normalize(const struct dq *a, struct dq *out);
 /* x' = R x + t from a unit rotation r and a translation t */
 DQ_INL void dq_from_rt(const struct quat *r, const struct vec3 *t, struct dq *out)
 #if DQ_PROTO
-;
+	;
 #else
 {
 	struct quat tq, rr = *r;
@@ -356,7 +356,7 @@ void dq_from_axis_angle_t(const struct vec3 *axis, sc_t angle, const struct vec3
 
 DQ_INL void dq_translation(const struct dq *a, struct vec3 *out)
 #if DQ_PROTO
-;
+	;
 #else
 {
 	/* t = 2 d r* */

@@ -34,18 +34,18 @@ extern "C" {
 #endif
 
 /* result flags */
-#define IK_REACHED 0x01     /* within tolerance */
+#define IK_REACHED 0x01	    /* within tolerance */
 #define IK_UNREACHABLE 0x02 /* no posture within the limits reaches the target: closest returned */
 #define IK_BAD_TARGET 0x04  /* NaN/inf or zero quaternion in the target or seed */
-#define IK_LIMITED 0x08     /* a joint limit is active in the returned posture */
+#define IK_LIMITED 0x08	    /* a joint limit is active in the returned posture */
 #define IK_ANALYTIC 0x10    /* the closed-form swivel search found the posture */
 
 /* The target end-effector pose, in the chest frame of the arm. */
 struct ik_target {
 	struct vec3 p;
 	struct quat r;
-	struct dq d;     /* the same as a dual quaternion */
-	sc_t m[4][4];    /* the same as a matrix */
+	struct dq d;  /* the same as a dual quaternion */
+	sc_t m[4][4]; /* the same as a matrix */
 	bool valid;
 };
 
@@ -74,23 +74,23 @@ struct ik_kin {
 };
 
 struct ik_opts {
-	int max_iter;       /* Newton iterations at most (polish and fallback) */
-	sc_t tol_pos;       /* metres */
-	sc_t tol_rot;       /* radians */
-	sc_t max_step;      /* largest joint step per iteration, radians (0: none) */
+	int max_iter;	    /* Newton iterations at most (polish and fallback) */
+	sc_t tol_pos;	    /* metres */
+	sc_t tol_rot;	    /* radians */
+	sc_t max_step;	    /* largest joint step per iteration, radians (0: none) */
 	int swivel_samples; /* closed-form search: samples of the swivel circle */
 	int yaw_samples;    /* closed-form search: samples of J1 */
-	int max_evals;      /* closed-form search: postures evaluated at most (bounds the time); 0: no search,
+	int max_evals;	    /* closed-form search: postures evaluated at most (bounds the time); 0: no search,
 			       Newton only, from the seed (an arm kept on its branch) */
-	int warm_iter;      /* Newton iterations tried from a seed before the closed-form search */
+	int warm_iter;	    /* Newton iterations tried from a seed before the closed-form search */
 	sc_t center_gain;   /* tracking: fraction of the way to mid-range the redundancy moves per step */
 };
 
 struct ik_result {
 	unsigned flags;
-	int iters;          /* Newton iterations done */
-	int evals;          /* closed-form postures evaluated */
-	struct ik_err err;  /* final error */
+	int iters;	   /* Newton iterations done */
+	int evals;	   /* closed-form postures evaluated */
+	struct ik_err err; /* final error */
 };
 
 #define ik_kin_dq SCN(ik_kin_dq)
@@ -148,8 +148,8 @@ void ik_rest_posture(const struct arm *a, sc_t q[ARM_DOF]);
  * writes q if one was found, else writes the least violating posture seen;
  * evals counts the postures tried.
  */
-bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t pref[ARM_DOF],
-		     const struct ik_opts *o, sc_t q[ARM_DOF], int *evals);
+bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t pref[ARM_DOF], const struct ik_opts *o,
+		     sc_t q[ARM_DOF], int *evals);
 
 #ifdef __cplusplus
 }

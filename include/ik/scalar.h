@@ -83,7 +83,7 @@ typedef int64_t sc_acc_t;
 #endif
 #define SC_FRAC 26
 /* rounds half away from zero; a constant argument folds to an integer at compile time */
-#define SC_C(x) ((sc_t)((x) * 67108864.0 + ((x) < 0 ? -0.5 : 0.5)))
+#define SC_C(x) ((sc_t)((x)*67108864.0 + ((x) < 0 ? -0.5 : 0.5)))
 #define SC_NAME "Q5.26"
 /* one unit in the last place */
 #define SC_EPS ((sc_t)1)
@@ -167,44 +167,44 @@ typedef uint32_t sc_bits_t;
  * and as a value (fn); then sin and cos of the remainder r in ps and pc.
  */
 #if SC_TYPE == SC_DOUBLE
-#define SC_SINCOS_POLY(a, y, fn, n, r, z, p, q, ps, pc, hz, w)                                                   \
-	do {                                                                                                     \
-		y = a * SC_C(0.63661977236758134308) + SC_RND_MAGIC;                                             \
-		fn = y - SC_RND_MAGIC;                                                                           \
-		__builtin_memcpy(&n, &y, sizeof(n));                                                             \
-		r = ((a - fn * 1.5707963267341256) - fn * 6.077100506303966e-11) - fn * 2.0222662487959506e-21; \
-		z = r * r;                                                                                       \
-		p = -2.5050747763608083e-08 + z * 1.589623019695111e-10;                                         \
-		p = 2.755731362139104e-06 + z * p;                                                               \
-		p = -0.00019841269829589555 + z * p;                                                             \
-		p = 0.008333333333322118 + z * p;                                                                \
-		p = -0.1666666666666663 + z * p;                                                                 \
-		q = 2.0875700841863214e-09 + z * -1.1358536519516824e-11;                                        \
-		q = -2.7557314179295147e-07 + z * q;                                                             \
-		q = 2.4801587288851694e-05 + z * q;                                                              \
-		q = -0.0013888888888873056 + z * q;                                                              \
-		q = 0.041666666666666595 + z * q;                                                                \
-		ps = r + r * z * p;                                                                              \
-		hz = SC_C(0.5) * z;                                                                              \
-		w = SC_C(1) - hz;                                                                                \
-		pc = w + (((SC_C(1) - w) - hz) + z * z * q);                                                     \
+#define SC_SINCOS_POLY(a, y, fn, n, r, z, p, q, ps, pc, hz, w)                                                         \
+	do {                                                                                                           \
+		y = a * SC_C(0.63661977236758134308) + SC_RND_MAGIC;                                                   \
+		fn = y - SC_RND_MAGIC;                                                                                 \
+		__builtin_memcpy(&n, &y, sizeof(n));                                                                   \
+		r = ((a - fn * 1.5707963267341256) - fn * 6.077100506303966e-11) - fn * 2.0222662487959506e-21;        \
+		z = r * r;                                                                                             \
+		p = -2.5050747763608083e-08 + z * 1.589623019695111e-10;                                               \
+		p = 2.755731362139104e-06 + z * p;                                                                     \
+		p = -0.00019841269829589555 + z * p;                                                                   \
+		p = 0.008333333333322118 + z * p;                                                                      \
+		p = -0.1666666666666663 + z * p;                                                                       \
+		q = 2.0875700841863214e-09 + z * -1.1358536519516824e-11;                                              \
+		q = -2.7557314179295147e-07 + z * q;                                                                   \
+		q = 2.4801587288851694e-05 + z * q;                                                                    \
+		q = -0.0013888888888873056 + z * q;                                                                    \
+		q = 0.041666666666666595 + z * q;                                                                      \
+		ps = r + r * z * p;                                                                                    \
+		hz = SC_C(0.5) * z;                                                                                    \
+		w = SC_C(1) - hz;                                                                                      \
+		pc = w + (((SC_C(1) - w) - hz) + z * z * q);                                                           \
 	} while (0)
 #else
-#define SC_SINCOS_POLY(a, y, fn, n, r, z, p, q, ps, pc, hz, w)                                                   \
-	do {                                                                                                     \
-		y = a * SC_C(0.63661977236758134308) + SC_RND_MAGIC;                                             \
-		fn = y - SC_RND_MAGIC;                                                                           \
-		__builtin_memcpy(&n, &y, sizeof(n));                                                             \
-		r = ((a - fn * 1.5703125f) - fn * 4.837512969970703e-4f) - fn * 7.549789954891882e-08f;          \
-		z = r * r;                                                                                       \
-		p = 0.008332160762195971f + z * -0.0001951528322646598f;                                         \
-		p = -0.16666654609555026f + z * p;                                                               \
-		q = -0.0013887316254782307f + z * 2.4433157107133406e-05f;                                       \
-		q = 0.04166664568298217f + z * q;                                                                \
-		ps = r + r * z * p;                                                                              \
-		hz = SC_C(0.5) * z;                                                                              \
-		w = SC_C(1) - hz;                                                                                \
-		pc = w + (((SC_C(1) - w) - hz) + z * z * q);                                                     \
+#define SC_SINCOS_POLY(a, y, fn, n, r, z, p, q, ps, pc, hz, w)                                                         \
+	do {                                                                                                           \
+		y = a * SC_C(0.63661977236758134308) + SC_RND_MAGIC;                                                   \
+		fn = y - SC_RND_MAGIC;                                                                                 \
+		__builtin_memcpy(&n, &y, sizeof(n));                                                                   \
+		r = ((a - fn * 1.5703125f) - fn * 4.837512969970703e-4f) - fn * 7.549789954891882e-08f;                \
+		z = r * r;                                                                                             \
+		p = 0.008332160762195971f + z * -0.0001951528322646598f;                                               \
+		p = -0.16666654609555026f + z * p;                                                                     \
+		q = -0.0013887316254782307f + z * 2.4433157107133406e-05f;                                             \
+		q = 0.04166664568298217f + z * q;                                                                      \
+		ps = r + r * z * p;                                                                                    \
+		hz = SC_C(0.5) * z;                                                                                    \
+		w = SC_C(1) - hz;                                                                                      \
+		pc = w + (((SC_C(1) - w) - hz) + z * z * q);                                                           \
 	} while (0)
 #endif
 

@@ -39,25 +39,25 @@ enum kind {
 	K_INT,
 	K_U32,
 	K_DOUBLE,
-	K_DEG,     /* degrees in the file, radians in memory */
+	K_DEG, /* degrees in the file, radians in memory */
 	K_BOOL,
 	K_ENUM,
 	K_STR,
 	K_PATH,
 	K_VEC3,
-	K_RANGE,   /* two numbers in degrees: lo hi */
-	K_SENSOR,  /* SOURCE/SENSOR */
-	K_PERSON,  /* SOURCE[/PREFIX]: head, left_hand, right_hand at once */
-	K_LIST,    /* avatar names, or all */
-	K_MOUNT,   /* mount_SENSOR: x y z [qw qx qy qz], one key per sensor */
-	K_NAMES,   /* sensor names separated by spaces, "-" for none */
+	K_RANGE,  /* two numbers in degrees: lo hi */
+	K_SENSOR, /* SOURCE/SENSOR */
+	K_PERSON, /* SOURCE[/PREFIX]: head, left_hand, right_hand at once */
+	K_LIST,	  /* avatar names, or all */
+	K_MOUNT,  /* mount_SENSOR: x y z [qw qx qy qz], one key per sensor */
+	K_NAMES,  /* sensor names separated by spaces, "-" for none */
 };
 
 static const char *const e_mode[] = { "deadline", "events", NULL };
 static const char *const e_log[] = { "err", "warning", "info", "debug", NULL };
 static const char *const e_solver[] = { "dq", "matrix", NULL };
-static const char *const e_out[] = { "udp", "multicast", "tcp", "unix", "modbus", "can", "vrpn", "vmc", "vrchat", "websocket",
-					  NULL };
+static const char *const e_out[] = { "udp",  "multicast", "tcp",    "unix",	 "modbus", "can",
+				     "vrpn", "vmc",	  "vrchat", "websocket", NULL };
 static const char *const e_word[] = { "abcd", "cdab", "badc", "dcba", NULL };
 static const char *const e_regtype[] = { "holding", "input", NULL };
 static const char *const e_regfmt[] = { "int16", "uint16", "int32", "uint32", "float32", NULL };
@@ -72,10 +72,10 @@ struct key_def {
 	int kind;
 	size_t off, off2;
 	double min, max;
-	const char *def;    /* NULL: required (or, for sensors, given by person) */
+	const char *def; /* NULL: required (or, for sensors, given by person) */
 	const char *unit;
 	const char *const *enums;
-	const char *only;   /* source: drivers, output: types that take the key; NULL = all */
+	const char *only; /* source: drivers, output: types that take the key; NULL = all */
 	const char *doc;
 };
 
@@ -89,8 +89,8 @@ static const struct key_def keys[] = {
 	  "avatars solved and published per second (deadline mode)" },
 	{ S_DAEMON, "mode", K_ENUM, D(mode), 0, 0, 0, "deadline", NULL, e_mode, NULL,
 	  "deadline: a cycle at every period, to absolute deadlines; events: a cycle when a source has new samples" },
-	{ S_DAEMON, "stale_ms", K_DOUBLE, D(stale_ms), 0, 1, 60000, "100", "ms",
-	  NULL, NULL, "a sensor without a new sample for this long is STALE" },
+	{ S_DAEMON, "stale_ms", K_DOUBLE, D(stale_ms), 0, 1, 60000, "100", "ms", NULL, NULL,
+	  "a sensor without a new sample for this long is STALE" },
 	{ S_DAEMON, "realtime_priority", K_INT, D(realtime_priority), 0, 0, 99, "0", NULL, NULL, NULL,
 	  "SCHED_FIFO priority of the loop thread, 0 = normal scheduling" },
 	{ S_DAEMON, "cpu", K_INT, D(cpu), 0, -1, 1023, "-1", NULL, NULL, NULL,
@@ -99,10 +99,11 @@ static const struct key_def keys[] = {
 	  "the loop spins to each deadline instead of sleeping: a whole CPU for the lowest latency (deadline mode)" },
 	{ S_DAEMON, "lock_memory", K_BOOL, D(lock_memory), 0, 0, 0, "yes", NULL, NULL, NULL,
 	  "mlockall() at start-up so that the loop never page-faults" },
-	{ S_DAEMON, "control_socket", K_PATH, D(control_socket), 0, 0, 0, "auto", NULL, NULL,
-	  NULL, "Unix socket of avatargw-ctl; auto = $RUNTIME_DIRECTORY/control, else $XDG_RUNTIME_DIR/avatargw.control, else /tmp/avatargw-UID.control; empty = none" },
-	{ S_DAEMON, "describe_interval", K_DOUBLE, D(describe_interval), 0, 0.1, 3600, "1", "s", NULL,
-	  NULL, "period of the DESCRIBE messages (also sent when an avatar's description changes)" },
+	{ S_DAEMON, "control_socket", K_PATH, D(control_socket), 0, 0, 0, "auto", NULL, NULL, NULL,
+	  "Unix socket of avatargw-ctl; auto = $RUNTIME_DIRECTORY/control, else $XDG_RUNTIME_DIR/avatargw.control, "
+	  "else /tmp/avatargw-UID.control; empty = none" },
+	{ S_DAEMON, "describe_interval", K_DOUBLE, D(describe_interval), 0, 0.1, 3600, "1", "s", NULL, NULL,
+	  "period of the DESCRIBE messages (also sent when an avatar's description changes)" },
 	{ S_DAEMON, "log_level", K_ENUM, D(log_level), 0, 0, 0, "info", NULL, e_log, NULL,
 	  "least important messages logged" },
 	{ S_DAEMON, "record_dir", K_PATH, D(record_dir), 0, 0, 0, "", NULL, NULL, NULL,
@@ -172,7 +173,8 @@ static const struct key_def keys[] = {
 	{ S_SOURCE, "orientation_scale", K_DOUBLE, SRC(ori_scale), 0, 1e-12, 1e3, "0.001", NULL, NULL, "modbus",
 	  "radians per count (rotvec, rpy) or quaternion units per count (quat_*)" },
 	{ S_SOURCE, "orientation", K_ENUM, SRC(orientation), 0, 0, 0, "rotvec", NULL, e_ori, "modbus",
-	  "rotvec (rx ry rz, axis times angle), quat_wxyz, quat_xyzw, rpy (roll pitch yaw about fixed x, y, z) or none" },
+	  "rotvec (rx ry rz, axis times angle), quat_wxyz, quat_xyzw, rpy (roll pitch yaw about fixed x, y, z) or "
+	  "none" },
 	{ S_SOURCE, "word_order", K_ENUM, SRC(word_order), 0, 0, 0, "abcd", NULL, e_word, "modbus",
 	  "byte order of 32-bit values over two registers, A = most significant byte" },
 	{ S_SOURCE, "poll_rate", K_DOUBLE, SRC(poll_rate), 0, 0.1, 1000, "50", "Hz", NULL, "modbus",
@@ -212,8 +214,8 @@ static const struct key_def keys[] = {
 	  "USB interface number that takes the feature report switching between gamepad and motion mode" },
 	{ S_SOURCE, "model", K_ENUM, SRC(model), 0, 0, 0, "auto", NULL, e_model, "polhemus",
 	  "which Polhemus product to open: auto (any of them) or one; it sets the expected record header and rate" },
-	{ S_SOURCE, "sensors", K_NAMES, SRC(stations), 0, 1, CFG_MAX_STATIONS, "head left_hand right_hand", NULL,
-	  NULL, "polhemus", "sensor names of stations 1, 2, 3, ... in order (- skips a station)" },
+	{ S_SOURCE, "sensors", K_NAMES, SRC(stations), 0, 1, CFG_MAX_STATIONS, "head left_hand right_hand", NULL, NULL,
+	  "polhemus", "sensor names of stations 1, 2, 3, ... in order (- skips a station)" },
 	{ S_SOURCE, "hemisphere", K_VEC3, SRC(hemisphere), 0, -1, 1, "1 0 0", NULL, NULL, "polhemus",
 	  "the hemisphere the sensors stay in, a vector in the Polhemus source's frame (its H command)" },
 	{ S_SOURCE, "mount_SENSOR", K_MOUNT, 0, 0, -10, 10, "0 0 0", "m", NULL, NULL,
@@ -231,10 +233,8 @@ static const struct key_def keys[] = {
 	{ S_AVATAR, "right_hand", K_SENSOR, 2, 0, 0, 0, NULL, NULL, NULL, NULL, "right hand sensor, SOURCE/SENSOR" },
 	{ S_AVATAR, "shoulder", K_DOUBLE, AV(dims[0]), 0, 0.01, 1, "0.1732", "m", NULL, NULL,
 	  "chest centre to shoulder joint (the paper's Shoulder)" },
-	{ S_AVATAR, "upper_arm", K_DOUBLE, AV(dims[1]), 0, 0.05, 1, "0.2886", "m", NULL, NULL,
-	  "shoulder to elbow" },
-	{ S_AVATAR, "forearm", K_DOUBLE, AV(dims[2]), 0, 0.05, 1, "0.1955", "m", NULL, NULL,
-	  "elbow to wrist" },
+	{ S_AVATAR, "upper_arm", K_DOUBLE, AV(dims[1]), 0, 0.05, 1, "0.2886", "m", NULL, NULL, "shoulder to elbow" },
+	{ S_AVATAR, "forearm", K_DOUBLE, AV(dims[2]), 0, 0.05, 1, "0.1955", "m", NULL, NULL, "elbow to wrist" },
 	{ S_AVATAR, "hand", K_DOUBLE, AV(dims[3]), 0, 0, 0.5, "0", "m", NULL, NULL,
 	  "wrist to the hand sensor, along the hand" },
 	{ S_AVATAR, "head_offset", K_VEC3, AV(head_offset), 0, -1, 1, "0.008 -0.0386 0.0967", "m", NULL, NULL,
@@ -270,7 +270,8 @@ static const struct key_def keys[] = {
 
 	{ S_OUTPUT, "type", K_ENUM, OUT(type), 0, 0, 0, NULL, NULL, e_out, NULL,
 	  "udp (unicast), multicast, tcp or unix (streams: u32 length + message), modbus (a Modbus TCP server), "
-	  "can (SocketCAN frames); vrpn (a VRPN server), vmc or vrchat (OSC), websocket (JSON frames and the browser viewer)" },
+	  "can (SocketCAN frames); vrpn (a VRPN server), vmc or vrchat (OSC), websocket (JSON frames and the browser "
+	  "viewer)" },
 	{ S_OUTPUT, "address", K_STR, OUT(address), 0, 0, 0, "127.0.0.1", NULL, NULL, "udp multicast tcp modbus",
 	  "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: listen address" },
 	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "7770", NULL, NULL, "udp multicast tcp modbus",
@@ -278,9 +279,11 @@ static const struct key_def keys[] = {
 	{ S_OUTPUT, "interface", K_STR, OUT(interface), 0, 0, 0, "", NULL, NULL, "multicast can",
 	  "multicast: network interface (empty: the kernel's choice); can: CAN interface or fd:N (required)" },
 	{ S_OUTPUT, "address", K_STR, OUT(address), 0, 0, 0, "0.0.0.0", NULL, NULL, "vrpn",
-	  "listen address for TCP connections and UDP connection requests (0.0.0.0: every IPv4 interface, ::: every interface)" },
+	  "listen address for TCP connections and UDP connection requests (0.0.0.0: every IPv4 interface, ::: every "
+	  "interface)" },
 	{ S_OUTPUT, "address", K_STR, OUT(address), 0, 0, 0, "127.0.0.1", NULL, NULL, "vmc vrchat websocket",
-	  "vmc, vrchat: destination host; websocket: listen address (any other address shows the viewer to the network)" },
+	  "vmc, vrchat: destination host; websocket: listen address (any other address shows the viewer to the "
+	  "network)" },
 	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "3883", NULL, NULL, "vrpn",
 	  "TCP and UDP port of the VRPN server (clients name it as NAME@host:port when it is not 3883)" },
 	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "39539", NULL, NULL, "vmc",
@@ -289,22 +292,24 @@ static const struct key_def keys[] = {
 	  "UDP port VRChat listens on for OSC" },
 	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "7780", NULL, NULL, "websocket",
 	  "TCP port of the viewer page (HTTP) and its WebSocket" },
-	{ S_OUTPUT, "ttl", K_INT, OUT(ttl), 0, 0, 255, "1", NULL, NULL, "multicast",
-	  "multicast hop limit" },
+	{ S_OUTPUT, "ttl", K_INT, OUT(ttl), 0, 0, 255, "1", NULL, NULL, "multicast", "multicast hop limit" },
 	{ S_OUTPUT, "loopback", K_BOOL, OUT(mcast_loop), 0, 0, 0, "yes", NULL, NULL, "multicast",
 	  "deliver multicast to listeners on this host too" },
 	{ S_OUTPUT, "gso", K_BOOL, OUT(gso), 0, 0, 0, "yes", NULL, NULL, "udp multicast",
-	  "send runs of equal-length messages as one buffer the kernel cuts into datagrams (UDP_SEGMENT); off by itself where refused" },
+	  "send runs of equal-length messages as one buffer the kernel cuts into datagrams (UDP_SEGMENT); off by "
+	  "itself where refused" },
 	{ S_OUTPUT, "path", K_PATH, OUT(path), 0, 0, 0, "/run/avatargw/stream", NULL, NULL, "unix",
 	  "Unix socket path to listen on" },
-	{ S_OUTPUT, "max_clients", K_INT, OUT(max_clients), 0, 1, 256, "8", NULL, NULL, "tcp unix modbus vrpn websocket",
+	{ S_OUTPUT, "max_clients", K_INT, OUT(max_clients), 0, 1, 256, "8", NULL, NULL,
+	  "tcp unix modbus vrpn websocket",
 	  "stream subscribers (Modbus, VRPN, WebSocket clients) at most; more are refused" },
 	{ S_OUTPUT, "client_buffer", K_INT, OUT(client_buffer), 0, 4096, 16777216, "65536", "bytes", NULL,
 	  "tcp unix vrpn", "per-subscriber buffer; messages that do not fit are dropped and counted" },
 	{ S_OUTPUT, "device", K_STR, OUT(device), 0, 0, 0, "Avatar%d", NULL, NULL, "vrpn",
 	  "VRPN device name of each avatar, %d = its id: clients open Avatar0@host (tracker, analog and button)" },
 	{ S_OUTPUT, "udp", K_BOOL, OUT(udp), 0, 0, 0, "yes", NULL, NULL, "vrpn",
-	  "tracker and analog reports over UDP to clients that offer a UDP port (VRPN's low-latency class); no: all over TCP" },
+	  "tracker and analog reports over UDP to clients that offer a UDP port (VRPN's low-latency class); no: all "
+	  "over TCP" },
 	{ S_OUTPUT, "client_timeout", K_DOUBLE, OUT(client_timeout), 0, 0.1, 3600, "5", "s", NULL, "vrpn",
 	  "a client that has not finished its handshake, or whose buffer stays full, this long is dropped" },
 	{ S_OUTPUT, "rate", K_DOUBLE, OUT(rate), 0, 1, 240, "60", "Hz", NULL, "vmc vrchat",
@@ -316,11 +321,11 @@ static const struct key_def keys[] = {
 	{ S_OUTPUT, "head", K_BOOL, OUT(head), 0, 0, 0, "yes", NULL, NULL, "vrchat",
 	  "also send the head pose (/tracking/trackers/head/*), which VRChat uses to align our space with its own" },
 	{ S_OUTPUT, "www", K_PATH, OUT(www), 0, 0, 0, "auto", NULL, NULL, "websocket",
-	  "directory of the viewer page; auto = $AVATARGW_WWW, else ../share/avatargw/www or ../www beside the program" },
+	  "directory of the viewer page; auto = $AVATARGW_WWW, else ../share/avatargw/www or ../www beside the "
+	  "program" },
 	{ S_OUTPUT, "three", K_PATH, OUT(three), 0, 0, 0, "/usr/share/javascript/three", NULL, NULL, "websocket",
 	  "directory of three.js (Debian's libjs-three), served as /three/" },
-	{ S_OUTPUT, "decimate", K_INT, OUT(decimate), 0, 1, 1000, "1", NULL, NULL, NULL,
-	  "publish every n-th frame" },
+	{ S_OUTPUT, "decimate", K_INT, OUT(decimate), 0, 1, 1000, "1", NULL, NULL, NULL, "publish every n-th frame" },
 	{ S_OUTPUT, "register_base", K_INT, OUT(reg_base), 0, 0, 65535, "0", NULL, NULL, "modbus",
 	  "input register (0-based) where the first avatar's block starts (docs/MODBUS.md)" },
 	{ S_OUTPUT, "register_stride", K_INT, OUT(reg_stride), 0, 66, 65536, "100", NULL, NULL, "modbus",
@@ -363,8 +368,7 @@ struct parse {
 	int long_line;
 };
 
-static int failf(struct parse *p, struct cfg_where w, const char *fmt, ...)
-	__attribute__((format(printf, 3, 4)));
+static int failf(struct parse *p, struct cfg_where w, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 
 static int failf(struct parse *p, struct cfg_where w, const char *fmt, ...)
 {
@@ -677,10 +681,10 @@ static bool parse_nums(const char *s, double *v, int n)
 struct section_ctx {
 	struct parse *p;
 	int sect;
-	const char *name;   /* the section's name after its kind */
-	const char *full;   /* as written */
+	const char *name; /* the section's name after its kind */
+	const char *full; /* as written */
 	void *obj;
-	const char *type;   /* source driver or output type name (keys with only) */
+	const char *type; /* source driver or output type name (keys with only) */
 	struct cfg_where first;
 };
 
@@ -703,8 +707,7 @@ static const struct key_def *find_key(int sect, const char *name, const char *ty
 		if (keys[i].sect != sect)
 			continue;
 		/* mount_SENSOR: the key's name ends in a sensor's name */
-		if (strcmp(keys[i].name, name) &&
-		    !(keys[i].kind == K_MOUNT && !strncmp(name, "mount_", 6) && name[6]))
+		if (strcmp(keys[i].name, name) && !(keys[i].kind == K_MOUNT && !strncmp(name, "mount_", 6) && name[6]))
 			continue;
 		if (!keys[i].only || (type && word_in(type, keys[i].only)))
 			return &keys[i];
@@ -798,8 +801,8 @@ static int set_value(struct section_ctx *s, const struct key_def *k, const char 
 		if (!parse_num(value, v))
 			return failf(p, w, "[%s] %s: '%s' is not a number", s->full, k->name, value);
 		if (v[0] < k->min || v[0] > k->max)
-			return failf(p, w, "[%s] %s: %s is out of range [%g, %g]%s%s", s->full, k->name, value,
-				     k->min, k->max, k->unit ? " " : "", k->unit ? k->unit : "");
+			return failf(p, w, "[%s] %s: %s is out of range [%g, %g]%s%s", s->full, k->name, value, k->min,
+				     k->max, k->unit ? " " : "", k->unit ? k->unit : "");
 		if ((k->kind == K_INT || k->kind == K_U32) && v[0] != floor(v[0]))
 			return failf(p, w, "[%s] %s: '%s' is not a whole number", s->full, k->name, value);
 		if (k->kind == K_INT)
@@ -884,8 +887,10 @@ static int set_value(struct section_ctx *s, const struct key_def *k, const char 
 				return failf(p, w, "[%s] %s: more than %d names", s->full, k->name, (int)k->max);
 			if (strcmp(tok, "-")) {
 				if (!valid_name(tok))
-					return failf(p, w, "[%s] %s: '%s' is not a valid sensor name (1-%d of A-Z a-z 0-9 _ - .)",
-						     s->full, k->name, tok, CFG_NAME_MAX - 1);
+					return failf(
+						p, w,
+						"[%s] %s: '%s' is not a valid sensor name (1-%d of A-Z a-z 0-9 _ - .)",
+						s->full, k->name, tok, CFG_NAME_MAX - 1);
 				for (int i = 0; i < named; i++)
 					if (!strcmp(seen[i], tok))
 						return failf(p, w, "[%s] %s: '%s' named twice", s->full, k->name, tok);
@@ -1028,8 +1033,7 @@ static int resolve_sensor(struct parse *p, const char *full, const char *key, co
 	return failf(p, w, "[%s] %s: no [source %.*s] is configured", full, key, (int)sn, ref);
 }
 
-static int build_avatars(struct parse *p, const char *full, const char *name, struct cfg_avatar *tmpl,
-			 int *next_id)
+static int build_avatars(struct parse *p, const char *full, const char *name, struct cfg_avatar *tmpl, int *next_id)
 {
 	struct config *c = p->c;
 	const struct cfg_entry *e_count = entry_of(c, full, "count");
@@ -1075,14 +1079,14 @@ static int build_avatars(struct parse *p, const char *full, const char *name, st
 				pnum = strtol(prefix + pbase, NULL, 10);
 		}
 		if (count > 1 && pnum < 0)
-			return failf(p, e_person->where,
-				     "[%s] person: count = %d needs a numbered person (SOURCE/p0)", full, count);
+			return failf(p, e_person->where, "[%s] person: count = %d needs a numbered person (SOURCE/p0)",
+				     full, count);
 	} else if (count > 1) {
 		return failf(p, e_count->where, "[%s] count: needs person = SOURCE/p0", full);
 	}
 	if (c->n_avatars + count > CFG_MAX_AVATARS)
-		return failf(p, e_count ? e_count->where : (struct cfg_where){ -1, 0 },
-			     "[%s]: more than %d avatars", full, CFG_MAX_AVATARS);
+		return failf(p, e_count ? e_count->where : (struct cfg_where){ -1, 0 }, "[%s]: more than %d avatars",
+			     full, CFG_MAX_AVATARS);
 	for (int k = 0; k < count; k++) {
 		struct cfg_avatar *a = &c->avatar[c->n_avatars];
 
@@ -1157,7 +1161,8 @@ static int resolve_output_avatars(struct parse *p, const char *full, struct cfg_
 			size_t tl = strlen(tok);
 
 			/* a counted avatar's name selects all its copies */
-			if (!strcmp(an, tok) || (!strncmp(an, tok, tl) && an[tl] == '-' && isdigit((unsigned char)an[tl + 1]))) {
+			if (!strcmp(an, tok) ||
+			    (!strncmp(an, tok, tl) && an[tl] == '-' && isdigit((unsigned char)an[tl + 1]))) {
 				bool dup = false;
 
 				for (int j = 0; j < n; j++)
@@ -1190,14 +1195,18 @@ static int check_bus_output(struct parse *p, const char *full, const struct cfg_
 
 		last = o->base_id + 8 * (n - 1) + 4; /* 8 identifiers per avatar, 5 used (docs/CAN.md) */
 		if (last > max)
-			return failf(p, t->where, "[%s] base_id: %ld avatars need identifiers up to 0x%lX, above 0x%lX%s",
-				     full, n, last, max, o->extended_ids ? "" : " (extended_ids = yes gives 29 bits)");
+			return failf(p, t->where,
+				     "[%s] base_id: %ld avatars need identifiers up to 0x%lX, above 0x%lX%s", full, n,
+				     last, max, o->extended_ids ? "" : " (extended_ids = yes gives 29 bits)");
 	}
 	if (o->type == CFG_OUT_MODBUS) {
-		last = o->reg_base + (long)o->reg_stride * (n - 1) + 66 - 1; /* a block is 66 registers (docs/MODBUS.md) */
+		last = o->reg_base + (long)o->reg_stride * (n - 1) + 66 -
+		       1; /* a block is 66 registers (docs/MODBUS.md) */
 		if (last > 65535)
-			return failf(p, t->where, "[%s] register_base, register_stride: %ld avatars need registers up "
-				     "to %ld, above 65535", full, n, last);
+			return failf(p, t->where,
+				     "[%s] register_base, register_stride: %ld avatars need registers up "
+				     "to %ld, above 65535",
+				     full, n, last);
 	}
 	return 0;
 }
@@ -1210,8 +1219,8 @@ static int one_avatar(struct parse *p, const char *full, const struct cfg_output
 
 	if ((o->type != CFG_OUT_VMC && o->type != CFG_OUT_VRCHAT) || n == 1)
 		return 0;
-	return failf(p, e ? e->where : t->where, "[%s] avatars: a %s output carries one avatar, not %d (avatars = NAME)",
-		     full, e_out[o->type], n);
+	return failf(p, e ? e->where : t->where,
+		     "[%s] avatars: a %s output carries one avatar, not %d (avatars = NAME)", full, e_out[o->type], n);
 }
 
 static int build(struct parse *p)
@@ -1234,7 +1243,8 @@ static int build(struct parse *p)
 			const struct cfg_entry *b = entry_of(c, "daemon", "busy_wait");
 
 			return failf(p, b ? b->where : (struct cfg_where){ -1, 0 },
-				     "[daemon] busy_wait: only with mode = deadline (an event-mode loop waits for its sources)");
+				     "[daemon] busy_wait: only with mode = deadline (an event-mode loop waits for its "
+				     "sources)");
 		}
 	}
 	/* each kind in turn, sections in order of first appearance */
@@ -1254,9 +1264,10 @@ static int build(struct parse *p)
 				seen[n_seen++] = e->section;
 			if (kind < 0) {
 				if (pass == 0)
-					return failf(p, e->where,
-						     "[%s]: unknown section (daemon, source NAME, avatar NAME, output NAME)",
-						     e->section);
+					return failf(
+						p, e->where,
+						"[%s]: unknown section (daemon, source NAME, avatar NAME, output NAME)",
+						e->section);
 				continue;
 			}
 			if (kind != pass || kind == S_DAEMON) {
@@ -1290,8 +1301,8 @@ static int build(struct parse *p)
 					char names[160];
 
 					name_list(names, sizeof(names), driver_name, trackers_count, ", ");
-					return failf(p, t->where, "[%s] type: unknown driver '%s' (known: %s)", e->section,
-						     t->value, names);
+					return failf(p, t->where, "[%s] type: unknown driver '%s' (known: %s)",
+						     e->section, t->value, names);
 				}
 				for (int j = 0; j < c->n_sources; j++)
 					if (!strcmp(c->source[j].name, name))
@@ -1355,10 +1366,13 @@ static int build(struct parse *p)
 							     e->section);
 				}
 				if (o->type == CFG_OUT_MODBUS && !entry_of(c, e->section, "port"))
-					return failf(p, t->where, "[%s] port: missing (Modbus TCP's own port 502 needs "
-						     "CAP_NET_BIND_SERVICE; 1502 is usual otherwise)", e->section);
+					return failf(p, t->where,
+						     "[%s] port: missing (Modbus TCP's own port 502 needs "
+						     "CAP_NET_BIND_SERVICE; 1502 is usual otherwise)",
+						     e->section);
 				if (o->type == CFG_OUT_CAN && !entry_of(c, e->section, "interface"))
-					return failf(p, t->where, "[%s] interface: missing (a CAN interface such as can0)",
+					return failf(p, t->where,
+						     "[%s] interface: missing (a CAN interface such as can0)",
 						     e->section);
 				if (apply_section(&s) || resolve_output_avatars(p, e->section, o) ||
 				    check_bus_output(p, e->section, o) || one_avatar(p, e->section, o, t)) {
@@ -1390,8 +1404,7 @@ int config_load(struct config *c, const char *path, char *err, size_t errlen)
 	return 0;
 }
 
-static int load_ex(struct config *c, const char *path, const char *const *sets, int n_sets, char *err,
-		   size_t errlen)
+static int load_ex(struct config *c, const char *path, const char *const *sets, int n_sets, char *err, size_t errlen)
 {
 	struct parse p = { .c = c, .err = err, .errlen = errlen };
 
@@ -1428,8 +1441,7 @@ static int load_ex(struct config *c, const char *path, const char *const *sets, 
 	return build(&p);
 }
 
-int config_load_ex(struct config *c, const char *path, const char *const *sets, int n_sets, char *err,
-		   size_t errlen)
+int config_load_ex(struct config *c, const char *path, const char *const *sets, int n_sets, char *err, size_t errlen)
 {
 	if (load_ex(c, path, sets, n_sets, err, errlen)) {
 		config_free(c);
@@ -1546,9 +1558,9 @@ static void print_section(FILE *out, const struct config *c, int sect, const cha
 			for (int m = 0; m < src->n_mounts; m++) {
 				const struct cfg_mount *mt = &src->mount[m];
 
-				fprintf(out, "mount_%s = %.10g %.10g %.10g %.10g %.10g %.10g %.10g    ; %s\n", mt->sensor,
-					mt->p[0], mt->p[1], mt->p[2], mt->q[0], mt->q[1], mt->q[2], mt->q[3],
-					config_where(c, mt->where, w, sizeof(w)));
+				fprintf(out, "mount_%s = %.10g %.10g %.10g %.10g %.10g %.10g %.10g    ; %s\n",
+					mt->sensor, mt->p[0], mt->p[1], mt->p[2], mt->q[0], mt->q[1], mt->q[2],
+					mt->q[3], config_where(c, mt->where, w, sizeof(w)));
 			}
 			continue;
 		}

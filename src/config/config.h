@@ -37,12 +37,12 @@ enum cfg_log_level { CFG_LOG_ERR, CFG_LOG_WARNING, CFG_LOG_INFO, CFG_LOG_DEBUG }
 enum cfg_loop_mode { CFG_LOOP_DEADLINE, CFG_LOOP_EVENTS };
 
 struct cfg_daemon {
-	double rate;            /* Hz */
-	int mode;               /* enum cfg_loop_mode */
+	double rate; /* Hz */
+	int mode;    /* enum cfg_loop_mode */
 	double stale_ms;
-	int realtime_priority;  /* SCHED_FIFO, 0 = off */
-	int cpu;                /* -1 = no affinity */
-	bool busy_wait;         /* spin to each deadline instead of sleeping */
+	int realtime_priority; /* SCHED_FIFO, 0 = off */
+	int cpu;	       /* -1 = no affinity */
+	bool busy_wait;	       /* spin to each deadline instead of sleeping */
 	bool lock_memory;
 	char control_socket[CFG_PATH_MAX];
 	double describe_interval; /* seconds */
@@ -51,20 +51,20 @@ struct cfg_daemon {
 	/* recording (docs/RECORDING.md) */
 	char record_dir[CFG_PATH_MAX]; /* empty: no recording */
 	bool record_messages;
-	double record_flush;           /* s */
-	int record_flush_records;      /* 0: by time only */
+	double record_flush;	  /* s */
+	int record_flush_records; /* 0: by time only */
 	bool record_fsync;
-	double record_rotate_size;     /* MiB, 0: never */
-	double record_rotate_time;     /* s, 0: never */
-	int record_buffer;             /* KiB */
-	double record_keyframe_rate;   /* Hz, 0: every sample */
+	double record_rotate_size;   /* MiB, 0: never */
+	double record_rotate_time;   /* s, 0: never */
+	int record_buffer;	     /* KiB */
+	double record_keyframe_rate; /* Hz, 0: every sample */
 };
 
 /* mount_SENSOR = x y z [qw qx qy qz]: the tracked point in the sensor's frame */
 struct cfg_mount {
 	char sensor[CFG_NAME_MAX * 2];
-	double p[3];            /* m */
-	double q[4];            /* w x y z, unit */
+	double p[3]; /* m */
+	double q[4]; /* w x y z, unit */
 	struct cfg_where where;
 };
 
@@ -72,56 +72,56 @@ enum cfg_polhemus_model { CFG_PH_AUTO, CFG_PH_LIBERTY, CFG_PH_LIBERTY_HS, CFG_PH
 
 struct cfg_source {
 	char name[CFG_NAME_MAX];
-	int driver;             /* index into trackers_table */
+	int driver;		/* index into trackers_table */
 	struct cfg_where where; /* its first line */
 	/* every tracker */
-	double origin[3];       /* world position of the tracker's frame, m */
-	double yaw;             /* rotation of the tracker's frame about world z, rad */
+	double origin[3]; /* world position of the tracker's frame, m */
+	double yaw;	  /* rotation of the tracker's frame about world z, rad */
 	/* sim */
 	int people;
 	uint32_t seed;
-	double sample_rate;     /* Hz */
-	double spacing;         /* m between simulated people */
+	double sample_rate; /* Hz */
+	double spacing;	    /* m between simulated people */
 	/* replay */
 	char file[CFG_PATH_MAX];
 	double speed;
 	bool loop;
-	double start;           /* s into the file */
+	double start; /* s into the file */
 	/* modbus (a Modbus TCP device polled for poses) */
 	char address[CFG_PATH_MAX]; /* host of the device */
 	int port;
 	int unit_id;
-	int register_type;      /* enum cfg_reg_type */
-	int sensors;            /* modbus, can: poses read */
-	int sensor_stride;      /* registers from one sensor's block to the next */
+	int register_type; /* enum cfg_reg_type */
+	int sensors;	   /* modbus, can: poses read */
+	int sensor_stride; /* registers from one sensor's block to the next */
 	int pos_register;
-	int pos_format;         /* enum cfg_reg_format */
-	double pos_scale;       /* modbus, can: m per count */
+	int pos_format;	  /* enum cfg_reg_format */
+	double pos_scale; /* modbus, can: m per count */
 	int ori_register;
 	int ori_format;
-	double ori_scale;       /* rad (or unit quaternion) per count */
-	int orientation;        /* enum cfg_orientation */
-	int word_order;         /* enum cfg_word_order: 32-bit values */
-	double poll_rate;       /* Hz */
+	double ori_scale; /* rad (or unit quaternion) per count */
+	int orientation;  /* enum cfg_orientation */
+	int word_order;	  /* enum cfg_word_order: 32-bit values */
+	double poll_rate; /* Hz */
 	double timeout_ms;
 	/* can (SocketCAN frames) */
 	char interface[CFG_NAME_MAX]; /* "can0", or "fd:N" for an inherited descriptor */
-	int ori_id;             /* sensor k's orientation frame: ori_id + k */
-	int pos_id;             /* sensor k's position frame: pos_id + k; -1: none */
-	double quat_scale;      /* the count that stands for 1.0 */
-	int quat_order;         /* enum cfg_quat_order */
-	bool extended_ids;      /* 29-bit identifiers */
-	bool step;              /* advance on avatargw-ctl step only */
-	int interpolate;        /* 0 none, else 1 + enum kf_interp */
+	int ori_id;		      /* sensor k's orientation frame: ori_id + k */
+	int pos_id;		      /* sensor k's position frame: pos_id + k; -1: none */
+	double quat_scale;	      /* the count that stands for 1.0 */
+	int quat_order;		      /* enum cfg_quat_order */
+	bool extended_ids;	      /* 29-bit identifiers */
+	bool step;		      /* advance on avatargw-ctl step only */
+	int interpolate;	      /* 0 none, else 1 + enum kf_interp */
 	/* hydra, polhemus */
-	char device[CFG_PATH_MAX];  /* auto, or which one: hidraw node (hydra), USB port (polhemus) */
-	char capture[CFG_PATH_MAX]; /* a capture of raw reports to play instead of the device; "" = none */
-	char record[CFG_PATH_MAX];  /* write the raw reports read from the device to this capture; "" = none */
-	int hid_interface;          /* hydra: USB interface of the motion reports */
-	int control_interface;      /* hydra: USB interface that takes the mode feature report */
-	int model;                  /* polhemus: enum cfg_polhemus_model */
+	char device[CFG_PATH_MAX];   /* auto, or which one: hidraw node (hydra), USB port (polhemus) */
+	char capture[CFG_PATH_MAX];  /* a capture of raw reports to play instead of the device; "" = none */
+	char record[CFG_PATH_MAX];   /* write the raw reports read from the device to this capture; "" = none */
+	int hid_interface;	     /* hydra: USB interface of the motion reports */
+	int control_interface;	     /* hydra: USB interface that takes the mode feature report */
+	int model;		     /* polhemus: enum cfg_polhemus_model */
 	char stations[CFG_PATH_MAX]; /* polhemus: sensor names of stations 1, 2, ...; "-" = unused */
-	double hemisphere[3];       /* polhemus: the H command's vector, Polhemus frame */
+	double hemisphere[3];	     /* polhemus: the H command's vector, Polhemus frame */
 	/* every tracker */
 	int n_mounts;
 	struct cfg_mount mount[CFG_MAX_MOUNTS];
@@ -148,9 +148,9 @@ struct cfg_avatar {
 	char section[CFG_NAME_MAX]; /* NAME of the [avatar NAME] it comes from (count = N: NAME-k's NAME) */
 	uint16_t id;
 	struct cfg_sensor_ref sensor[3]; /* head, left hand, right hand */
-	double dims[4];                  /* shoulder, upper arm, forearm, hand, m */
-	double head_offset[3];           /* m, chest frame */
-	double lo[8], hi[8];             /* rad */
+	double dims[4];			 /* shoulder, upper arm, forearm, hand, m */
+	double head_offset[3];		 /* m, chest frame */
+	double lo[8], hi[8];		 /* rad */
 	int solver;
 	int max_iter;
 	double tol_mm;
@@ -164,11 +164,11 @@ enum cfg_output_type {
 	CFG_OUT_MULTICAST,
 	CFG_OUT_TCP,
 	CFG_OUT_UNIX,
-	CFG_OUT_MODBUS,    /* Modbus TCP server (docs/MODBUS.md) */
-	CFG_OUT_CAN,       /* joint angles as CAN frames (docs/CAN.md) */
-	CFG_OUT_VRPN,      /* VRPN server (docs/VRPN.md) */
-	CFG_OUT_VMC,       /* OSC, VMC protocol performer (docs/OSC.md) */
-	CFG_OUT_VRCHAT,    /* OSC, VRChat trackers */
+	CFG_OUT_MODBUS,	   /* Modbus TCP server (docs/MODBUS.md) */
+	CFG_OUT_CAN,	   /* joint angles as CAN frames (docs/CAN.md) */
+	CFG_OUT_VRPN,	   /* VRPN server (docs/VRPN.md) */
+	CFG_OUT_VMC,	   /* OSC, VMC protocol performer (docs/OSC.md) */
+	CFG_OUT_VRCHAT,	   /* OSC, VRChat trackers */
 	CFG_OUT_WEBSOCKET, /* JSON frames and the browser viewer (docs/VIEWER.md) */
 };
 
@@ -182,32 +182,32 @@ struct cfg_output {
 	int ttl;
 	bool mcast_loop;
 	bool gso;
-	char path[CFG_PATH_MAX];    /* unix */
+	char path[CFG_PATH_MAX]; /* unix */
 	int max_clients;
-	int client_buffer;          /* bytes per stream client */
-	int decimate;               /* publish every n-th frame */
+	int client_buffer; /* bytes per stream client */
+	int decimate;	   /* publish every n-th frame */
 	/* modbus */
-	int reg_base;               /* input register of the first avatar's block */
-	int reg_stride;             /* registers from one avatar's block to the next */
-	int word_order;             /* enum cfg_word_order */
-	int writable_regs;          /* holding registers clients may write, 0: writes refused */
-	double idle_timeout;        /* s, 0: never */
+	int reg_base;	     /* input register of the first avatar's block */
+	int reg_stride;	     /* registers from one avatar's block to the next */
+	int word_order;	     /* enum cfg_word_order */
+	int writable_regs;   /* holding registers clients may write, 0: writes refused */
+	double idle_timeout; /* s, 0: never */
 	/* can */
-	int base_id;                /* first CAN identifier */
+	int base_id; /* first CAN identifier */
 	bool extended_ids;
-	bool safe;                  /* clamp, limit the speed, send nothing stale */
-	double max_speed;           /* rad/s per joint (safe mode) */
-	char device[CFG_PATH_MAX];  /* vrpn: device name pattern, %d = avatar id */
-	bool udp;                   /* vrpn: low-latency reports over UDP when a client offers a port */
-	double client_timeout;      /* vrpn: s a client may stall or take over its handshake */
-	double rate;                /* vmc, vrchat, websocket: messages per second */
-	double torso;               /* vmc: shoulder line to hips, m */
-	bool head;                  /* vrchat: send the head for alignment */
-	char www[CFG_PATH_MAX];     /* websocket: the viewer page's directory, or auto */
-	char three[CFG_PATH_MAX];   /* websocket: libjs-three's directory */
+	bool safe;		   /* clamp, limit the speed, send nothing stale */
+	double max_speed;	   /* rad/s per joint (safe mode) */
+	char device[CFG_PATH_MAX]; /* vrpn: device name pattern, %d = avatar id */
+	bool udp;		   /* vrpn: low-latency reports over UDP when a client offers a port */
+	double client_timeout;	   /* vrpn: s a client may stall or take over its handshake */
+	double rate;		   /* vmc, vrchat, websocket: messages per second */
+	double torso;		   /* vmc: shoulder line to hips, m */
+	bool head;		   /* vrchat: send the head for alignment */
+	char www[CFG_PATH_MAX];	   /* websocket: the viewer page's directory, or auto */
+	char three[CFG_PATH_MAX];  /* websocket: libjs-three's directory */
 	/* which avatars: all when n_avatars == 0 */
 	int n_avatars;
-	uint16_t *avatar_ids;       /* resolved ids */
+	uint16_t *avatar_ids; /* resolved ids */
 	char avatar_list[CFG_PATH_MAX];
 };
 
@@ -247,8 +247,7 @@ int config_load(struct config *c, const char *path, char *err, size_t errlen);
  * splits section and key: "output local.port=7771"); path "builtin:NAME"
  * reads a file compiled into the daemon, without drop-ins.
  */
-int config_load_ex(struct config *c, const char *path, const char *const *sets, int n_sets, char *err,
-		   size_t errlen);
+int config_load_ex(struct config *c, const char *path, const char *const *sets, int n_sets, char *err, size_t errlen);
 int config_load_text(struct config *c, const char *name, const char *text, char *err, size_t errlen);
 void config_free(struct config *c);
 

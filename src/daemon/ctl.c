@@ -21,7 +21,8 @@
 
 static const char *const tracker_states[] = { "OK", "STALE", "FAULTY", "ENDED" };
 static const char *const sensor_states[] = { "OK", "STALE", "FAULTY" };
-static const char *const out_types[] = { "udp", "multicast", "tcp", "unix", "modbus", "can", "vrpn", "vmc", "vrchat", "websocket" };
+static const char *const out_types[] = { "udp", "multicast", "tcp", "unix",   "modbus",
+					 "can", "vrpn",	     "vmc", "vrchat", "websocket" };
 
 void ctl_resolve_path(const char *configured, char *out, size_t len)
 {
@@ -102,7 +103,8 @@ int ctl_rates_update(struct ctl_rates *r, struct gateway *g)
 		uint64_t s = stat_get(&g->trk[i].st.samples);
 
 		if (r->t > 0 && dt > 0)
-			r->trk_rate[i] = (double)(s - r->trk_samples[i]) / dt / (g->trk[i].n_sensors ? g->trk[i].n_sensors : 1);
+			r->trk_rate[i] =
+				(double)(s - r->trk_samples[i]) / dt / (g->trk[i].n_sensors ? g->trk[i].n_sensors : 1);
 		r->trk_samples[i] = s;
 	}
 	for (int i = 0; i < g->n_avatars; i++) {
@@ -158,33 +160,38 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 	clock_gettime(CLOCK_MONOTONIC, &ts);
 	up = (double)ts.tv_sec + ts.tv_nsec * 1e-9 - info->started;
 	if (json) {
-		fprintf(out, "{\"uptime_s\":%.3f,\"config\":\"%s\",\"source_id\":%u,\"rate_hz\":%.6g,\"mode\":\"%s\","
+		fprintf(out,
+			"{\"uptime_s\":%.3f,\"config\":\"%s\",\"source_id\":%u,\"rate_hz\":%.6g,\"mode\":\"%s\","
 			"\"realtime\":\"%s\",\"reloads\":%llu,\"reload_failures\":%llu,",
 			up, info->config_name, g->source_id, g->cfg.daemon.rate,
 			g->cfg.daemon.mode == CFG_LOOP_EVENTS ? "events" : "deadline", rts,
 			(unsigned long long)info->reloads, (unsigned long long)info->reload_failures);
-		fprintf(out, "\"loop\":{\"cycles\":%llu,\"overruns\":%llu,\"poll_errors\":%llu,"
+		fprintf(out,
+			"\"loop\":{\"cycles\":%llu,\"overruns\":%llu,\"poll_errors\":%llu,"
 			"\"work_us\":{\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f},"
 			"\"work_cpu_us\":{\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f},"
 			"\"wake_late_us\":{\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f}},",
 			(unsigned long long)stat_get(&g->st.cycles), (unsigned long long)stat_get(&g->st.overruns),
 			(unsigned long long)stat_get(&g->st.poll_errors), us(hist_percentile(wk, 0.5)),
-			us(hist_percentile(wk, 0.99)), us(stat_get(&wk->max_ns)), us(hist_percentile(&g->st.work_cpu, 0.5)),
-			us(hist_percentile(&g->st.work_cpu, 0.99)), us(stat_get(&g->st.work_cpu.max_ns)),
-			us(hist_percentile(wa, 0.5)),
+			us(hist_percentile(wk, 0.99)), us(stat_get(&wk->max_ns)),
+			us(hist_percentile(&g->st.work_cpu, 0.5)), us(hist_percentile(&g->st.work_cpu, 0.99)),
+			us(stat_get(&g->st.work_cpu.max_ns)), us(hist_percentile(wa, 0.5)),
 			us(hist_percentile(wa, 0.99)), us(stat_get(&wa->max_ns)));
 		fputs("\"sources\":[", out);
 		for (int i = 0; i < g->n_trackers; i++) {
 			struct tracker *t = &g->trk[i];
 
-			fprintf(out, "%s{\"name\":\"%s\",\"driver\":\"%s\",\"state\":\"%s\",\"sensors\":%d,"
+			fprintf(out,
+				"%s{\"name\":\"%s\",\"driver\":\"%s\",\"state\":\"%s\",\"sensors\":%d,"
 				"\"samples\":%llu,\"rate_hz\":%.2f,\"malformed\":%llu,\"faults\":%llu,\"lost\":%llu,"
 				"\"reconnects\":%llu",
 				i ? "," : "", t->name, t->drv->name,
-				tracker_states[atomic_load_explicit(&t->st.state, memory_order_relaxed) & 3], t->n_sensors,
-				(unsigned long long)stat_get(&t->st.samples), r && i < r->n_trackers ? r->trk_rate[i] : 0.0,
-				(unsigned long long)stat_get(&t->st.malformed), (unsigned long long)stat_get(&t->st.faults),
-				(unsigned long long)stat_get(&t->st.lost), (unsigned long long)stat_get(&t->st.reconnects));
+				tracker_states[atomic_load_explicit(&t->st.state, memory_order_relaxed) & 3],
+				t->n_sensors, (unsigned long long)stat_get(&t->st.samples),
+				r && i < r->n_trackers ? r->trk_rate[i] : 0.0,
+				(unsigned long long)stat_get(&t->st.malformed),
+				(unsigned long long)stat_get(&t->st.faults), (unsigned long long)stat_get(&t->st.lost),
+				(unsigned long long)stat_get(&t->st.reconnects));
 			if (t->drv->status) {
 				char dev[256];
 
@@ -202,33 +209,42 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 			struct gw_avatar *a = &g->av[i];
 			uint64_t solves = stat_get(&a->st.ik_solves);
 
-			fprintf(out, "%s{\"name\":\"%s\",\"id\":%u,\"state\":\"%s\",\"frames\":%llu,\"rate_hz\":%.2f,"
+			fprintf(out,
+				"%s{\"name\":\"%s\",\"id\":%u,\"state\":\"%s\",\"frames\":%llu,\"rate_hz\":%.2f,"
 				"\"new_frames\":%llu,\"stale_frames\":%llu,\"held\":%llu,\"ik_iters_per_arm\":%.3f,"
 				"\"ik_unreached\":%llu,\"nan_blocked\":%llu,"
 				"\"latency_us\":{\"n\":%llu,\"p50\":%.1f,\"p99\":%.1f,\"p999\":%.1f,\"max\":%.1f}}",
 				i ? "," : "", a->cfg->name, a->cfg->id,
 				sensor_states[atomic_load_explicit(&a->st.state, memory_order_relaxed) % 3],
-				(unsigned long long)stat_get(&a->st.frames), r && i < r->n_avatars ? r->av_rate[i] : 0.0,
+				(unsigned long long)stat_get(&a->st.frames),
+				r && i < r->n_avatars ? r->av_rate[i] : 0.0,
 				(unsigned long long)stat_get(&a->st.new_frames),
-				(unsigned long long)stat_get(&a->st.stale_frames), (unsigned long long)stat_get(&a->st.held),
+				(unsigned long long)stat_get(&a->st.stale_frames),
+				(unsigned long long)stat_get(&a->st.held),
 				solves ? (double)stat_get(&a->st.ik_iters) / (double)solves : 0.0,
 				(unsigned long long)stat_get(&a->st.ik_unreached),
 				(unsigned long long)stat_get(&a->st.nan_blocked),
-				(unsigned long long)stat_get(&a->st.latency.n), us(hist_percentile(&a->st.latency, 0.5)),
-				us(hist_percentile(&a->st.latency, 0.99)), us(hist_percentile(&a->st.latency, 0.999)),
-				us(stat_get(&a->st.latency.max_ns)));
+				(unsigned long long)stat_get(&a->st.latency.n),
+				us(hist_percentile(&a->st.latency, 0.5)), us(hist_percentile(&a->st.latency, 0.99)),
+				us(hist_percentile(&a->st.latency, 0.999)), us(stat_get(&a->st.latency.max_ns)));
 		}
 		fputs("],\"outputs\":[", out);
 		for (int i = 0; i < g->n_outputs; i++) {
 			struct output *o = &g->out[i];
 
-			fprintf(out, "%s{\"name\":\"%s\",\"type\":\"%s\",\"sent\":%llu,\"dropped\":%llu,\"errors\":%llu,"
-				"\"clients\":%llu,\"accepted\":%llu,\"refused\":%llu,\"closed\":%llu,\"gso_off\":%llu,\"malformed\":%llu",
-				i ? "," : "", o->name, out_types[o->cfg->type], (unsigned long long)stat_get(&o->st.sent),
-				(unsigned long long)stat_get(&o->st.dropped), (unsigned long long)stat_get(&o->st.errors),
-				(unsigned long long)stat_get(&o->st.clients), (unsigned long long)stat_get(&o->st.accepted),
-				(unsigned long long)stat_get(&o->st.refused), (unsigned long long)stat_get(&o->st.closed),
-				(unsigned long long)stat_get(&o->st.gso_off), (unsigned long long)stat_get(&o->st.malformed));
+			fprintf(out,
+				"%s{\"name\":\"%s\",\"type\":\"%s\",\"sent\":%llu,\"dropped\":%llu,\"errors\":%llu,"
+				"\"clients\":%llu,\"accepted\":%llu,\"refused\":%llu,\"closed\":%llu,\"gso_off\":%llu,"
+				"\"malformed\":%llu",
+				i ? "," : "", o->name, out_types[o->cfg->type],
+				(unsigned long long)stat_get(&o->st.sent), (unsigned long long)stat_get(&o->st.dropped),
+				(unsigned long long)stat_get(&o->st.errors),
+				(unsigned long long)stat_get(&o->st.clients),
+				(unsigned long long)stat_get(&o->st.accepted),
+				(unsigned long long)stat_get(&o->st.refused),
+				(unsigned long long)stat_get(&o->st.closed),
+				(unsigned long long)stat_get(&o->st.gso_off),
+				(unsigned long long)stat_get(&o->st.malformed));
 			if (o->ops->report)
 				o->ops->report(o, out, true);
 			fputc('}', out);
@@ -241,12 +257,15 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 
 			recorder_current_file(g->rec, file, sizeof(file));
 			recorder_ring_use(g->rec, &used, &cap);
-			fprintf(out, ",\"recorder\":{\"dir\":\"%s\",\"file\":\"%s\",\"files\":%llu,\"records\":%llu,"
-				"\"bytes\":%llu,\"flushes\":%llu,\"dropped\":%llu,\"skipped\":%llu,\"write_errors\":%llu,"
+			fprintf(out,
+				",\"recorder\":{\"dir\":\"%s\",\"file\":\"%s\",\"files\":%llu,\"records\":%llu,"
+				"\"bytes\":%llu,\"flushes\":%llu,\"dropped\":%llu,\"skipped\":%llu,\"write_errors\":%"
+				"llu,"
 				"\"buffer_used\":%llu,\"buffer_size\":%llu}",
 				g->cfg.daemon.record_dir, file, (unsigned long long)stat_get(&rs->files),
 				(unsigned long long)stat_get(&rs->records), (unsigned long long)stat_get(&rs->bytes),
-				(unsigned long long)stat_get(&rs->flushes), (unsigned long long)stat_get(&rs->dropped_records),
+				(unsigned long long)stat_get(&rs->flushes),
+				(unsigned long long)stat_get(&rs->dropped_records),
 				(unsigned long long)stat_get(&rs->skipped_records),
 				(unsigned long long)stat_get(&rs->write_errors), (unsigned long long)used,
 				(unsigned long long)cap);
@@ -255,9 +274,12 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 		return;
 	}
 	fprintf(out, "avatargw: up %.1f s, config %s, %.6g Hz %s, real-time %s, reloads %llu (%llu failed)\n", up,
-		info->config_name, g->cfg.daemon.rate, g->cfg.daemon.mode == CFG_LOOP_EVENTS ? "on events" : "to deadlines",
-		rts, (unsigned long long)info->reloads, (unsigned long long)info->reload_failures);
-	fprintf(out, "loop: %llu cycles, %llu overruns, work p50 %.1f p99 %.1f max %.1f us, wake-up late p99 %.1f max %.1f us\n",
+		info->config_name, g->cfg.daemon.rate,
+		g->cfg.daemon.mode == CFG_LOOP_EVENTS ? "on events" : "to deadlines", rts,
+		(unsigned long long)info->reloads, (unsigned long long)info->reload_failures);
+	fprintf(out,
+		"loop: %llu cycles, %llu overruns, work p50 %.1f p99 %.1f max %.1f us, wake-up late p99 %.1f max %.1f "
+		"us\n",
 		(unsigned long long)stat_get(&g->st.cycles), (unsigned long long)stat_get(&g->st.overruns),
 		us(hist_percentile(wk, 0.5)), us(hist_percentile(wk, 0.99)), us(stat_get(&wk->max_ns)),
 		us(hist_percentile(wa, 0.99)), us(stat_get(&wa->max_ns)));
@@ -284,14 +306,15 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 		struct gw_avatar *a = &g->av[i];
 		uint64_t solves = stat_get(&a->st.ik_solves);
 
-		fprintf(out, "%-16s %5u %-6s %8.1f %9llu %7llu %6llu %8.2f %9llu %5llu %10.1f/%.1f/%.1f\n", a->cfg->name,
-			a->cfg->id, sensor_states[atomic_load_explicit(&a->st.state, memory_order_relaxed) % 3],
+		fprintf(out, "%-16s %5u %-6s %8.1f %9llu %7llu %6llu %8.2f %9llu %5llu %10.1f/%.1f/%.1f\n",
+			a->cfg->name, a->cfg->id,
+			sensor_states[atomic_load_explicit(&a->st.state, memory_order_relaxed) % 3],
 			r && i < r->n_avatars ? r->av_rate[i] : 0.0, (unsigned long long)stat_get(&a->st.frames),
 			(unsigned long long)stat_get(&a->st.stale_frames), (unsigned long long)stat_get(&a->st.held),
 			solves ? (double)stat_get(&a->st.ik_iters) / (double)solves : 0.0,
-			(unsigned long long)stat_get(&a->st.ik_unreached), (unsigned long long)stat_get(&a->st.nan_blocked),
-			us(hist_percentile(&a->st.latency, 0.5)), us(hist_percentile(&a->st.latency, 0.99)),
-			us(stat_get(&a->st.latency.max_ns)));
+			(unsigned long long)stat_get(&a->st.ik_unreached),
+			(unsigned long long)stat_get(&a->st.nan_blocked), us(hist_percentile(&a->st.latency, 0.5)),
+			us(hist_percentile(&a->st.latency, 0.99)), us(stat_get(&a->st.latency.max_ns)));
 	}
 	fprintf(out, "\n%-16s %-9s %10s %9s %7s %8s\n", "OUTPUT", "TYPE", "SENT", "DROPPED", "ERRORS", "CLIENTS");
 	for (int i = 0; i < g->n_outputs; i++) {
@@ -312,11 +335,13 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 		char file[CFG_PATH_MAX + 64];
 
 		recorder_current_file(g->rec, file, sizeof(file));
-		fprintf(out, "\nrecording: %s\n  %llu files, %llu records, %.1f MiB written, %llu dropped (buffer full), "
+		fprintf(out,
+			"\nrecording: %s\n  %llu files, %llu records, %.1f MiB written, %llu dropped (buffer full), "
 			"%llu not written, %llu write errors\n",
 			file[0] ? file : "(no file open)", (unsigned long long)stat_get(&rs->files),
 			(unsigned long long)stat_get(&rs->records), (double)stat_get(&rs->bytes) / 1048576.0,
-			(unsigned long long)stat_get(&rs->dropped_records), (unsigned long long)stat_get(&rs->skipped_records),
+			(unsigned long long)stat_get(&rs->dropped_records),
+			(unsigned long long)stat_get(&rs->skipped_records),
 			(unsigned long long)stat_get(&rs->write_errors));
 	}
 }
@@ -360,8 +385,8 @@ static void ctl_sensors(FILE *out, const struct ctl_info *info, const char *name
 	for (int k = 0;; k++) {
 		uint32_t s = seqlock_peek(&g->probe.seq);
 
-		if (!(s & 1) && s - s0 >= 4 && (seqlock_read(&g->probe.seq, g->probe.words, w, GW_PROBE_WORDS), w[2]) ==
-							   (uint32_t)idx)
+		if (!(s & 1) && s - s0 >= 4 &&
+		    (seqlock_read(&g->probe.seq, g->probe.words, w, GW_PROBE_WORDS), w[2]) == (uint32_t)idx)
 			break;
 		if (k >= wait_ms) {
 			atomic_store_explicit(&g->probe.want, 0, memory_order_relaxed);
@@ -372,8 +397,9 @@ static void ctl_sensors(FILE *out, const struct ctl_info *info, const char *name
 	}
 	atomic_store_explicit(&g->probe.want, 0, memory_order_relaxed);
 	t = (uint64_t)w[0] | (uint64_t)w[1] << 32;
-	fprintf(out, "{\"avatar\":\"%s\",\"id\":%u,\"section\":\"%s\",\"section_avatars\":%d,\"hand\":%.4f,"
-		     "\"mono_ns\":%llu,\"sensors\":[",
+	fprintf(out,
+		"{\"avatar\":\"%s\",\"id\":%u,\"section\":\"%s\",\"section_avatars\":%d,\"hand\":%.4f,"
+		"\"mono_ns\":%llu,\"sensors\":[",
 		name, g->av[idx].cfg->id, g->av[idx].cfg->section, shared, (double)g->av[idx].av->body.dims.hand,
 		(unsigned long long)t);
 	for (int r = 0; r < FRAME_SENSORS; r++) {
@@ -383,8 +409,8 @@ static void ctl_sensors(FILE *out, const struct ctl_info *info, const char *name
 		memcpy(v, o + 1, sizeof(v));
 		fprintf(out, "%s{\"role\":\"%s\",\"state\":\"%s\"", r ? "," : "", roles[r], states[o[0] % 3]);
 		if (o[0] != WIRE_SENSOR_MISSING)
-			fprintf(out, ",\"p\":[%.6f,%.6f,%.6f],\"q\":[%.6f,%.6f,%.6f,%.6f]", v[0], v[1], v[2], v[3], v[4], v[5],
-				v[6]);
+			fprintf(out, ",\"p\":[%.6f,%.6f,%.6f],\"q\":[%.6f,%.6f,%.6f,%.6f]", v[0], v[1], v[2], v[3],
+				v[4], v[5], v[6]);
 		fputc('}', out);
 	}
 	fputs("]}\n", out);
@@ -484,7 +510,9 @@ void ctl_serve(int lfd, const struct ctl_info *info, bool *want_reload)
 	else if (!strncmp(req, "sensors ", 8))
 		ctl_sensors(out, info, req + 8);
 	else
-		fprintf(out, "error: unknown request '%s' (status, status json, reload, step [N] [SOURCE], sensors AVATAR)\n",
+		fprintf(out,
+			"error: unknown request '%s' (status, status json, reload, step [N] [SOURCE], sensors "
+			"AVATAR)\n",
 			req);
 	fclose(out);
 	for (size_t off = 0; off < len;) {

@@ -16,7 +16,7 @@
 void ctl_resolve_path(const char *configured, char *out, size_t len);
 
 struct ctl_rates {
-	double t;                  /* CLOCK_MONOTONIC seconds of the last sample */
+	double t; /* CLOCK_MONOTONIC seconds of the last sample */
 	int n_trackers, n_avatars;
 	uint64_t *trk_samples;
 	uint64_t *av_frames;
@@ -28,7 +28,7 @@ struct ctl_info {
 	struct gateway *g;
 	struct loop *l;
 	struct ctl_rates *rates;
-	double started;            /* CLOCK_MONOTONIC seconds */
+	double started; /* CLOCK_MONOTONIC seconds */
 	const char *config_name;
 	uint64_t reloads, reload_failures;
 };

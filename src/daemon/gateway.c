@@ -91,8 +91,10 @@ static bool describe_changed(const struct gw_avatar *a, const struct gw_avatar *
 static void describe_soon(struct gateway *g, uint64_t now_ns)
 {
 	for (int i = 0; i < g->n_avatars; i++)
-		g->av[i].next_describe_ns = g->n_avatars <= GW_DESCRIBE_AT_ONCE ? 0 :
-			now_ns + GW_DESCRIBE_BURST_NS * (uint64_t)i / (uint64_t)g->n_avatars;
+		g->av[i].next_describe_ns =
+			g->n_avatars <= GW_DESCRIBE_AT_ONCE
+				? 0
+				: now_ns + GW_DESCRIBE_BURST_NS * (uint64_t)i / (uint64_t)g->n_avatars;
 }
 
 /*
@@ -338,7 +340,8 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 			s[r] = pf->state[r] == WIRE_SENSOR_MISSING ? &nan_dq : &pf->sensor[r];
 		for (int r = 0; r < FRAME_SENSORS; r++)
 			missing |= (uint8_t)((pf->state[r] == WIRE_SENSOR_MISSING) << r);
-		if (pf->state[0] != WIRE_SENSOR_MISSING && !pf->new_sample && a->have_pose && missing == a->solved_missing) {
+		if (pf->state[0] != WIRE_SENSOR_MISSING && !pf->new_sample && a->have_pose &&
+		    missing == a->solved_missing) {
 			/*
 			 * The very samples of the last solve: its posture is the answer.
 			 * Solving again would only move the redundancy a little further

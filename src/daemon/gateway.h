@@ -21,13 +21,13 @@ struct gw_avatar_stats {
 	_Atomic uint64_t frames;       /* published */
 	_Atomic uint64_t new_frames;   /* with a new sample */
 	_Atomic uint64_t stale_frames; /* with a sensor STALE or MISSING */
-	_Atomic uint64_t held;         /* no head: previous posture repeated */
+	_Atomic uint64_t held;	       /* no head: previous posture repeated */
 	_Atomic uint64_t ik_solves;    /* arms solved */
 	_Atomic uint64_t ik_iters;     /* Newton iterations, summed */
 	_Atomic uint64_t ik_unreached; /* arms whose target was out of reach or invalid */
 	_Atomic uint64_t nan_blocked;  /* frames not published because a number was not finite */
-	_Atomic uint32_t state;        /* worst sensor state of the last frame (enum wire_sensor_state) */
-	struct hist latency;           /* newest sample's arrival -> datagrams sent */
+	_Atomic uint32_t state;	       /* worst sensor state of the last frame (enum wire_sensor_state) */
+	struct hist latency;	       /* newest sample's arrival -> datagrams sent */
 };
 
 /*
@@ -38,30 +38,30 @@ struct gw_avatar_stats {
  */
 struct gw_avatar {
 	const struct cfg_avatar *cfg;
-	uint16_t id;                /* cfg->id, without a trip to the configuration every cycle */
+	uint16_t id; /* cfg->id, without a trip to the configuration every cycle */
 	const struct avatar *av;
 	const struct ik_kin *kin;
 	struct ik_opts opts;
 	struct frame_source fs;
 	struct avatar_pose pose;
 	bool have_pose;
-	uint8_t solved_missing;     /* sensors MISSING at the last solve (bit per sensor) */
+	uint8_t solved_missing; /* sensors MISSING at the last solve (bit per sensor) */
 	uint32_t seq, dseq;
 	uint32_t describe_rev;
 	uint64_t next_describe_ns;
-	uint64_t pose_arrival_ns;   /* arrival of the newest sample of the frame just queued, 0: none */
+	uint64_t pose_arrival_ns; /* arrival of the newest sample of the frame just queued, 0: none */
 	uint16_t describe_len;
-	uint8_t *describe_msg;      /* WIRE_MAX_MSG bytes in the gateway's describe arena */
+	uint8_t *describe_msg; /* WIRE_MAX_MSG bytes in the gateway's describe arena */
 	struct gw_avatar_stats st;
 };
 
 struct gw_stats {
 	_Atomic uint64_t cycles;
-	_Atomic uint64_t overruns;     /* cycles that started after their deadline had passed the next one */
+	_Atomic uint64_t overruns; /* cycles that started after their deadline had passed the next one */
 	_Atomic uint64_t poll_errors;
-	struct hist work;              /* time of one cycle's work */
-	struct hist work_cpu;          /* CPU time of the loop thread in it (wall minus preemption) */
-	struct hist wake;              /* lateness of the wake-up after the deadline */
+	struct hist work;     /* time of one cycle's work */
+	struct hist work_cpu; /* CPU time of the loop thread in it (wall minus preemption) */
+	struct hist wake;     /* lateness of the wake-up after the deadline */
 };
 
 /*
@@ -74,7 +74,7 @@ struct gw_stats {
  * comparison per cycle otherwise, never a wait.
  */
 #define GW_PROBE_SENSOR_WORDS 8 /* state, then x y z, qw qx qy qz as float bits */
-#define GW_PROBE_HEAD 3         /* the cycle's time (2 words), the avatar's index */
+#define GW_PROBE_HEAD 3		/* the cycle's time (2 words), the avatar's index */
 #define GW_PROBE_WORDS (GW_PROBE_HEAD + FRAME_SENSORS * GW_PROBE_SENSOR_WORDS)
 
 struct gw_probe {
@@ -91,10 +91,10 @@ struct gateway {
 	struct gw_avatar *av;
 	int n_outputs;
 	struct output out[CFG_MAX_OUTPUTS];
-	uint8_t *arena;           /* one FRAME per avatar and cycle, frame_slot bytes apart */
+	uint8_t *arena; /* one FRAME per avatar and cycle, frame_slot bytes apart */
 	size_t frame_slot;
-	uint8_t *describe;        /* one DESCRIBE per avatar, sent from here */
-	struct avatar *bodies;    /* the distinct bodies the avatars point to */
+	uint8_t *describe;     /* one DESCRIBE per avatar, sent from here */
+	struct avatar *bodies; /* the distinct bodies the avatars point to */
 	int n_bodies;
 	struct out_msg *msgs;
 	struct pose_frame *frames; /* per avatar, the frame of this cycle */
@@ -102,7 +102,7 @@ struct gateway {
 	uint64_t stale_ns;
 	uint64_t describe_ns;
 	struct gw_stats st;
-	struct recorder *rec;     /* recording this gateway (record/recorder.h), or NULL */
+	struct recorder *rec; /* recording this gateway (record/recorder.h), or NULL */
 	struct gw_probe probe;
 };
 

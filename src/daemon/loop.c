@@ -28,9 +28,9 @@ struct loop {
 	pthread_t thread;
 	pthread_mutex_t mu;
 	pthread_cond_t cv;
-	struct gateway *g;   /* guarded by mu while paused */
+	struct gateway *g; /* guarded by mu while paused */
 	_Atomic int cmd;
-	bool paused;         /* guarded by mu */
+	bool paused; /* guarded by mu */
 	_Atomic uint64_t heartbeat;
 	int rt;
 	int epfd;

@@ -56,7 +56,8 @@ static void usage(FILE *out)
 		"  -V, --version\n"
 		"  -h, --help\n"
 		"\n"
-		"Signals: SIGHUP reloads the configuration, SIGTERM/SIGINT stop. avatargw-ctl status shows the state.\n");
+		"Signals: SIGHUP reloads the configuration, SIGTERM/SIGINT stop. avatargw-ctl status shows the "
+		"state.\n");
 }
 
 static double mono_s(void)
@@ -135,7 +136,8 @@ static int list_devices(void)
 	if (!n)
 		printf("no supported tracker found: Razer Hydra (1532:0300), Polhemus Liberty, Liberty HS, Patriot "
 		       "(0f44:ff12, ff20, ef12, ef20; ff11, ff21, ef11, ef21 before their firmware).\n"
-		       "Is it plugged in (lsusb)? README.md, \"Setting up a tracker\", goes through it step by step.\n");
+		       "Is it plugged in (lsusb)? README.md, \"Setting up a tracker\", goes through it step by "
+		       "step.\n");
 	return 0;
 }
 
@@ -204,8 +206,9 @@ static void final_line(struct gateway *g, struct recorder *rec)
 			 (unsigned long long)stat_get(&rs->records), (unsigned long long)stat_get(&rs->dropped_records),
 			 (unsigned long long)stat_get(&rs->write_errors));
 	}
-	pr_info("stopped after %llu cycles, %llu overruns, %llu poll errors%s", (unsigned long long)stat_get(&g->st.cycles),
-		(unsigned long long)stat_get(&g->st.overruns), (unsigned long long)stat_get(&g->st.poll_errors), tail);
+	pr_info("stopped after %llu cycles, %llu overruns, %llu poll errors%s",
+		(unsigned long long)stat_get(&g->st.cycles), (unsigned long long)stat_get(&g->st.overruns),
+		(unsigned long long)stat_get(&g->st.poll_errors), tail);
 }
 
 static void status_line(struct gateway *g)
@@ -247,10 +250,14 @@ static int lock_memory(void)
 int main(int argc, char **argv)
 {
 	static const struct option opts[] = {
-		{ "config", required_argument, NULL, 'c' }, { "demo", no_argument, NULL, 'D' },
-		{ "set", required_argument, NULL, 's' },    { "check-config", no_argument, NULL, 'C' },
-		{ "keys", no_argument, NULL, 'K' },         { "version", no_argument, NULL, 'V' },
-		{ "help", no_argument, NULL, 'h' },         { "list-devices", no_argument, NULL, 'L' },
+		{ "config", required_argument, NULL, 'c' },
+		{ "demo", no_argument, NULL, 'D' },
+		{ "set", required_argument, NULL, 's' },
+		{ "check-config", no_argument, NULL, 'C' },
+		{ "keys", no_argument, NULL, 'K' },
+		{ "version", no_argument, NULL, 'V' },
+		{ "help", no_argument, NULL, 'h' },
+		{ "list-devices", no_argument, NULL, 'L' },
 		{ NULL, 0, NULL, 0 },
 	};
 	static struct gateway gws[2];

@@ -39,8 +39,7 @@ void hist_add(struct hist *h, uint64_t ns)
 {
 	int b = bucket_of(ns / 1000);
 
-	atomic_store_explicit(&h->b[b], atomic_load_explicit(&h->b[b], memory_order_relaxed) + 1,
-			      memory_order_relaxed);
+	atomic_store_explicit(&h->b[b], atomic_load_explicit(&h->b[b], memory_order_relaxed) + 1, memory_order_relaxed);
 	stat_add(&h->n, 1);
 	if (ns > atomic_load_explicit(&h->max_ns, memory_order_relaxed))
 		atomic_store_explicit(&h->max_ns, ns, memory_order_relaxed);

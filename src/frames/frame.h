@@ -12,15 +12,15 @@
 #define FRAME_SENSORS 3 /* head, left hand, right hand (cfg_sensor_roles) */
 
 struct pose_frame {
-	struct dq sensor[FRAME_SENSORS]; /* world; meaningful when state != MISSING */
-	uint8_t state[FRAME_SENSORS];    /* enum wire_sensor_state */
-	uint32_t buttons[FRAME_SENSORS]; /* the sensor's buttons (bit i: button i), 0 when it has none */
+	struct dq sensor[FRAME_SENSORS];		/* world; meaningful when state != MISSING */
+	uint8_t state[FRAME_SENSORS];			/* enum wire_sensor_state */
+	uint32_t buttons[FRAME_SENSORS];		/* the sensor's buttons (bit i: button i), 0 when it has none */
 	float analog[FRAME_SENSORS][SENSOR_ANALOG_MAX]; /* its analog values, 0 when absent */
-	uint8_t inputs;                  /* bit i: sensor i has buttons and analog values, and they are current */
-	uint64_t age_ns[FRAME_SENSORS];  /* now - arrival */
-	uint64_t t_ns;                   /* newest tracker sample time, CLOCK_REALTIME */
-	uint64_t arrival_ns;             /* CLOCK_MONOTONIC arrival of the newest sample */
-	bool new_sample;                 /* a sample arrived since the previous frame */
+	uint8_t inputs;			/* bit i: sensor i has buttons and analog values, and they are current */
+	uint64_t age_ns[FRAME_SENSORS]; /* now - arrival */
+	uint64_t t_ns;			/* newest tracker sample time, CLOCK_REALTIME */
+	uint64_t arrival_ns;		/* CLOCK_MONOTONIC arrival of the newest sample */
+	bool new_sample;		/* a sample arrived since the previous frame */
 };
 
 struct frame_source {

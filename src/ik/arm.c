@@ -6,7 +6,7 @@
 #include "ik/arm.h"
 #include "ik_private.h"
 
-#define DEG(x) SC_C((x) * 0.017453292519943295)
+#define DEG(x) SC_C((x)*0.017453292519943295)
 
 void arm_default_limits(struct arm_limits *out)
 {
@@ -125,8 +125,6 @@ static inline void col_z(const struct quat *q, struct vec3 *o)
 	o->y = 2 * (sc_mul(q->y, q->z) - sc_mul(q->w, q->x));
 	o->z = SC_C(1) - 2 * (sc_mul(q->x, q->x) + sc_mul(q->y, q->y));
 }
-
-
 
 #if IK_COMPACT
 /*

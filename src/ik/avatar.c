@@ -87,7 +87,8 @@ static sc_t hands_heading(const struct dq *lhand, const struct dq *rhand, sc_t c
 	 * fading out from 45 to 60 degrees off the head's heading (linearly in
 	 * the cosine: no angle computed): no jump of the chest when it crosses
 	 */
-	return sc_mul(wgt, sc_clamp(sc_div(sc_mul(*hx, cy) + sc_mul(*hy, sy) - COS60, COS45 - COS60), SC_C(0), SC_C(1)));
+	return sc_mul(wgt,
+		      sc_clamp(sc_div(sc_mul(*hx, cy) + sc_mul(*hy, sy) - COS60, COS45 - COS60), SC_C(0), SC_C(1)));
 }
 
 /*
@@ -300,13 +301,13 @@ static sc_t tdot(const sc_t a[3][3], const sc_t b[3][3], int i, int j)
  * back when the line is vertical) toward d1 = ax x d0.
  */
 struct arm_goal {
-	sc_t R[3][3];        /* target orientation */
-	struct vec3 w, s;    /* wrist centre, shoulder */
-	struct vec3 ax;      /* unit, shoulder -> wrist */
-	struct vec3 d0, d1;  /* unit, across ax */
-	sc_t x, r;           /* the circle: centre s + x ax, radius r */
+	sc_t R[3][3];	    /* target orientation */
+	struct vec3 w, s;   /* wrist centre, shoulder */
+	struct vec3 ax;	    /* unit, shoulder -> wrist */
+	struct vec3 d0, d1; /* unit, across ax */
+	sc_t x, r;	    /* the circle: centre s + x ax, radius r */
 	sc_t q1, s1, c1;
-	bool in_reach;       /* false: the wrist is beyond A + F, the circle is the straight arm's */
+	bool in_reach; /* false: the wrist is beyond A + F, the circle is the straight arm's */
 };
 
 static bool goal_init(const struct arm *a, const struct ik_target *t, sc_t q1, struct arm_goal *g)
@@ -387,9 +388,9 @@ static bool goal_init(const struct arm *a, const struct ik_target *t, sc_t q1, s
  * so the cost is k0 + k1 cos phi + k2 sin phi + k3 cos 2phi + k4 sin 2phi,
  * without one angle computed.
  */
-#define W6 SC_C(3.2422778766)  /* 2 / SIG6^2, SIG6 = 45 degrees about MU6 */
-#define W7 SC_C(2.7194094061)  /* 1 / SIG7^2 - W6 / 2 - W8 / 2, SIG7 = 25 degrees */
-#define W8 SC_C(1.8237813055)  /* 2 / SIG8^2, SIG8 = 60 degrees */
+#define W6 SC_C(3.2422778766)		 /* 2 / SIG6^2, SIG6 = 45 degrees about MU6 */
+#define W7 SC_C(2.7194094061)		 /* 1 / SIG7^2 - W6 / 2 - W8 / 2, SIG7 = 25 degrees */
+#define W8 SC_C(1.8237813055)		 /* 2 / SIG8^2, SIG8 = 60 degrees */
 #define COS_MU6 SC_C(0.8660254037844387) /* MU6 = -30 degrees: the forearm at rest, a little pronated */
 #define SIN_MU6 SC_C(-0.5)
 
@@ -444,11 +445,13 @@ static void goal_wrist_cost(const struct arm *a, const struct arm_goal *g, struc
 #define SWIVEL_STEPS 12
 
 /* cos and sin of k * 30 degrees, k = 0..5 (k + 6: both negated), and of 2 k * 30 degrees */
-static const sc_t cos30k[6] = { SC_C(1), SC_C(0.8660254037844387), SC_C(0.5), SC_C(0), SC_C(-0.5), SC_C(-0.8660254037844387) };
-static const sc_t sin30k[6] = { SC_C(0), SC_C(0.5), SC_C(0.8660254037844387), SC_C(1), SC_C(0.8660254037844387), SC_C(0.5) };
+static const sc_t cos30k[6] = { SC_C(1),    SC_C(0.8660254037844387), SC_C(0.5), SC_C(0),
+				SC_C(-0.5), SC_C(-0.8660254037844387) };
+static const sc_t sin30k[6] = { SC_C(0),  SC_C(0.5), SC_C(0.8660254037844387), SC_C(1), SC_C(0.8660254037844387),
+				SC_C(0.5) };
 static const sc_t cos60k[6] = { SC_C(1), SC_C(0.5), SC_C(-0.5), SC_C(-1), SC_C(-0.5), SC_C(0.5) };
-static const sc_t sin60k[6] = { SC_C(0), SC_C(0.8660254037844387), SC_C(0.8660254037844387), SC_C(0), SC_C(-0.8660254037844387),
-				SC_C(-0.8660254037844387) };
+static const sc_t sin60k[6] = { SC_C(0), SC_C(0.8660254037844387),  SC_C(0.8660254037844387),
+				SC_C(0), SC_C(-0.8660254037844387), SC_C(-0.8660254037844387) };
 
 /* (c, s) turned by a (|a| <= 15 degrees; Taylor to a^5, off by under 1e-6) */
 static void rot_small(sc_t a, sc_t *c, sc_t *s)
@@ -592,7 +595,7 @@ static bool goal_posture(const struct arm *a, const struct arm_goal *g, sc_t phi
 	return goal_posture_cs(a, g, cp, sp, q, v_arm, v_wrist);
 }
 
-#define MISFIT_RATE SC_C(0.02)  /* of the running mean per frame */
+#define MISFIT_RATE SC_C(0.02) /* of the running mean per frame */
 /*
  * Besides the wrist: a pull of the elbow toward its natural place, down and
  * turned 30 degrees out (where people's elbows are when nothing else says),
@@ -835,8 +838,8 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 			ik_solve(a, kin, t, NULL, o, base, res);
 			pq = base;
 		}
-		if (hand_elbow_posture(a, t, !prev, prev ? prev->hand_misfit[side] : SC_C(0),
-				       &out->hand_misfit[side], pref))
+		if (hand_elbow_posture(a, t, !prev, prev ? prev->hand_misfit[side] : SC_C(0), &out->hand_misfit[side],
+				       pref))
 			seed = pref;
 		else
 			seed = pq;
@@ -897,12 +900,14 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 		no.max_evals = 0;
 		ik_solve_pose(a, kin, t, prev->q[side], &no, q2, &r2, &s2);
 		if (!(r2.err.pos <= HOLD_POS) && hold_swivel(a, t, prev->q[side], &prev->seg[side], q2)) {
-			/* Newton gave up the hand's place for its orientation: the hand on its place at the elbow's swivel */
+			/* Newton gave up the hand's place for its orientation: the hand on its place at the elbow's
+			 * swivel */
 			posture_err(a, t, q2, &r2.err);
 			arm_fk_pose(a, q2, &s2);
 			r2.flags = IK_UNREACHABLE | at_limits(a, q2);
 		}
-		if (r2.err.pos <= HOLD_POS && r2.err.rot <= res->err.rot + HOLD_ROT && !arm_jumped(&prev->seg[side], &s2)) {
+		if (r2.err.pos <= HOLD_POS && r2.err.rot <= res->err.rot + HOLD_ROT &&
+		    !arm_jumped(&prev->seg[side], &s2)) {
 			q_set(q, q2);
 			*res = r2;
 			out->seg[side] = s2;
@@ -934,7 +939,8 @@ static bool wrist_in_reach(const struct arm *a, const struct ik_target *t)
 	const struct arm_dims *dm = &a->dims;
 	const struct quat *r = &t->r;
 	sc_t sx = a->side == ARM_LEFT ? -dm->shoulder : dm->shoulder, reach = dm->arm + dm->forearm;
-	struct vec3 hy = { 2 * (sc_mul(r->x, r->y) - sc_mul(r->w, r->z)), SC_C(1) - 2 * (sc_mul(r->x, r->x) + sc_mul(r->z, r->z)),
+	struct vec3 hy = { 2 * (sc_mul(r->x, r->y) - sc_mul(r->w, r->z)),
+			   SC_C(1) - 2 * (sc_mul(r->x, r->x) + sc_mul(r->z, r->z)),
 			   2 * (sc_mul(r->y, r->z) + sc_mul(r->w, r->x)) };
 	struct vec3 d = { t->p.x - sc_mul(dm->hand, hy.x) - sx, t->p.y - sc_mul(dm->hand, hy.y),
 			  t->p.z - sc_mul(dm->hand, hy.z) };
@@ -1015,8 +1021,8 @@ static bool reach_chest(const struct avatar *av, const struct dq *const hand[2],
 /* the half angles of 15, 30, 45, 60, 75 degrees: Rx(-pitch) = (cos, -sin, 0, 0) */
 static const sc_t bow_c[BOW_TRIES] = { SC_C(0.9914448613738104), SC_C(0.9659258262890683), SC_C(0.9238795325112867),
 				       SC_C(0.8660254037844387), SC_C(0.7933533402912352) };
-static const sc_t bow_s[BOW_TRIES] = { SC_C(0.13052619222005157), SC_C(0.25881904510252074),
-				       SC_C(0.3826834323650898), SC_C(0.5), SC_C(0.6087614290087207) };
+static const sc_t bow_s[BOW_TRIES] = { SC_C(0.13052619222005157), SC_C(0.25881904510252074), SC_C(0.3826834323650898),
+				       SC_C(0.5), SC_C(0.6087614290087207) };
 
 /* more than BOW_MISS: a millimetre, what the fidelity goals call a hand on its sensor */
 #define BOW_MISS SC_C(0.001)
@@ -1038,7 +1044,8 @@ static int bow_eval(const struct ik_target t[2], const struct avatar_pose *p, sc
 	*lie = 0;
 	for (side = 0; side < 2; side++) {
 		const struct arm_pose *sg = &p->seg[side];
-		struct vec3 ua = { sg->elbow.x - sg->shoulder.x, sg->elbow.y - sg->shoulder.y, sg->elbow.z - sg->shoulder.z };
+		struct vec3 ua = { sg->elbow.x - sg->shoulder.x, sg->elbow.y - sg->shoulder.y,
+				   sg->elbow.z - sg->shoulder.z };
 		sc_t n = v3_norm(&ua);
 
 		if (!t[side].valid)
@@ -1151,9 +1158,9 @@ static unsigned bow(const struct avatar *av, const struct ik_kin *kin, const str
 	return flags;
 }
 
-unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const struct ik_opts *o,
-		      const struct dq *head, const struct dq *lhand, const struct dq *rhand,
-		      const struct avatar_pose *prev, struct avatar_pose *out)
+unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const struct ik_opts *o, const struct dq *head,
+		      const struct dq *lhand, const struct dq *rhand, const struct avatar_pose *prev,
+		      struct avatar_pose *out)
 {
 	const struct dq *hand[2] = { rhand, lhand };
 	const struct ik_opts *o1 = o;

@@ -86,7 +86,8 @@ void quat_mul(const struct quat *a, const struct quat *b, struct quat *out)
 
 void quat_axis(const struct quat *q, int k, struct vec3 *out)
 {
-	/* with i, j the next axes: R e_k = (1 - 2 (u_i^2 + u_j^2)) e_k + 2 (u_k u_i + w u_j) e_i + 2 (u_k u_j - w u_i) e_j */
+	/* with i, j the next axes: R e_k = (1 - 2 (u_i^2 + u_j^2)) e_k + 2 (u_k u_i + w u_j) e_i + 2 (u_k u_j - w u_i)
+	 * e_j */
 	const sc_t *u = &q->x;
 	sc_t *o = SC_V(out);
 	int i = next3[k], j = next3[k + 1];

@@ -449,8 +449,8 @@ static bool lsq_normal_eq(const sc_t J[6][ARM_DOF], const sc_t V[6], sc_t x[ARM_
 	IK_UNROLL
 	for (i = 0; i < 6; i++)
 		IK_UNROLL
-		for (j = 0; j <= i; j++)
-			M[i][j] = dot8(J[i], J[j]);
+	for (j = 0; j <= i; j++)
+		M[i][j] = dot8(J[i], J[j]);
 	/* M[i][j] (i > j) becomes W_ij = L_ij d_j */
 	IK_UNROLL
 	for (j = 0; j < 6; j++) {
@@ -611,8 +611,8 @@ static bool err_ok(const struct ik_err *e, const struct ik_opts *o)
  * there and *ch_at sets to whether ch now holds the chain at q.
  */
 static bool kin_eval(const struct ik_kin *kin, const struct arm *a, const sc_t q[ARM_DOF], const struct ik_target *t,
-		     const struct ik_opts *o, sc_t J[6][ARM_DOF], sc_t V[6], struct ik_err *err,
-		     struct arm_chain *ch, bool *ch_at)
+		     const struct ik_opts *o, sc_t J[6][ARM_DOF], sc_t V[6], struct ik_err *err, struct arm_chain *ch,
+		     bool *ch_at)
 {
 	if (ch) {
 		*ch_at = kin == &ik_kin_dq;
@@ -737,7 +737,8 @@ static void newton_limited(const struct arm *a, const struct ik_kin *kin, const 
 					sc_t half = sc_mul(a->lim.hi[i] - a->lim.lo[i], SC_C(0.5));
 					sc_t u = half > 0 ? sc_div(q[i] - a->lim.lo[i] - half, half) : SC_C(0);
 
-					z[i] = free[i] ? -sc_mul(sc_mul(center, half), sc_mul(u, sc_mul(u, u))) : SC_C(0);
+					z[i] = free[i] ? -sc_mul(sc_mul(center, half), sc_mul(u, sc_mul(u, u)))
+						       : SC_C(0);
 				}
 				for (j = 0; j < 6; j++) {
 					sc_acc_t acc = sc_acc0();
@@ -778,7 +779,8 @@ static void newton_limited(const struct arm *a, const struct ik_kin *kin, const 
  * says whether that chain is at the returned q (ik_solve_pose).
  */
 static unsigned solve(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t, const sc_t *seed,
-		      const struct ik_opts *o, sc_t q[ARM_DOF], struct ik_result *res, struct arm_chain *chp, bool *ch_at)
+		      const struct ik_opts *o, sc_t q[ARM_DOF], struct ik_result *res, struct arm_chain *chp,
+		      bool *ch_at)
 {
 	sc_t pref[ARM_DOF];
 	int i;
@@ -843,7 +845,8 @@ unsigned ik_solve_pose(const struct arm *a, const struct ik_kin *kin, const stru
 	bool ch_at = false;
 	unsigned flags = solve(a, kin, t, seed, o, q, res, &ch, &ch_at);
 
-	/* the solver's last evaluation was at q (newton_limited ends with one): its chain, unless another backend made it */
+	/* the solver's last evaluation was at q (newton_limited ends with one): its chain, unless another backend made
+	 * it */
 	if (ch_at)
 		arm_chain_pose(&ch, pose);
 	else

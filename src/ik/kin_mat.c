@@ -32,7 +32,8 @@ static inline void turn(struct vec3 *a, struct vec3 *b, sc_t s, sc_t c)
 	*b = nb;
 }
 
-/* R Rx: columns (c0, c c1 + s c2, c c2 - s c1); R Ry: (c c0 - s c2, c1, c c2 + s c0); R Rz: (c c0 + s c1, c c1 - s c0, c2) */
+/* R Rx: columns (c0, c c1 + s c2, c c2 - s c1); R Ry: (c c0 - s c2, c1, c c2 + s c0); R Rz: (c c0 + s c1, c c1 - s c0,
+ * c2) */
 static inline void rot_mx(struct m3c *r, sc_t s, sc_t c)
 {
 	turn(&r->c[1], &r->c[2], s, c);
@@ -47,8 +48,6 @@ static inline void rot_mz(struct m3c *r, sc_t s, sc_t c)
 {
 	turn(&r->c[0], &r->c[1], s, c);
 }
-
-
 
 /*
  * Above pi - ROT_LOG_NEAR_PI the axis comes from the symmetric part. Fixed
@@ -155,8 +154,9 @@ static bool kin_mat(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_
 
 		for (r = 0; r < 3; r++)
 			for (i = 0; i < 3; i++)
-				E[r][i] = sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), t->m[r][0], C[i][0]), t->m[r][1], C[i][1]),
-							 t->m[r][2], C[i][2]));
+				E[r][i] = sc_acc_get(
+					sc_mac(sc_mac(sc_mac(sc_acc0(), t->m[r][0], C[i][0]), t->m[r][1], C[i][1]),
+					       t->m[r][2], C[i][2]));
 	}
 	dp = (struct vec3){ t->m[0][3] - p[8].x, t->m[1][3] - p[8].y, t->m[2][3] - p[8].z };
 	err->pos = v3_norm(&dp);

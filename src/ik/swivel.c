@@ -173,15 +173,15 @@ static sc_t euler_fast(const sc_t m[3][3], const struct arm *a, int i0)
 /* what stays fixed while the swivel moves: one target, one J1 */
 struct swivel_ctx {
 	const struct arm *a;
-	sc_t rt1[3][3]; /* target rotation in the J1 frame */
-	struct vec3 u;  /* shoulder -> wrist centre, J1 frame */
-	struct vec3 uh; /* u / |u| */
+	sc_t rt1[3][3];	    /* target rotation in the J1 frame */
+	struct vec3 u;	    /* shoulder -> wrist centre, J1 frame */
+	struct vec3 uh;	    /* u / |u| */
 	struct vec3 n1, n2; /* basis of the swivel circle's plane */
-	struct vec3 c;  /* centre of the circle (from the shoulder) */
-	sc_t r;         /* radius of the circle */
+	struct vec3 c;	    /* centre of the circle (from the shoulder) */
+	sc_t r;		    /* radius of the circle */
 	sc_t q1, q5, s5, c5;
-	sc_t inv_a;     /* 1 / A */
-	sc_t viol15;    /* limit violation of J1 and J5 */
+	sc_t inv_a;  /* 1 / A */
+	sc_t viol15; /* limit violation of J1 and J5 */
 };
 
 /* Sets up the circle for one J1; false if the wrist is out of reach there. */
@@ -378,8 +378,8 @@ struct search {
 	sc_t best_q1, best_phi;
 };
 
-static sc_t search_eval_cs(struct search *s, const struct swivel_ctx *x, sc_t phi, sc_t cp, sc_t sp,
-			   sc_t q[ARM_DOF], bool full)
+static sc_t search_eval_cs(struct search *s, const struct swivel_ctx *x, sc_t phi, sc_t cp, sc_t sp, sc_t q[ARM_DOF],
+			   bool full)
 {
 	sc_t v;
 
@@ -500,11 +500,10 @@ static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, 
 /* what does not change while J1 and the swivel are searched */
 struct swivel_target {
 	const struct arm *a;
-	struct vec3 w;   /* wrist centre, right-arm chest frame */
-	sc_t rt[3][3];   /* target rotation, right-arm chest frame */
+	struct vec3 w;	 /* wrist centre, right-arm chest frame */
+	sc_t rt[3][3];	 /* target rotation, right-arm chest frame */
 	struct vec3 x4p; /* preferred elbow axis, J1 frame */
 };
-
 
 static int yaw_candidates(const struct swivel_target *st, sc_t q1p, int samples, sc_t out[], int max);
 
@@ -595,7 +594,8 @@ static int reach_intervals(const struct swivel_target *st, sc_t lo[2], sc_t hi[2
 
 	/* the squared shoulder-wrist distance at J5's lower limit (the largest) and upper (the smallest) */
 	for (i = 0; i < 2; i++)
-		d2[i] = base - sc_mul(af2, sc_sin_lim(i ? sc_min(a->lim.hi[4], SC_HALF_PI) : sc_max(a->lim.lo[4], -SC_HALF_PI)));
+		d2[i] = base - sc_mul(af2, sc_sin_lim(i ? sc_min(a->lim.hi[4], SC_HALF_PI)
+							: sc_max(a->lim.lo[4], -SC_HALF_PI)));
 	if (!(srho > SC_C(1e-9))) {
 		/* the distance does not depend on J1 */
 		if (k > d2[0] || k < d2[1])
@@ -689,8 +689,8 @@ static int yaw_candidates(const struct swivel_target *st, sc_t q1p, int samples,
 	return m;
 }
 
-bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t pref[ARM_DOF],
-		     const struct ik_opts *o, sc_t q[ARM_DOF], int *evals)
+bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t pref[ARM_DOF], const struct ik_opts *o,
+		     sc_t q[ARM_DOF], int *evals)
 {
 	struct swivel_target st;
 	struct swivel_ctx x;

@@ -40,10 +40,10 @@
 struct can_avatar {
 	double lo[WIRE_JOINTS], hi[WIRE_JOINTS]; /* rad, from the DESCRIBE */
 	bool have_limits;
-	double period_s;                         /* nominal time between commands */
-	double cmd[WIRE_JOINTS];                 /* the last command sent, rad */
+	double period_s;	 /* nominal time between commands */
+	double cmd[WIRE_JOINTS]; /* the last command sent, rad */
 	bool have_cmd;
-	uint64_t last_ns;                        /* when it was sent */
+	uint64_t last_ns; /* when it was sent */
 	uint8_t counter;
 };
 
@@ -52,9 +52,9 @@ struct can_out {
 	bool disabled;
 	char why[192];
 	char iface[CFG_NAME_MAX];
-	canid_t id0;          /* the first avatar's STATUS identifier, with CAN_EFF_FLAG */
-	int n;                /* avatars published */
-	int *slot;            /* per avatar index: its block, or -1 */
+	canid_t id0; /* the first avatar's STATUS identifier, with CAN_EFF_FLAG */
+	int n;	     /* avatars published */
+	int *slot;   /* per avatar index: its block, or -1 */
 	struct can_avatar *av;
 	_Atomic uint64_t commands;  /* commands sent whole */
 	_Atomic uint64_t withheld;  /* safe mode: frames not turned into a command */
@@ -175,7 +175,7 @@ static void send_avatar(struct can_out *c, struct output *o, struct can_avatar *
 			uint64_t now)
 {
 	static const int order[CANCODEC_FRAMES] = { CANCODEC_RIGHT_1, CANCODEC_RIGHT_2, CANCODEC_LEFT_1,
-						     CANCODEC_LEFT_2, CANCODEC_STATUS };
+						    CANCODEC_LEFT_2, CANCODEC_STATUS };
 	struct cancodec_avatar ca = { 0 };
 	struct can_frame f[CANCODEC_FRAMES];
 	double q[WIRE_JOINTS];
@@ -310,7 +310,8 @@ static void can_out_report(struct output *o, FILE *out, bool json)
 		return;
 	}
 	fprintf(out, "  %s: CAN %s, safe mode %s: %llu commands, %llu withheld, %llu limited\n", o->name, c->iface,
-		o->cfg->safe ? "on" : "off", (unsigned long long)atomic_load_explicit(&c->commands, memory_order_relaxed),
+		o->cfg->safe ? "on" : "off",
+		(unsigned long long)atomic_load_explicit(&c->commands, memory_order_relaxed),
 		(unsigned long long)atomic_load_explicit(&c->withheld, memory_order_relaxed),
 		(unsigned long long)atomic_load_explicit(&c->limited, memory_order_relaxed));
 }

@@ -175,9 +175,16 @@ void encode_describe(const struct avatar *av, const char *name, double rate_hz, 
 {
 	/* the segment each arm joint's rotation is applied at (see the file comment) */
 	static const uint8_t joint_seg[ARM_DOF] = { 0, 0, 0, 0, 1, 2, 2, 2 };
-	static const uint8_t seg_parent[WIRE_SEGMENTS] = { 255, WIRE_SEG_CHEST, WIRE_SEG_CHEST, WIRE_SEG_R_SHOULDER,
-							   WIRE_SEG_R_ELBOW, WIRE_SEG_R_WRIST, WIRE_SEG_CHEST,
-							   WIRE_SEG_L_SHOULDER, WIRE_SEG_L_ELBOW, WIRE_SEG_L_WRIST };
+	static const uint8_t seg_parent[WIRE_SEGMENTS] = { 255,
+							   WIRE_SEG_CHEST,
+							   WIRE_SEG_CHEST,
+							   WIRE_SEG_R_SHOULDER,
+							   WIRE_SEG_R_ELBOW,
+							   WIRE_SEG_R_WRIST,
+							   WIRE_SEG_CHEST,
+							   WIRE_SEG_L_SHOULDER,
+							   WIRE_SEG_L_ELBOW,
+							   WIRE_SEG_L_WRIST };
 	static const int seg0[2] = { WIRE_SEG_R_SHOULDER, WIRE_SEG_L_SHOULDER };
 
 	memset(out, 0, sizeof(*out));
@@ -190,7 +197,8 @@ void encode_describe(const struct avatar *av, const char *name, double rate_hz, 
 	out->head_offset[1] = (float)av->body.head_offset.y;
 	out->head_offset[2] = (float)av->body.head_offset.z;
 	snprintf(out->avatar_name, sizeof(out->avatar_name), "%s", name);
-	snprintf(out->conventions, sizeof(out->conventions), "z-up RH; m; rad; quat wxyz; "
+	snprintf(out->conventions, sizeof(out->conventions),
+		 "z-up RH; m; rad; quat wxyz; "
 		 "chest x right y fwd z up");
 	snprintf(out->joint[0].name, sizeof(out->joint[0].name), "%s", wire_joint_names[0]);
 	out->joint[0].segment = WIRE_SEG_CHEST;

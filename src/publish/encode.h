@@ -16,7 +16,7 @@ struct encode_in {
 	const struct avatar *av;
 	const struct pose_frame *pf;
 	const struct avatar_pose *pose; /* NULL: never solved */
-	bool held;                      /* pose is the previous frame's */
+	bool held;			/* pose is the previous frame's */
 };
 
 void encode_frame(const struct encode_in *in, struct wire_frame *out);

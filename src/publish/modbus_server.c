@@ -52,9 +52,9 @@
 #include <time.h>
 #include <unistd.h>
 
-#define MB_ADU_MAX 260          /* MBAP header (7) + PDU (253) */
+#define MB_ADU_MAX 260		    /* MBAP header (7) + PDU (253) */
 #define MB_PARTIAL_NS 1000000000ull /* half a request may wait this long */
-#define MB_TICK_MS 100          /* the server thread's timeout sweep */
+#define MB_TICK_MS 100		    /* the server thread's timeout sweep */
 
 enum { EX_FUNCTION = 1, EX_ADDRESS = 2, EX_VALUE = 3 };
 
@@ -68,23 +68,23 @@ struct mb_block {
 };
 
 struct mb_client {
-	int fd;                 /* -1: free */
+	int fd; /* -1: free */
 	uint8_t buf[MB_ADU_MAX];
 	size_t len;
-	uint64_t last_ns;       /* last complete request (or the connection) */
-	uint64_t partial_ns;    /* when the bytes now waiting began to arrive */
+	uint64_t last_ns;    /* last complete request (or the connection) */
+	uint64_t partial_ns; /* when the bytes now waiting began to arrive */
 };
 
 struct mb_stats {
-	_Atomic uint64_t requests;     /* answered with data */
-	_Atomic uint64_t exceptions[4]; /* answered with exception 1, 2, 3 (index = code) */
-	_Atomic uint64_t writes;       /* writes done (writable registers) */
+	_Atomic uint64_t requests;	 /* answered with data */
+	_Atomic uint64_t exceptions[4];	 /* answered with exception 1, 2, 3 (index = code) */
+	_Atomic uint64_t writes;	 /* writes done (writable registers) */
 	_Atomic uint64_t writes_refused; /* write functions answered ILLEGAL FUNCTION */
-	_Atomic uint64_t malformed;    /* PDUs of the wrong length (exception 3) and broken headers (closed) */
-	_Atomic uint64_t idle_closed;  /* clients closed for silence or half a request */
-	_Atomic uint64_t send_errors;  /* responses a client could not take: closed */
+	_Atomic uint64_t malformed;	 /* PDUs of the wrong length (exception 3) and broken headers (closed) */
+	_Atomic uint64_t idle_closed;	 /* clients closed for silence or half a request */
+	_Atomic uint64_t send_errors;	 /* responses a client could not take: closed */
 	_Atomic uint64_t clients, accepted, refused, closed;
-	_Atomic uint64_t updates;      /* blocks stored by the loop */
+	_Atomic uint64_t updates; /* blocks stored by the loop */
 };
 
 struct mb_server {
@@ -92,7 +92,7 @@ struct mb_server {
 	char addr[CFG_PATH_MAX + 8];
 	int base, stride, order, writable, max_clients, n;
 	uint64_t idle_ns;
-	int *slot;                     /* per avatar index: its block, or -1 */
+	int *slot; /* per avatar index: its block, or -1 */
 	int n_avatars;
 
 	struct mb_block *blk;
@@ -290,7 +290,8 @@ static bool serve_buffer(struct mb_server *s, struct mb_client *c, uint64_t now)
 			break;
 		ex = check_request(s, c->buf, len, &write);
 		modbus_set_socket(s->ctx, c->fd);
-		rc = ex ? modbus_reply_exception(s->ctx, c->buf, (unsigned)ex) : modbus_reply(s->ctx, c->buf, len, s->map);
+		rc = ex ? modbus_reply_exception(s->ctx, c->buf, (unsigned)ex)
+			: modbus_reply(s->ctx, c->buf, len, s->map);
 		if (ex) {
 			bump(&s->st.exceptions[ex]);
 			if (write && ex == EX_FUNCTION)
@@ -391,7 +392,8 @@ static void *mb_thread(void *arg)
 
 			if (c->fd < 0)
 				continue;
-			if ((s->idle_ns && now - c->last_ns > s->idle_ns) || (c->len && now - c->partial_ns > MB_PARTIAL_NS)) {
+			if ((s->idle_ns && now - c->last_ns > s->idle_ns) ||
+			    (c->len && now - c->partial_ns > MB_PARTIAL_NS)) {
 				bump(&s->st.idle_closed);
 				drop_client(s, c);
 			}
@@ -466,7 +468,8 @@ static int modbus_server_open(struct output *o, char *err, size_t errlen)
 	if (s->slot && s->base + n_input > 65536) {
 		snprintf(err, errlen,
 			 "[output %s]: %d avatars at register_base %d and register_stride %d need registers up to %d, "
-			 "beyond 65535", cfg->name, s->n, s->base, s->stride, s->base + n_input - 1);
+			 "beyond 65535",
+			 cfg->name, s->n, s->base, s->stride, s->base + n_input - 1);
 		free_server(s);
 		return -EINVAL;
 	}
@@ -587,7 +590,8 @@ static void modbus_server_report(struct output *o, FILE *out, bool json)
 	if (!s)
 		return;
 	if (json) {
-		fprintf(out, ",\"modbus\":{\"address\":\"%s\",\"avatars\":%d,\"requests\":%llu,"
+		fprintf(out,
+			",\"modbus\":{\"address\":\"%s\",\"avatars\":%d,\"requests\":%llu,"
 			"\"illegal_function\":%llu,\"illegal_address\":%llu,\"illegal_value\":%llu,"
 			"\"malformed\":%llu,\"writes\":%llu,\"writes_refused\":%llu,\"idle_closed\":%llu,"
 			"\"send_errors\":%llu,\"updates\":%llu}",
@@ -599,8 +603,10 @@ static void modbus_server_report(struct output *o, FILE *out, bool json)
 			(unsigned long long)get(&s->st.updates));
 		return;
 	}
-	fprintf(out, "  %s: Modbus %s: %llu requests, exceptions 01/02/03 %llu/%llu/%llu, %llu malformed, "
-		"%llu writes refused, %llu idle closed\n", o->name, s->addr, (unsigned long long)get(&s->st.requests),
+	fprintf(out,
+		"  %s: Modbus %s: %llu requests, exceptions 01/02/03 %llu/%llu/%llu, %llu malformed, "
+		"%llu writes refused, %llu idle closed\n",
+		o->name, s->addr, (unsigned long long)get(&s->st.requests),
 		(unsigned long long)get(&s->st.exceptions[1]), (unsigned long long)get(&s->st.exceptions[2]),
 		(unsigned long long)get(&s->st.exceptions[3]), (unsigned long long)get(&s->st.malformed),
 		(unsigned long long)get(&s->st.writes_refused), (unsigned long long)get(&s->st.idle_closed));

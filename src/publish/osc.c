@@ -46,8 +46,10 @@ struct v3 {
 
 static struct qd q_mul(struct qd a, struct qd b)
 {
-	return (struct qd){ a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-			    a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w };
+	return (struct qd){ a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z,
+			    a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+			    a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
+			    a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w };
 }
 
 static struct qd q_conj(struct qd q)
@@ -115,7 +117,8 @@ static bool pose_ok(const struct wire_pose *p)
  */
 static struct v3 unity_euler(struct qd q)
 {
-	double m02 = 2 * (q.x * q.z + q.w * q.y), m12 = 2 * (q.y * q.z - q.w * q.x), m22 = 1 - 2 * (q.x * q.x + q.y * q.y);
+	double m02 = 2 * (q.x * q.z + q.w * q.y), m12 = 2 * (q.y * q.z - q.w * q.x),
+	       m22 = 1 - 2 * (q.x * q.x + q.y * q.y);
 	double m10 = 2 * (q.x * q.y + q.w * q.z), m11 = 1 - 2 * (q.x * q.x + q.z * q.z);
 	double deg = 180.0 / M_PI, s = -m12;
 
@@ -154,14 +157,13 @@ enum bone {
 };
 
 static const char *const bone_names[B_COUNT] = {
-	"Hips",         "Spine",        "Chest",         "UpperChest",    "Neck",
-	"Head",         "LeftShoulder", "LeftUpperArm",  "LeftLowerArm",  "LeftHand",
-	"RightShoulder", "RightUpperArm", "RightLowerArm", "RightHand",
+	"Hips",		"Spine",	"Chest",    "UpperChest",    "Neck",	      "Head",	       "LeftShoulder",
+	"LeftUpperArm", "LeftLowerArm", "LeftHand", "RightShoulder", "RightUpperArm", "RightLowerArm", "RightHand",
 };
 
 static const int bone_parent[B_COUNT] = {
-	B_ROOT,        B_HIPS,       B_SPINE,       B_CHEST,       B_UPPER_CHEST, B_NECK,        B_UPPER_CHEST,
-	B_L_SHOULDER,  B_L_UPPER_ARM, B_L_LOWER_ARM, B_UPPER_CHEST, B_R_SHOULDER, B_R_UPPER_ARM, B_R_LOWER_ARM,
+	B_ROOT,	      B_HIPS,	     B_SPINE,	    B_CHEST,	   B_UPPER_CHEST, B_NECK,	 B_UPPER_CHEST,
+	B_L_SHOULDER, B_L_UPPER_ARM, B_L_LOWER_ARM, B_UPPER_CHEST, B_R_SHOULDER,  B_R_UPPER_ARM, B_R_LOWER_ARM,
 };
 
 struct body {
@@ -183,7 +185,7 @@ static bool body_of(const struct wire_frame *f, double torso, struct body *b)
 		double ax, ay, az, angle;
 	} arm[] = {
 		{ B_R_UPPER_ARM, WIRE_SEG_R_SHOULDER, 0, 1, 0, 1 }, { B_R_LOWER_ARM, WIRE_SEG_R_ELBOW, 0, 0, 1, 1 },
-		{ B_R_HAND, WIRE_SEG_R_WRIST, 0, 0, 1, 1 },         { B_L_UPPER_ARM, WIRE_SEG_L_SHOULDER, 0, 1, 0, -1 },
+		{ B_R_HAND, WIRE_SEG_R_WRIST, 0, 0, 1, 1 },	    { B_L_UPPER_ARM, WIRE_SEG_L_SHOULDER, 0, 1, 0, -1 },
 		{ B_L_LOWER_ARM, WIRE_SEG_L_ELBOW, 0, 0, 1, -1 },   { B_L_HAND, WIRE_SEG_L_WRIST, 0, 0, 1, -1 },
 	};
 
@@ -228,7 +230,8 @@ static bool body_of(const struct wire_frame *f, double torso, struct body *b)
 	q[B_L_SHOULDER] = q_mul(qc, q_axis(0, 0, -1, f->joint[9]));
 	for (size_t i = 0; i < sizeof(arm) / sizeof(arm[0]); i++) {
 		p[arm[i].bone] = pose_p(&f->segment[arm[i].seg]);
-		q[arm[i].bone] = q_mul(pose_q(&f->segment[arm[i].seg]), q_axis(arm[i].ax, arm[i].ay, arm[i].az, arm[i].angle * h));
+		q[arm[i].bone] = q_mul(pose_q(&f->segment[arm[i].seg]),
+				       q_axis(arm[i].ax, arm[i].ay, arm[i].az, arm[i].angle * h));
 	}
 	/* the root stands on the floor (z = 0) under the hips, facing the chest's way */
 	b->root_p = unity_p((struct v3){ p[B_HIPS].x, p[B_HIPS].y, 0 });
@@ -246,15 +249,15 @@ struct osc {
 	int type;
 	lo_address addr;
 	struct snap snap;
-	int avatar;                 /* the one avatar (index) */
+	int avatar; /* the one avatar (index) */
 	double torso;
 	bool head;
 	uint64_t period_ns;
 	pthread_t thread;
 	pthread_mutex_t mu;
 	pthread_cond_t cv;
-	bool stop;                  /* guarded by mu */
-	double t0;                  /* start, for /VMC/Ext/T */
+	bool stop; /* guarded by mu */
+	double t0; /* start, for /VMC/Ext/T */
 };
 
 static uint64_t mono_ns(void)
@@ -445,7 +448,8 @@ static int osc_open(struct output *o, char *err, size_t errlen)
 	for (int i = 0; i < o->n_avatars; i++)
 		if (o->wants[i]) {
 			if (s->avatar >= 0) {
-				snprintf(err, errlen, "[output %s] avatars: an OSC output carries one avatar", cfg->name);
+				snprintf(err, errlen, "[output %s] avatars: an OSC output carries one avatar",
+					 cfg->name);
 				osc_free(s);
 				return -EINVAL;
 			}

@@ -22,7 +22,7 @@
 struct out_msg {
 	const uint8_t *data;
 	uint16_t len;
-	uint16_t avatar;  /* index into the gateway's avatars */
+	uint16_t avatar; /* index into the gateway's avatars */
 	/*
 	 * FRAME messages: the pose frame the message was made from (its
 	 * buttons and analog values, which the v1 FRAME does not carry);
@@ -32,7 +32,7 @@ struct out_msg {
 };
 
 struct output_stats {
-	_Atomic uint64_t sent;      /* messages handed to the kernel */
+	_Atomic uint64_t sent;	    /* messages handed to the kernel */
 	_Atomic uint64_t dropped;   /* messages a full socket or subscriber could not take */
 	_Atomic uint64_t errors;    /* other send errors */
 	_Atomic uint64_t clients;   /* stream subscribers now */
@@ -65,11 +65,11 @@ struct output {
 	const struct output_ops *ops;
 	const struct cfg_output *cfg;
 	char name[CFG_NAME_MAX];
-	bool *wants;        /* per avatar index */
-	uint16_t *ids;      /* per avatar index: its id (vrpn device names) */
+	bool *wants;   /* per avatar index */
+	uint16_t *ids; /* per avatar index: its id (vrpn device names) */
 	int n_avatars;
-	uint32_t cycle;     /* for decimation */
-	bool adopted;       /* priv was taken over from the previous configuration */
+	uint32_t cycle; /* for decimation */
+	bool adopted;	/* priv was taken over from the previous configuration */
 	struct output_stats st;
 	void *priv;
 };
@@ -84,8 +84,8 @@ extern const struct output_ops udp_output_ops;
 extern const struct output_ops stream_output_ops;
 extern const struct output_ops modbus_output_ops;
 extern const struct output_ops can_output_ops;
-extern const struct output_ops vrpn_output_ops;      /* vrpn.c */
-extern const struct output_ops vmc_output_ops;       /* osc.c */
+extern const struct output_ops vrpn_output_ops;	     /* vrpn.c */
+extern const struct output_ops vmc_output_ops;	     /* osc.c */
 extern const struct output_ops vrchat_output_ops;    /* osc.c */
 extern const struct output_ops websocket_output_ops; /* websocket.c */
 

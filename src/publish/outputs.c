@@ -10,16 +10,11 @@
 #include <string.h>
 
 static const struct output_ops *const outputs_table[] = {
-	[CFG_OUT_UDP] = &udp_output_ops,
-	[CFG_OUT_MULTICAST] = &udp_output_ops,
-	[CFG_OUT_TCP] = &stream_output_ops,
-	[CFG_OUT_UNIX] = &stream_output_ops,
-	[CFG_OUT_MODBUS] = &modbus_output_ops,
-	[CFG_OUT_CAN] = &can_output_ops,
-	[CFG_OUT_VRPN] = &vrpn_output_ops,
-	[CFG_OUT_VMC] = &vmc_output_ops,
-	[CFG_OUT_VRCHAT] = &vrchat_output_ops,
-	[CFG_OUT_WEBSOCKET] = &websocket_output_ops,
+	[CFG_OUT_UDP] = &udp_output_ops,       [CFG_OUT_MULTICAST] = &udp_output_ops,
+	[CFG_OUT_TCP] = &stream_output_ops,    [CFG_OUT_UNIX] = &stream_output_ops,
+	[CFG_OUT_MODBUS] = &modbus_output_ops, [CFG_OUT_CAN] = &can_output_ops,
+	[CFG_OUT_VRPN] = &vrpn_output_ops,     [CFG_OUT_VMC] = &vmc_output_ops,
+	[CFG_OUT_VRCHAT] = &vrchat_output_ops, [CFG_OUT_WEBSOCKET] = &websocket_output_ops,
 };
 
 int output_open(struct output *o, const struct cfg_output *cfg, const uint16_t *avatar_ids, int n_avatars,

@@ -22,19 +22,19 @@
 #include <stdint.h>
 
 struct snap_entry {
-	struct wire_frame f;                             /* decoded */
+	struct wire_frame f; /* decoded */
 	uint32_t buttons[FRAME_SENSORS];
 	float analog[FRAME_SENSORS][SENSOR_ANALOG_MAX];
-	uint64_t put_mono_ns;                            /* when the loop handed it over */
-	char name[WIRE_NAME_MAX + 1];                    /* from its DESCRIBE; "" until one came */
+	uint64_t put_mono_ns;	      /* when the loop handed it over */
+	char name[WIRE_NAME_MAX + 1]; /* from its DESCRIBE; "" until one came */
 };
 
 struct snap_slot {
 	struct snap_entry buf[3];
-	_Atomic unsigned mid;      /* index of the buffer between the two sides, | SNAP_NEW */
-	unsigned back;             /* the writer's */
-	unsigned front;            /* the reader's */
-	bool seen;                 /* the reader has taken at least one */
+	_Atomic unsigned mid;	      /* index of the buffer between the two sides, | SNAP_NEW */
+	unsigned back;		      /* the writer's */
+	unsigned front;		      /* the reader's */
+	bool seen;		      /* the reader has taken at least one */
 	char name[WIRE_NAME_MAX + 1]; /* writer: the avatar's name */
 };
 

@@ -29,7 +29,7 @@
 #include <unistd.h>
 
 struct client {
-	int fd;        /* -1: free slot */
+	int fd; /* -1: free slot */
 	uint8_t *buf;
 	size_t off, len;
 };
@@ -37,7 +37,7 @@ struct client {
 struct stream {
 	int lfd;
 	int type;
-	char addr[CFG_PATH_MAX + 8];  /* what adopt() compares */
+	char addr[CFG_PATH_MAX + 8]; /* what adopt() compares */
 	int max_clients;
 	size_t buf_size;
 	struct client *cl;

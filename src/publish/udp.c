@@ -39,8 +39,8 @@
 #define SOL_UDP 17
 #endif
 
-#define UDP_BATCH 1024     /* UIO_MAXIOV: headers per sendmmsg() */
-#define UDP_GSO_SEGS 64    /* UDP_MAX_SEGMENTS of every kernel that has UDP_SEGMENT */
+#define UDP_BATCH 1024	    /* UIO_MAXIOV: headers per sendmmsg() */
+#define UDP_GSO_SEGS 64	    /* UDP_MAX_SEGMENTS of every kernel that has UDP_SEGMENT */
 #define UDP_GSO_BYTES 60000 /* one GSO buffer stays below the 64 KiB datagram limit */
 
 struct udp {
@@ -49,11 +49,11 @@ struct udp {
 	socklen_t dst_len;
 	struct mmsghdr *mm;
 	struct iovec *iov;
-	uint16_t *segs;     /* messages carried by mm[i] */
+	uint16_t *segs; /* messages carried by mm[i] */
 	union udp_cmsg {
 		char buf[CMSG_SPACE(sizeof(uint16_t))];
 		struct cmsghdr align;
-	} *cmsg;
+	} * cmsg;
 	int cap;
 	bool gso;
 };

@@ -50,17 +50,17 @@
 #include <unistd.h>
 
 /* the protocol (facts from VRPN's vrpn_Connection.[Ch], vrpn_Tracker.C, vrpn_Analog.C, vrpn_Button.C) */
-#define VRPN_MAGIC "vrpn: ver. 07.35"   /* 16 bytes; peers compare up to the last '.' */
+#define VRPN_MAGIC "vrpn: ver. 07.35" /* 16 bytes; peers compare up to the last '.' */
 #define VRPN_MAGIC_LEN 16
-#define VRPN_MAJOR_LEN 14               /* "vrpn: ver. 07." */
-#define VRPN_COOKIE_LEN 24              /* magic, two spaces, the log mode digit, padding */
-#define VRPN_HEADER_LEN 24              /* five be32 (length, sec, usec, sender, type), padded to 8 */
+#define VRPN_MAJOR_LEN 14  /* "vrpn: ver. 07." */
+#define VRPN_COOKIE_LEN 24 /* magic, two spaces, the log mode digit, padding */
+#define VRPN_HEADER_LEN 24 /* five be32 (length, sec, usec, sender, type), padded to 8 */
 #define VRPN_ALIGN 8
-#define VRPN_NAME_MAX 100               /* a name with its NUL (VRPN's cName) */
-#define VRPN_DEVICE_MAX 95              /* a peer refuses a description (length + name + NUL) over 100 */
-#define VRPN_ID_MAX 2000                /* VRPN's translation tables */
-#define VRPN_LONGEST 64000              /* no VRPN peer sends a longer message (its TCP buffer) */
-#define VRPN_UDP_MAX 1472               /* one Ethernet frame, as VRPN sends */
+#define VRPN_NAME_MAX 100  /* a name with its NUL (VRPN's cName) */
+#define VRPN_DEVICE_MAX 95 /* a peer refuses a description (length + name + NUL) over 100 */
+#define VRPN_ID_MAX 2000   /* VRPN's translation tables */
+#define VRPN_LONGEST 64000 /* no VRPN peer sends a longer message (its TCP buffer) */
+#define VRPN_UDP_MAX 1472  /* one Ethernet frame, as VRPN sends */
 
 enum {
 	VRPN_SENDER_DESCRIPTION = -1,
@@ -73,8 +73,8 @@ enum {
 /* our type ids, announced to every client */
 enum { T_POS_QUAT, T_ANALOG, T_BUTTON_CHANGE, T_BUTTON_STATES, T_PONG, T_PING, T_COUNT };
 static const char *const vrpn_types[T_COUNT] = {
-	"vrpn_Tracker Pos_Quat", "vrpn_Analog Channel", "vrpn_Button Change",
-	"vrpn_Button States",    "vrpn_Base pong_message", "vrpn_Base ping_message",
+	"vrpn_Tracker Pos_Quat", "vrpn_Analog Channel",	   "vrpn_Button Change",
+	"vrpn_Button States",	 "vrpn_Base pong_message", "vrpn_Base ping_message",
 };
 
 /* what a device carries (docs/VRPN.md) */
@@ -90,7 +90,7 @@ static const char *const vrpn_types[T_COUNT] = {
 #define LOW_MAX (VRPN_SENSORS * MSG_LEN(POS_QUAT_LEN) + MSG_LEN(ANALOG_LEN))
 #define REL_MAX (VRPN_BUTTONS * MSG_LEN(8))
 
-#define IN_BUF 4096       /* longer client messages are skipped, not kept */
+#define IN_BUF 4096	   /* longer client messages are skipped, not kept */
 #define REMOTE_SENDERS 256 /* client sender ids we remember (its devices that are ours) */
 
 enum vcl_state { VC_FREE, VC_CONNECTING, VC_COOKIE, VC_DESCRIBING, VC_LIVE };
@@ -98,20 +98,20 @@ enum vcl_state { VC_FREE, VC_CONNECTING, VC_COOKIE, VC_DESCRIBING, VC_LIVE };
 struct vcl {
 	int fd;
 	enum vcl_state state;
-	uint64_t since_ns;          /* entered this state */
-	uint64_t dropping_ns;       /* first message dropped since the buffer was last empty, 0 none */
+	uint64_t since_ns;    /* entered this state */
+	uint64_t dropping_ns; /* first message dropped since the buffer was last empty, 0 none */
 	struct sockaddr_storage peer;
 	socklen_t peer_len;
 	struct sockaddr_storage udp_to; /* where its low-latency reports go, when udp */
 	bool udp;
-	uint8_t *out;               /* TCP bytes waiting, buf_size */
+	uint8_t *out; /* TCP bytes waiting, buf_size */
 	size_t off, len;
 	uint8_t in[IN_BUF];
 	size_t in_len;
-	size_t skip;                /* bytes of an overlong message still to discard */
-	int desc_next;              /* descriptions sent: our types, then one per avatar */
-	int32_t ping_type;          /* its id of "vrpn_Base ping_message", -1 unknown */
-	int states_next;            /* the next device whose states go again, -1: none due */
+	size_t skip;	   /* bytes of an overlong message still to discard */
+	int desc_next;	   /* descriptions sent: our types, then one per avatar */
+	int32_t ping_type; /* its id of "vrpn_Base ping_message", -1 unknown */
+	int states_next;   /* the next device whose states go again, -1: none due */
 	int n_remote;
 	struct vremote {
 		int32_t remote, avatar;
@@ -141,7 +141,7 @@ struct vrpn {
 	/* a reload builds the new configuration's devices beside the running ones (two owners) */
 	struct vmap map[2];
 	int active;
-	bool same_names;            /* the other map names the same devices: keep the clients */
+	bool same_names; /* the other map names the same devices: keep the clients */
 	/* one cycle's encoded reports of one avatar */
 	uint8_t low[LOW_MAX];
 	uint8_t rel[REL_MAX];

@@ -43,14 +43,14 @@
 
 struct ws_view {
 	const struct output *owner;
-	bool *wants;         /* a copy: the owner's goes when it closes, maybe before the thread notices */
+	bool *wants; /* a copy: the owner's goes when it closes, maybe before the thread notices */
 	struct snap snap;
-	uint32_t *sent;      /* per avatar: records sent with a new frame (the page measures loss from gaps) */
+	uint32_t *sent; /* per avatar: records sent with a new frame (the page measures loss from gaps) */
 };
 
 struct ws_srv {
 	pthread_t thread;
-	pthread_mutex_t mu;  /* the thread's tick; a reload's adopt(); close() */
+	pthread_mutex_t mu;	 /* the thread's tick; a reload's adopt(); close() */
 	struct lws_context *ctx; /* the thread's; guarded by mu for lws_cancel_service() */
 	bool started;
 	int start_rc;
@@ -72,15 +72,15 @@ struct ws_srv {
 	/* the text of the current tick: LWS_PRE bytes, then the JSON */
 	char *text;
 	size_t cap, len;
-	uint64_t gen;        /* texts written so far */
+	uint64_t gen; /* texts written so far */
 	int clients;
 	struct ws_session **sessions; /* the admitted browsers, max_clients slots */
 };
 
 /* one browser */
 struct ws_session {
-	uint64_t gen;        /* the text it last got */
-	bool counted;        /* admitted (under max_clients) */
+	uint64_t gen; /* the text it last got */
+	bool counted; /* admitted (under max_clients) */
 };
 
 static struct output *ws_owner(struct ws_srv *w)
@@ -160,8 +160,7 @@ static void jname(struct jbuf *b, const char *s)
 	jprintf(b, "\"");
 }
 
-static void json_avatar(struct jbuf *b, const struct snap_entry *e, uint32_t sent, uint64_t now_real,
-			uint64_t now_mono)
+static void json_avatar(struct jbuf *b, const struct snap_entry *e, uint32_t sent, uint64_t now_real, uint64_t now_mono)
 {
 	const struct wire_frame *f = &e->f;
 
@@ -373,7 +372,8 @@ static void *ws_main(void *arg)
 	if (!ctx) {
 		w->start_rc = -EADDRINUSE;
 		snprintf(w->start_err, sizeof(w->start_err),
-			 "cannot serve on %.100s port %d (in use, or not an address of this host)", w->address, w->port);
+			 "cannot serve on %.100s port %d (in use, or not an address of this host)", w->address,
+			 w->port);
 	}
 	pthread_cond_broadcast(&w->started_cv);
 	pthread_mutex_unlock(&w->mu);
@@ -507,8 +507,9 @@ static int ws_open(struct output *o, char *err, size_t errlen)
 	}
 	snprintf(w->three, sizeof(w->three), "%s", cfg->three);
 	if (!has_file(w->three, "build/three.module.js")) {
-		snprintf(err, errlen, "[output %s] three: no build/three.module.js in %s (install Debian's libjs-three)",
-			 cfg->name, w->three);
+		snprintf(err, errlen,
+			 "[output %s] three: no build/three.module.js in %s (install Debian's libjs-three)", cfg->name,
+			 w->three);
 		srv_free(w);
 		return -ENOENT;
 	}
@@ -521,12 +522,18 @@ static int ws_open(struct output *o, char *err, size_t errlen)
 		return -ENOMEM;
 	}
 	/* /three/ is libjs-three, the rest is the page (OrbitControls imports ../../../build/three.module.js) */
-	w->mount_three = (struct lws_http_mount){ .mountpoint = "/three", .origin = w->three,
-						  .origin_protocol = LWSMPRO_FILE, .mountpoint_len = 6 };
-	w->mount_www = (struct lws_http_mount){ .mount_next = &w->mount_three, .mountpoint = "/", .origin = w->www,
-						.def = "index.html", .origin_protocol = LWSMPRO_FILE, .mountpoint_len = 1 };
+	w->mount_three = (struct lws_http_mount){
+		.mountpoint = "/three", .origin = w->three, .origin_protocol = LWSMPRO_FILE, .mountpoint_len = 6
+	};
+	w->mount_www = (struct lws_http_mount){ .mount_next = &w->mount_three,
+						.mountpoint = "/",
+						.origin = w->www,
+						.def = "index.html",
+						.origin_protocol = LWSMPRO_FILE,
+						.mountpoint_len = 1 };
 	w->protocols[0] = (struct lws_protocols){ .name = "http", .callback = lws_callback_http_dummy };
-	w->protocols[1] = (struct lws_protocols){ .name = WS_PROTOCOL, .callback = ws_callback,
+	w->protocols[1] = (struct lws_protocols){ .name = WS_PROTOCOL,
+						  .callback = ws_callback,
 						  .per_session_data_size = sizeof(struct ws_session) };
 	lws_set_log_level(LLL_ERR, ws_log);
 	o->priv = w;

@@ -102,8 +102,7 @@ void kf_slerp(const double a[4], const double b[4], double h, double out[4])
 	qunit(out);
 }
 
-void kf_squad(const double q0[4], const double q1[4], const double s0[4], const double s1[4], double h,
-	      double out[4])
+void kf_squad(const double q0[4], const double q1[4], const double s0[4], const double s1[4], double h, double out[4])
 {
 	double a[4], b[4];
 

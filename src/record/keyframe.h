@@ -52,11 +52,11 @@ struct kf_pose {
 struct kf_track {
 	enum kf_interp interp;
 	size_t n;
-	const double *t;      /* n times, strictly increasing */
-	struct kf_pose *key;  /* n keys; kf_prepare normalises and aligns the quaternions in place */
-	double (*d2)[3];      /* n: second derivatives of the natural spline (KF_NATURAL only, else NULL) */
-	double (*s)[4];       /* n: squad inner points (KF_CATMULL_ROM and KF_NATURAL, else NULL) */
-	double *work;         /* n scratch doubles (KF_NATURAL only, else NULL) */
+	const double *t;     /* n times, strictly increasing */
+	struct kf_pose *key; /* n keys; kf_prepare normalises and aligns the quaternions in place */
+	double (*d2)[3];     /* n: second derivatives of the natural spline (KF_NATURAL only, else NULL) */
+	double (*s)[4];	     /* n: squad inner points (KF_CATMULL_ROM and KF_NATURAL, else NULL) */
+	double *work;	     /* n scratch doubles (KF_NATURAL only, else NULL) */
 };
 
 /*
@@ -76,7 +76,6 @@ int kf_interp_parse(const char *name);
 
 /* the quaternion helpers, exposed for the tests: unit quaternions (w, x, y, z) */
 void kf_slerp(const double a[4], const double b[4], double h, double out[4]);
-void kf_squad(const double q0[4], const double q1[4], const double s0[4], const double s1[4], double h,
-	      double out[4]);
+void kf_squad(const double q0[4], const double q1[4], const double s0[4], const double s1[4], double h, double out[4]);
 
 #endif /* AGW_KEYFRAME_H */

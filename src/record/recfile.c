@@ -465,7 +465,8 @@ int recfile_session_parse(const uint8_t *payload, uint32_t len, struct recfile_s
 		for (int k = 0; k < 3; k++) {
 			a->source[k] = r_u16(&r);
 			a->sensor[k] = r_u16(&r);
-			if (!r.bad && (a->source[k] >= s->n_sources || a->sensor[k] >= s->sources[a->source[k]].n_sensors))
+			if (!r.bad &&
+			    (a->source[k] >= s->n_sources || a->sensor[k] >= s->sources[a->source[k]].n_sensors))
 				r.bad = true;
 		}
 		for (int k = 0; k < 4; k++)

@@ -16,13 +16,15 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define RECFILE_MAGIC "\x89" "AGWR\r\n\x1a"
+#define RECFILE_MAGIC                                                                                                  \
+	"\x89"                                                                                                         \
+	"AGWR\r\n\x1a"
 #define RECFILE_MAGIC_LEN 8
 #define RECFILE_VERSION 1
 #define RECFILE_HEADER_LEN 32
 
 /* header flags */
-#define RECFILE_F_MESSAGES 0x1  /* the published wire messages are recorded too */
+#define RECFILE_F_MESSAGES 0x1	/* the published wire messages are recorded too */
 #define RECFILE_F_KEYFRAMES 0x2 /* samples were kept at a reduced rate (record_keyframe_rate) */
 
 /* record framing: sync (4), word = type | length << 8 (4), payload, CRC-32 (4) */
@@ -42,25 +44,25 @@ enum recfile_type {
 	RECFILE_END = 5,     /* the file was closed on purpose (stop or rotation) */
 };
 
-#define RECFILE_SAMPLE_LEN 52        /* without analog values */
+#define RECFILE_SAMPLE_LEN 52	     /* without analog values */
 #define RECFILE_SAMPLE_LEN_ANALOG 68 /* with the four analog values */
 #define RECFILE_GAP_LEN 24
 #define RECFILE_END_LEN 17
-#define RECFILE_MESSAGE_HEAD 8       /* mono time before the message bytes */
+#define RECFILE_MESSAGE_HEAD 8 /* mono time before the message bytes */
 
 struct recfile_header {
 	uint16_t version;
 	uint32_t flags;
 	uint64_t created_ns; /* CLOCK_REALTIME when the file was opened */
-	uint32_t seq;        /* 0 for the first file of a daemon run, + 1 at each rotation */
+	uint32_t seq;	     /* 0 for the first file of a daemon run, + 1 at each rotation */
 };
 
 struct recfile_record {
 	uint8_t type;
-	uint32_t len;           /* payload bytes */
+	uint32_t len; /* payload bytes */
 	const uint8_t *payload;
-	size_t off;             /* of the record's first byte in the buffer */
-	size_t size;            /* of the whole record, RECFILE_REC_OVERHEAD + len */
+	size_t off;  /* of the record's first byte in the buffer */
+	size_t size; /* of the whole record, RECFILE_REC_OVERHEAD + len */
 };
 
 /* bytes that recfile_next() skipped: damage, or a record cut off at the end of the buffer */
@@ -71,13 +73,13 @@ struct recfile_damage {
 };
 
 struct recfile_sample {
-	uint16_t source;     /* index in the SESSION's sources */
-	uint16_t sensor;     /* index in that source's sensors */
+	uint16_t source; /* index in the SESSION's sources */
+	uint16_t sensor; /* index in that source's sensors */
 	uint32_t buttons;
-	uint64_t t_ns;       /* the tracker's sample time, CLOCK_REALTIME */
+	uint64_t t_ns;	     /* the tracker's sample time, CLOCK_REALTIME */
 	uint64_t arrival_ns; /* when the daemon took it in, CLOCK_MONOTONIC */
-	float p[3];          /* world position, m */
-	float q[4];          /* world orientation, w x y z */
+	float p[3];	     /* world position, m */
+	float q[4];	     /* world orientation, w x y z */
 	bool has_analog;
 	float analog[4];
 };
@@ -91,7 +93,7 @@ struct recfile_gap {
 struct recfile_end {
 	uint64_t mono_ns;
 	uint64_t records; /* records in this file before END */
-	uint8_t reason;   /* 0 the recorder stopped, 1 rotation */
+	uint8_t reason;	  /* 0 the recorder stopped, 1 rotation */
 };
 
 bool recfile_is_recording(const uint8_t *buf, size_t len);
@@ -148,9 +150,9 @@ struct recfile_source {
 	char *name;
 	char *driver;
 	uint32_t n_sensors;
-	char **sensor;     /* n_sensors names */
-	double origin[3];  /* the source's transform to the world (samples are already in the world) */
-	double yaw;        /* rad */
+	char **sensor;	  /* n_sensors names */
+	double origin[3]; /* the source's transform to the world (samples are already in the world) */
+	double yaw;	  /* rad */
 };
 
 struct recfile_avatar {
@@ -158,14 +160,14 @@ struct recfile_avatar {
 	uint16_t id;
 	uint16_t source[3]; /* head, left hand, right hand */
 	uint16_t sensor[3];
-	double dims[4];     /* S, A, F, H, m */
+	double dims[4]; /* S, A, F, H, m */
 	double head_offset[3];
 };
 
 struct recfile_session {
-	uint64_t real_ns;   /* CLOCK_REALTIME and CLOCK_MONOTONIC at the same instant */
+	uint64_t real_ns; /* CLOCK_REALTIME and CLOCK_MONOTONIC at the same instant */
 	uint64_t mono_ns;
-	double rate;        /* loop rate, Hz */
+	double rate;	    /* loop rate, Hz */
 	uint32_t source_id; /* the wire protocol's source id */
 	uint16_t n_sources;
 	uint16_t n_avatars;

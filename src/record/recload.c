@@ -125,7 +125,7 @@ int rec_index_parse(const uint8_t *buf, size_t len, struct rec_index *ix, char *
 	rc = recfile_header_decode(buf, len, &ix->hdr);
 	if (rc) {
 		snprintf(err, errlen, "%s",
-			 rc == -1 ? "not an avatargw recording (no magic)"
+			 rc == -1   ? "not an avatargw recording (no magic)"
 			 : rc == -2 ? "the file header is damaged (CRC)"
 				    : "a recording of an unknown format version");
 		return -1;
@@ -288,8 +288,8 @@ void rec_index_free(struct rec_index *ix)
 	memset(ix, 0, sizeof(*ix));
 }
 
-int rec_index_person(const struct rec_index *ix, const char *person, int sensor[3], char *label, size_t llen,
-		     char *err, size_t errlen)
+int rec_index_person(const struct rec_index *ix, const char *person, int sensor[3], char *label, size_t llen, char *err,
+		     size_t errlen)
 {
 	static const char *const roles[3] = { "head", "left_hand", "right_hand" };
 	char prefix[2 * RECFILE_NAME_MAX + 2];
@@ -298,7 +298,8 @@ int rec_index_person(const struct rec_index *ix, const char *person, int sensor[
 		const struct recfile_session *s = &ix->session;
 
 		if (!s->n_avatars) {
-			snprintf(err, errlen, "the recording names no avatar: give the person (SOURCE or SOURCE/PREFIX)");
+			snprintf(err, errlen,
+				 "the recording names no avatar: give the person (SOURCE or SOURCE/PREFIX)");
 			return -1;
 		}
 		for (int r = 0; r < 3; r++) {

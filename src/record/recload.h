@@ -18,7 +18,7 @@
 
 struct rec_event {
 	uint64_t arrival_ns; /* CLOCK_MONOTONIC of the recording daemon */
-	uint64_t t_ns;       /* the tracker's sample time */
+	uint64_t t_ns;	     /* the tracker's sample time */
 	uint32_t sensor;     /* index into rec_index.names */
 	uint32_t buttons;
 	float p[3];
@@ -30,18 +30,18 @@ struct rec_index {
 	struct recfile_header hdr;
 	struct recfile_session session; /* the first */
 	uint32_t n_sensors;
-	char **names;                   /* n_sensors, "SOURCE.SENSOR" */
+	char **names; /* n_sensors, "SOURCE.SENSOR" */
 	size_t n_events;
-	struct rec_event *events;       /* every sample, in file order */
+	struct rec_event *events; /* every sample, in file order */
 	size_t n_sessions, n_messages, n_gaps, n_other;
-	uint64_t lost_records;          /* summed over GAP records */
-	size_t n_unmapped;              /* samples of sensors not in the first SESSION */
-	size_t n_bad;                   /* good CRC but a payload that does not decode */
+	uint64_t lost_records; /* summed over GAP records */
+	size_t n_unmapped;     /* samples of sensors not in the first SESSION */
+	size_t n_bad;	       /* good CRC but a payload that does not decode */
 	size_t n_damage;
-	struct recfile_damage *damage;  /* regions that were skipped, in file order */
+	struct recfile_damage *damage; /* regions that were skipped, in file order */
 	size_t damaged_bytes;
-	bool truncated;                 /* the file ends inside a record */
-	bool clean_end;                 /* the last record is an END */
+	bool truncated; /* the file ends inside a record */
+	bool clean_end; /* the last record is an END */
 	size_t file_size;
 };
 
@@ -63,7 +63,7 @@ int rec_index_sensor(const struct rec_index *ix, const char *name);
  * key, as in the configuration of the recording daemon). label gets a
  * printable name. 0 or -1 with err.
  */
-int rec_index_person(const struct rec_index *ix, const char *person, int sensor[3], char *label, size_t llen,
-		     char *err, size_t errlen);
+int rec_index_person(const struct rec_index *ix, const char *person, int sensor[3], char *label, size_t llen, char *err,
+		     size_t errlen);
 
 #endif /* AGW_RECLOAD_H */

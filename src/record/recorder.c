@@ -27,8 +27,8 @@
 #include <unistd.h>
 
 #define WRITE_BUF (256 * 1024)
-#define TICK_NS 10000000ull      /* the writer looks at the ring every 10 ms at most */
-#define RETRY_NS 1000000000ull   /* a file that could not be opened is tried again after 1 s */
+#define TICK_NS 10000000ull    /* the writer looks at the ring every 10 ms at most */
+#define RETRY_NS 1000000000ull /* a file that could not be opened is tried again after 1 s */
 #define RECORDER_NAME_MAX (CFG_PATH_MAX + 64)
 
 struct ring {
@@ -47,14 +47,14 @@ struct recorder {
 	uint64_t rotate_bytes;
 	uint64_t rotate_ns;
 	uint64_t kf_period_ns;
-	struct cfg_daemon cfg;    /* as opened, to tell whether a reload changes it */
+	struct cfg_daemon cfg; /* as opened, to tell whether a reload changes it */
 
 	struct ring ring;
 	struct recorder_stats st;
 
 	/* loop side */
-	uint32_t *kf_base;        /* per attached source: first index into kf_due */
-	uint64_t *kf_due;         /* per sensor: arrival time at which the next keyframe is due */
+	uint32_t *kf_base; /* per attached source: first index into kf_due */
+	uint64_t *kf_due;  /* per sensor: arrival time at which the next keyframe is due */
 	int kf_sources;
 
 	/* writer thread */
@@ -64,14 +64,14 @@ struct recorder {
 	uint32_t seq;
 	uint64_t file_bytes, file_records, file_opened_ns, next_retry_ns;
 	uint8_t *wbuf;
-	size_t wlen, wcap;        /* wcap: the larger of WRITE_BUF and the ring: any record fits */
-	uint64_t wrecords;        /* records in wbuf */
+	size_t wlen, wcap; /* wcap: the larger of WRITE_BUF and the ring: any record fits */
+	uint64_t wrecords; /* records in wbuf */
 	uint64_t last_flush_ns;
-	uint8_t *session;         /* the latest SESSION record, sealed (ring capacity) */
+	uint8_t *session; /* the latest SESSION record, sealed (ring capacity) */
 	size_t session_len;
 	uint64_t gap_records, gap_bytes; /* drops already marked in the file */
 
-	pthread_mutex_t mu;       /* guards cur_path */
+	pthread_mutex_t mu; /* guards cur_path */
 	char cur_path[RECORDER_NAME_MAX];
 
 	/* control thread: what recorder_log() reported last */
@@ -149,7 +149,7 @@ void recorder_sample(struct recorder *r, uint16_t source, uint16_t sensor, const
 		if (s->arrival_ns < *due)
 			return;
 		*due = *due && s->arrival_ns - *due < r->kf_period_ns ? *due + r->kf_period_ns
-								     : s->arrival_ns + r->kf_period_ns;
+								      : s->arrival_ns + r->kf_period_ns;
 	}
 	dq_translation(&s->pose, &p);
 	smp.source = source;
@@ -281,8 +281,8 @@ static bool open_file(struct recorder *r)
 	for (int k = 0; k < 1000; k++) {
 		/* UTC to the millisecond: names sort in time order */
 		size_t n = (size_t)snprintf(name, sizeof(name), "%s/avatargw-%04d%02d%02dT%02d%02d%02d.%03dZ", r->dir,
-					    tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec,
-					    (int)(h.created_ns / 1000000ull % 1000));
+					    tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min,
+					    tm.tm_sec, (int)(h.created_ns / 1000000ull % 1000));
 
 		if (k && n < sizeof(name))
 			n += (size_t)snprintf(name + n, sizeof(name) - n, "-%d", k);
@@ -618,12 +618,15 @@ int recorder_attach(struct recorder *r, struct gateway *g, char *err, size_t err
 	r->kf_due = due;
 	r->kf_sources = g->n_trackers;
 
-	len = r->ring.cap > RECFILE_REC_OVERHEAD ? session_payload(g, rec + RECFILE_REC_HEAD,
-								   r->ring.cap - RECFILE_REC_OVERHEAD) : 0;
+	len = r->ring.cap > RECFILE_REC_OVERHEAD
+		      ? session_payload(g, rec + RECFILE_REC_HEAD, r->ring.cap - RECFILE_REC_OVERHEAD)
+		      : 0;
 	if (!len || len > RECFILE_MAX_PAYLOAD) {
 		free(rec);
-		snprintf(err, errlen, "recorder: the SESSION record of this configuration does not fit record_buffer "
-			 "(%zu KiB): raise it", r->ring.cap / 1024);
+		snprintf(err, errlen,
+			 "recorder: the SESSION record of this configuration does not fit record_buffer "
+			 "(%zu KiB): raise it",
+			 r->ring.cap / 1024);
 		recorder_attach(NULL, g, err, errlen);
 		return -ENOSPC;
 	}
@@ -680,7 +683,8 @@ void recorder_log(struct recorder *r)
 	}
 	if ((v = stat_get(&r->st.dropped_records)) != r->seen_dropped) {
 		pr_warning("recorder: %llu records lost to a full buffer (raise record_buffer, or the disk is slow), "
-			   "%llu in all", (unsigned long long)(v - r->seen_dropped), (unsigned long long)v);
+			   "%llu in all",
+			   (unsigned long long)(v - r->seen_dropped), (unsigned long long)v);
 		r->seen_dropped = v;
 	}
 	if ((v = stat_get(&r->st.write_errors)) != r->seen_errors) {

@@ -29,14 +29,14 @@ struct out_msg;
 struct recorder;
 
 struct recorder_stats {
-	_Atomic uint64_t records;         /* written to files */
-	_Atomic uint64_t bytes;           /* written to files, headers included */
+	_Atomic uint64_t records;	  /* written to files */
+	_Atomic uint64_t bytes;		  /* written to files, headers included */
 	_Atomic uint64_t dropped_records; /* lost to a full ring (loop side) */
 	_Atomic uint64_t dropped_bytes;
 	_Atomic uint64_t skipped_records; /* not written: no file could be opened, or a write failed */
-	_Atomic uint64_t write_errors;    /* failed open/write/fsync calls */
-	_Atomic uint64_t files;           /* files opened */
-	_Atomic uint64_t flushes;         /* write() batches */
+	_Atomic uint64_t write_errors;	  /* failed open/write/fsync calls */
+	_Atomic uint64_t files;		  /* files opened */
+	_Atomic uint64_t flushes;	  /* write() batches */
 	_Atomic int last_errno;
 };
 

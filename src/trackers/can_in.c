@@ -34,12 +34,12 @@
 
 struct can_in {
 	struct can_port port;
-	bool disabled;       /* no CAN here, or no such interface */
+	bool disabled; /* no CAN here, or no such interface */
 	char why[192];
-	bool failed;         /* the port failed; reported to the loop once */
+	bool failed; /* the port failed; reported to the loop once */
 	struct cancodec_sensor_map map;
-	double (*q)[4];      /* per sensor: newest orientation */
-	double (*p)[3];      /* newest position */
+	double (*q)[4]; /* per sensor: newest orientation */
+	double (*p)[3]; /* newest position */
 	bool *have_q, *have_p;
 	_Atomic uint64_t frames, unknown_id, bad_length, bad_value;
 	_Atomic int32_t last_errno;
@@ -66,8 +66,10 @@ static int can_in_check(const struct cfg_source *cfg, char *err, size_t errlen)
 		return -1;
 	}
 	if (o1 > max || p1 > max) {
-		snprintf(err, errlen, "orientation_id, position_id: %d sensors need identifiers up to 0x%lX, above "
-			 "0x%lX (set extended_ids = yes for 29-bit identifiers)", cfg->sensors, o1 > p1 ? o1 : p1, max);
+		snprintf(err, errlen,
+			 "orientation_id, position_id: %d sensors need identifiers up to 0x%lX, above "
+			 "0x%lX (set extended_ids = yes for 29-bit identifiers)",
+			 cfg->sensors, o1 > p1 ? o1 : p1, max);
 		return -1;
 	}
 	if (p0 >= 0 && o0 <= p1 && p0 <= o1) {

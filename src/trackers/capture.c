@@ -119,7 +119,7 @@ int capture_parse(struct capture *c, const char *name, const char *text, char *e
 		}
 		c->rep[c->n++] = (struct capture_report){ t, (uint32_t)used, (uint16_t)len, (uint32_t)lineno };
 		used += len;
-next:
+	next:
 		if (!end)
 			break;
 		line = end + 1;
@@ -135,8 +135,7 @@ next:
 	c->timed = !untimed;
 	return 0;
 bad:
-	snprintf(err, errlen, "%s:%d: not a report (hex bytes, optionally after a timestamp in seconds)", name,
-		 lineno);
+	snprintf(err, errlen, "%s:%d: not a report (hex bytes, optionally after a timestamp in seconds)", name, lineno);
 fail:
 	capture_free(c);
 	return -1;

@@ -23,17 +23,17 @@
 #define CAPTURE_MAX_REPORT 4096 /* bytes of one report at most */
 
 struct capture_report {
-	double t;        /* s since the capture's first report; < 0: no timestamp */
-	uint32_t off;    /* into capture.bytes */
+	double t;     /* s since the capture's first report; < 0: no timestamp */
+	uint32_t off; /* into capture.bytes */
 	uint16_t len;
-	uint32_t line;   /* in the file, for messages */
+	uint32_t line; /* in the file, for messages */
 };
 
 struct capture {
 	uint8_t *bytes;
 	struct capture_report *rep;
 	int n;
-	bool timed;      /* every report has a timestamp */
+	bool timed; /* every report has a timestamp */
 };
 
 /*

@@ -35,21 +35,21 @@
 #include <stdatomic.h>
 
 #define DEVICE_MAX_SENSORS CFG_MAX_STATIONS
-#define DEVICE_NOTES 16        /* notes kept for the control thread; older ones are dropped (and counted) */
+#define DEVICE_NOTES 16 /* notes kept for the control thread; older ones are dropped (and counted) */
 #define DEVICE_NOTE_LEN 512
 
 /* one decoded sample, in the tracker's frame (z up, metres, unit quaternion) */
 struct device_sample {
 	struct dq pose;
-	uint32_t buttons;                 /* the driver's button bits (docs/TRACKERS.md) */
+	uint32_t buttons; /* the driver's button bits (docs/TRACKERS.md) */
 	float analog[SENSOR_ANALOG_MAX];
-	bool inputs;                      /* the sensor has buttons and analog values */
+	bool inputs; /* the sensor has buttons and analog values */
 };
 
 /* what a codec counted; the first member of every codec's state */
 struct device_counts {
 	uint64_t malformed; /* reports or records dropped: wrong length, bad header, not a unit quaternion... */
-	uint64_t lost;      /* reports the device numbered but that never arrived */
+	uint64_t lost;	    /* reports the device numbered but that never arrived */
 	uint64_t resyncs;   /* times a byte stream lost its framing and searched for the next header */
 	uint64_t reports;   /* reports or records decoded */
 };
@@ -58,8 +58,8 @@ typedef void device_emit_fn(void *ctx, int sensor, const struct device_sample *s
 
 /* a decoder: the same code for a device, a capture and avatargw-decode */
 struct device_codec {
-	const char *name;   /* the driver's name in config */
-	size_t size;        /* of its state, which starts with struct device_counts */
+	const char *name; /* the driver's name in config */
+	size_t size;	  /* of its state, which starts with struct device_counts */
 	/* prepares the state for a source; 0, or -1 with err */
 	int (*init)(void *st, const struct cfg_source *cfg, char *err, size_t errlen);
 	/* a new stream starts (reopened device, capture from the top): continuity is forgotten, counts are kept */
@@ -79,9 +79,9 @@ enum device_link { DEVICE_DOWN, DEVICE_STARTING, DEVICE_UP, DEVICE_ENDED };
 
 struct device_slot {
 	struct device_sample s;
-	uint64_t t_ns;       /* CLOCK_REALTIME when the report was read */
+	uint64_t t_ns;	     /* CLOCK_REALTIME when the report was read */
 	uint64_t arrival_ns; /* CLOCK_MONOTONIC, the same moment */
-	uint32_t count;      /* samples of this sensor so far */
+	uint32_t count;	     /* samples of this sensor so far */
 };
 
 struct device_snap {
@@ -102,27 +102,27 @@ struct device {
 	void *codec_st;
 	struct device_counts told; /* what was added to the tracker's counters already */
 	int n_sensors;
-	void *drv;                 /* the driver's own state */
-	device_run_fn *run;        /* the thread's body: returns when device_stopping() */
-	FILE *rec;                 /* record = FILE: every report fed, as a capture line */
-	uint64_t rec_t0;           /* CLOCK_MONOTONIC of the first recorded report */
+	void *drv;	    /* the driver's own state */
+	device_run_fn *run; /* the thread's body: returns when device_stopping() */
+	FILE *rec;	    /* record = FILE: every report fed, as a capture line */
+	uint64_t rec_t0;    /* CLOCK_MONOTONIC of the first recorded report */
 
 	pthread_t thread;
 	bool started;
 	_Atomic bool stop;
-	_Atomic int link;          /* enum device_link */
-	int efd;                   /* eventfd: readable when a sample was handed over */
+	_Atomic int link; /* enum device_link */
+	int efd;	  /* eventfd: readable when a sample was handed over */
 
 	/* the handoff: a triple buffer (no lock, no tearing; the reader always gets the newest) */
-	struct device_snap work;   /* the device thread's current state */
-	struct device_snap *buf;   /* [3] */
-	_Atomic unsigned mid;      /* index of the buffer between the two, | DEVICE_FRESH when new */
-	unsigned back;             /* the device thread's */
-	unsigned front;            /* the loop's */
+	struct device_snap work;	   /* the device thread's current state */
+	struct device_snap *buf;	   /* [3] */
+	_Atomic unsigned mid;		   /* index of the buffer between the two, | DEVICE_FRESH when new */
+	unsigned back;			   /* the device thread's */
+	unsigned front;			   /* the loop's */
 	uint32_t seen[DEVICE_MAX_SENSORS]; /* the loop's: counts already put */
 
 	/* control thread's view */
-	pthread_mutex_t mu;        /* notes, status; also the stop wait */
+	pthread_mutex_t mu; /* notes, status; also the stop wait */
 	pthread_cond_t cv;
 	struct device_note notes[DEVICE_NOTES];
 	unsigned note_head, note_count, notes_dropped;

@@ -55,11 +55,11 @@
 #include <wchar.h>
 
 struct hydra_timing hydra_timing = {
-	.probe_ms = 250,   /* 60 reports' worth: a device in motion mode has sent some by then */
-	.retry_ms = 5000,  /* VRPN's wait after a mode request */
+	.probe_ms = 250,  /* 60 reports' worth: a device in motion mode has sent some by then */
+	.retry_ms = 5000, /* VRPN's wait after a mode request */
 	.stall_ms = 500,
 	.search_ms = 200,
-	.bad_run = 25,     /* 0.1 s of reports */
+	.bad_run = 25, /* 0.1 s of reports */
 };
 
 /* hidapi is not thread-safe for enumeration, opening and closing: one lock for every Hydra source */
@@ -116,10 +116,10 @@ struct hydra_codec_st {
 	bool have_seq;
 	uint8_t seq;
 	bool tracking[2];
-	double prev[2][3];  /* the previous position of each wand, base frame, mm, hemisphere resolved */
-	int jumps;          /* reports in a row rejected for an impossible jump */
+	double prev[2][3];    /* the previous position of each wand, base frame, mm, hemisphere resolved */
+	int jumps;	      /* reports in a row rejected for an impossible jump */
 	uint64_t rejected[4]; /* bit d: number seq + d came in a rejected report (received: not lost) */
-	uint64_t flips;     /* positions taken as -p */
+	uint64_t flips;	      /* positions taken as -p */
 };
 
 /*
@@ -410,15 +410,15 @@ struct hydra {
 	bool use_capture;
 	hid_device *data, *ctrl;
 	bool ctrl_is_data;
-	bool found_gamepad;   /* this connection switched it from gamepad mode (or one before it did) */
+	bool found_gamepad;	 /* this connection switched it from gamepad mode (or one before it did) */
 	struct hydra_open *open; /* the device's entry in hydra_opens */
 	bool ever_up;
 	char path[PATH_MAX];
 	char port[64];
-	unsigned attempts;    /* mode requests of this connection */
-	char told[PATH_MAX];  /* the node last told about (an open failure): not again every second */
+	unsigned attempts;   /* mode requests of this connection */
+	char told[PATH_MAX]; /* the node last told about (an open failure): not again every second */
 	int told_errno;
-	uint64_t requests;    /* mode requests in all */
+	uint64_t requests; /* mode requests in all */
 };
 
 static void hydra_feature(uint8_t rep[HYDRA_FEATURE_LEN], bool motion)
@@ -479,8 +479,7 @@ static void hydra_close_dev(struct hydra *h, bool restore)
 			device_note(&h->dev, LOG_WARNING, "[source %s] Razer Hydra: back to gamepad mode failed: %s",
 				    h->dev.t->name, hydra_errstr(h->ctrl));
 		else
-			device_note(&h->dev, LOG_INFO, "[source %s] Razer Hydra: back in gamepad mode",
-				    h->dev.t->name);
+			device_note(&h->dev, LOG_INFO, "[source %s] Razer Hydra: back in gamepad mode", h->dev.t->name);
 	}
 	if (h->ctrl && !h->ctrl_is_data)
 		hid_close(h->ctrl);
@@ -532,12 +531,11 @@ static int hydra_open_dev(struct hydra *h)
 			return e ? -e : -EIO;
 		snprintf(h->told, sizeof(h->told), "%s", bad);
 		h->told_errno = e;
-		device_note(&h->dev, LOG_ERR,
-			    "[source %s] Razer Hydra: cannot open %s: %s%s", h->dev.t->name, bad,
+		device_note(&h->dev, LOG_ERR, "[source %s] Razer Hydra: cannot open %s: %s%s", h->dev.t->name, bad,
 			    e ? strerror(e) : "failed",
-			    e == EACCES || e == EPERM
-				    ? " (install systemd/60-avatargw.rules and be in the group avatargw: README, Setting up a tracker)"
-				    : "");
+			    e == EACCES || e == EPERM ? " (install systemd/60-avatargw.rules and be in the group "
+							"avatargw: README, Setting up a tracker)"
+						      : "");
 		return e ? -e : -EIO;
 	}
 	snprintf(h->path, sizeof(h->path), "%s", found[k][0].path);
@@ -591,20 +589,23 @@ static int hydra_handshake(struct hydra *h, bool first)
 		h->requests++;
 		hydra_feature(rep, true);
 		if (hid_send_feature_report(h->ctrl, rep, sizeof(rep)) < 0) {
-			device_note(&h->dev, LOG_WARNING, "[source %s] Razer Hydra on %s: the motion-mode request failed: %s",
-				    h->dev.t->name, h->path, hydra_errstr(h->ctrl));
+			device_note(&h->dev, LOG_WARNING,
+				    "[source %s] Razer Hydra on %s: the motion-mode request failed: %s", h->dev.t->name,
+				    h->path, hydra_errstr(h->ctrl));
 		} else {
 			/* as VRPN and Monado do: read the feature report back, which some firmware wants */
 			memset(got, 0, sizeof(got));
 			hid_get_feature_report(h->ctrl, got, sizeof(got));
 		}
-		device_set_status(&h->dev, "Razer Hydra on %s (USB port %s): in gamepad mode, motion-mode request %u sent",
+		device_set_status(&h->dev,
+				  "Razer Hydra on %s (USB port %s): in gamepad mode, motion-mode request %u sent",
 				  h->path, h->port, h->attempts);
 		rc = hydra_await_motion(h, hydra_timing.retry_ms);
 		if (rc)
 			return rc;
 		device_note(&h->dev, LOG_WARNING,
-			    "[source %s] Razer Hydra on %s: still no motion report %d ms after motion-mode request %u; asking again",
+			    "[source %s] Razer Hydra on %s: still no motion report %d ms after motion-mode request %u; "
+			    "asking again",
 			    h->dev.t->name, h->path, hydra_timing.retry_ms, h->attempts);
 	}
 	return 0;
@@ -630,7 +631,8 @@ static int hydra_stream(struct hydra *h)
 		}
 		if (n > 0 && n != HYDRA_REPORT_LEN && ++bad >= hydra_timing.bad_run) {
 			device_note(&h->dev, LOG_WARNING,
-				    "[source %s] Razer Hydra on %s: %d reports of the wrong length in a row: it left motion mode",
+				    "[source %s] Razer Hydra on %s: %d reports of the wrong length in a row: it left "
+				    "motion mode",
 				    h->dev.t->name, h->path, bad);
 			return 0;
 		}
@@ -661,9 +663,11 @@ static void hydra_run(struct device *d)
 		if (rc == -ENOENT) {
 			device_set_status(d, "no Razer Hydra%s%s found; looking every %d ms",
 					  strcmp(d->t->cfg->device, "auto") ? " at " : "",
-					  strcmp(d->t->cfg->device, "auto") ? d->t->cfg->device : "", hydra_timing.search_ms);
+					  strcmp(d->t->cfg->device, "auto") ? d->t->cfg->device : "",
+					  hydra_timing.search_ms);
 			if (!told_missing)
-				device_note(d, LOG_WARNING, "[source %s] no Razer Hydra (1532:0300) found; waiting for one",
+				device_note(d, LOG_WARNING,
+					    "[source %s] no Razer Hydra (1532:0300) found; waiting for one",
 					    d->t->name);
 			told_missing = true;
 			device_sleep_ms(d, hydra_timing.search_ms);
@@ -697,8 +701,9 @@ static void hydra_run(struct device *d)
 			device_set_link(d, DEVICE_UP);
 			device_set_status(d, "Razer Hydra on %s (USB port %s): motion mode (%s)", h->path, h->port,
 					  h->found_gamepad ? "switched from gamepad mode" : "found in motion mode");
-			device_note(d, LOG_INFO, "[source %s] Razer Hydra on %s: motion reports flowing (%s)", d->t->name,
-				    h->path, h->found_gamepad ? "switched from gamepad mode" : "was in motion mode");
+			device_note(d, LOG_INFO, "[source %s] Razer Hydra on %s: motion reports flowing (%s)",
+				    d->t->name, h->path,
+				    h->found_gamepad ? "switched from gamepad mode" : "was in motion mode");
 			rc = hydra_stream(h);
 			if (rc < 0)
 				break;
@@ -787,7 +792,8 @@ static int hydra_list(FILE *out)
 		hid_device *h;
 		int e;
 
-		fprintf(out, "Razer Hydra (1532:0300) on USB port %s: motion reports on %s (interface 0), "
+		fprintf(out,
+			"Razer Hydra (1532:0300) on USB port %s: motion reports on %s (interface 0), "
 			"mode switch on %s (interface 1)\n",
 			found[k][0].port[0] ? found[k][0].port : "?", found[k][0].path,
 			found[k][1].path[0] ? found[k][1].path : "(none)");
@@ -800,14 +806,16 @@ static int hydra_list(FILE *out)
 		pthread_mutex_unlock(&hydra_hid_lock);
 		if (!h)
 			fprintf(out, "  cannot open it: %s%s\n", e ? strerror(e) : "failed",
-				e == EACCES || e == EPERM ? " (udev rule and group avatargw: README, Setting up a tracker)"
-							   : "");
+				e == EACCES || e == EPERM
+					? " (udev rule and group avatargw: README, Setting up a tracker)"
+					: "");
 		char name[16];
 
 		snprintf(name, sizeof(name), n > 1 ? "hydra%d" : "hydra", k);
 		fprintf(out, "  [source %s]\n  type = hydra\n  device = %s\n", name,
 			found[k][0].port[0] ? found[k][0].port : found[k][0].path);
-		fprintf(out, "  ; its sensors: %s/left and %s/right (with buttons, joystick and trigger)\n\n", name, name);
+		fprintf(out, "  ; its sensors: %s/left and %s/right (with buttons, joystick and trigger)\n\n", name,
+			name);
 	}
 	return n;
 }

@@ -8,13 +8,13 @@
 
 #define HYDRA_VID 0x1532
 #define HYDRA_PID 0x0300
-#define HYDRA_REPORT_LEN 52      /* motion report, no report id */
-#define HYDRA_FEATURE_LEN 91     /* mode feature report, report id 0 included */
-#define HYDRA_RATE_HZ 250.0      /* interrupt endpoint polled every 4 ms */
+#define HYDRA_REPORT_LEN 52  /* motion report, no report id */
+#define HYDRA_FEATURE_LEN 91 /* mode feature report, report id 0 included */
+#define HYDRA_RATE_HZ 250.0  /* interrupt endpoint polled every 4 ms */
 
 /* sensors of a hydra source, in this order */
-#define HYDRA_LEFT 0             /* the wand with LB/LT: report block A */
-#define HYDRA_RIGHT 1            /* RB/RT: block B */
+#define HYDRA_LEFT 0  /* the wand with LB/LT: report block A */
+#define HYDRA_RIGHT 1 /* RB/RT: block B */
 
 /* our button bits (VRPN's numbering) */
 #define HYDRA_BTN_START (1u << 0)
@@ -35,11 +35,11 @@
  * tests of the retry paths need not wait 5 s per attempt.
  */
 struct hydra_timing {
-	int probe_ms;    /* after opening: a motion report within this long means motion mode already */
-	int retry_ms;    /* after the motion-mode request: wait this long for motion reports, then ask again */
-	int stall_ms;    /* no motion report for this long while running: ask for motion mode again */
-	int search_ms;   /* while no Hydra is found: enumerate this often */
-	int bad_run;     /* this many reports of the wrong length in a row: the device left motion mode */
+	int probe_ms;  /* after opening: a motion report within this long means motion mode already */
+	int retry_ms;  /* after the motion-mode request: wait this long for motion reports, then ask again */
+	int stall_ms;  /* no motion report for this long while running: ask for motion mode again */
+	int search_ms; /* while no Hydra is found: enumerate this often */
+	int bad_run;   /* this many reports of the wrong length in a row: the device left motion mode */
 };
 
 extern struct hydra_timing hydra_timing;

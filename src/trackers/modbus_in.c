@@ -41,9 +41,9 @@
 #include <time.h>
 #include <unistd.h>
 
-#define MODBUS_IN_BACKOFF_MIN_NS 200000000ull   /* first retry after 0.2 s */
-#define MODBUS_IN_BACKOFF_MAX_NS 5000000000ull  /* then doubling up to 5 s */
-#define MODBUS_IN_MAX_READS 64                  /* 16 sensors, position and orientation apart */
+#define MODBUS_IN_BACKOFF_MIN_NS 200000000ull  /* first retry after 0.2 s */
+#define MODBUS_IN_BACKOFF_MAX_NS 5000000000ull /* then doubling up to 5 s */
+#define MODBUS_IN_MAX_READS 64		       /* 16 sensors, position and orientation apart */
 
 enum modbus_in_link { MODBUS_IN_CONNECTING, MODBUS_IN_UP, MODBUS_IN_DOWN };
 
@@ -67,33 +67,33 @@ struct modbus_in_read {
 struct modbus_in {
 	/* settings */
 	char name[CFG_NAME_MAX];
-	char where[CFG_PATH_MAX + 16];  /* host:port, for messages */
+	char where[CFG_PATH_MAX + 16]; /* host:port, for messages */
 	int n;
 	uint64_t period_ns;
 	int reads;
 	struct modbus_in_read read[MODBUS_IN_MAX_READS];
-	int lo, span;                   /* the registers read: [lo, lo + span) */
-	const struct cfg_source *cfg;   /* valid until close(), which joins the thread first */
+	int lo, span;		      /* the registers read: [lo, lo + span) */
+	const struct cfg_source *cfg; /* valid until close(), which joins the thread first */
 
 	/* the thread */
 	pthread_t th;
 	bool started;
 	pthread_mutex_t mu;
 	pthread_cond_t cv;
-	bool stop;                      /* under mu */
+	bool stop; /* under mu */
 	modbus_t *ctx;
-	uint16_t *img;                  /* the registers [lo, lo + span) */
-	int efd;                        /* readable when a poll brought poses (event-mode loops) */
+	uint16_t *img; /* the registers [lo, lo + span) */
+	int efd;       /* readable when a poll brought poses (event-mode loops) */
 
 	/* handed to the loop */
 	struct modbus_in_slot *slot;
-	_Atomic uint32_t link;          /* enum modbus_in_link */
+	_Atomic uint32_t link; /* enum modbus_in_link */
 	_Atomic int32_t last_errno;
 	_Atomic uint64_t polls, connects, losses, exceptions, timeouts, malformed;
 
 	/* the loop's */
-	uint32_t *seen;                 /* per sensor: sequence taken in */
-	bool reported;                  /* the current outage was returned to the loop */
+	uint32_t *seen; /* per sensor: sequence taken in */
+	bool reported;	/* the current outage was returned to the loop */
 	uint64_t malformed_seen;
 };
 
@@ -137,16 +137,21 @@ static int modbus_in_check(const struct cfg_source *cfg, char *err, size_t errle
 		return -1;
 	}
 	if (cfg->pos_register + last + pn > 65536 || cfg->ori_register + last + on > 65536) {
-		snprintf(err, errlen, "position_register, orientation_register: the map of %d sensors goes beyond "
-			 "register 65535", cfg->sensors);
+		snprintf(err, errlen,
+			 "position_register, orientation_register: the map of %d sensors goes beyond "
+			 "register 65535",
+			 cfg->sensors);
 		return -1;
 	}
 	for (int k = 0; k < cfg->sensors && on; k++) {
-		long p0 = cfg->pos_register + (long)k * cfg->sensor_stride, o0 = cfg->ori_register + (long)k * cfg->sensor_stride;
+		long p0 = cfg->pos_register + (long)k * cfg->sensor_stride,
+		     o0 = cfg->ori_register + (long)k * cfg->sensor_stride;
 
 		if (p0 < o0 + on && o0 < p0 + pn) {
-			snprintf(err, errlen, "position_register, orientation_register: sensor %d's position (%ld-%ld) "
-				 "and orientation (%ld-%ld) overlap", k, p0, p0 + pn - 1, o0, o0 + on - 1);
+			snprintf(err, errlen,
+				 "position_register, orientation_register: sensor %d's position (%ld-%ld) "
+				 "and orientation (%ld-%ld) overlap",
+				 k, p0, p0 + pn - 1, o0, o0 + on - 1);
 			return -1;
 		}
 	}
@@ -165,7 +170,8 @@ static void plan_reads(struct modbus_in *m, const struct cfg_source *cfg)
 	int n = 0, on = ori_values(cfg->orientation) * width(cfg->ori_format);
 
 	for (int k = 0; k < cfg->sensors; k++) {
-		r[n++] = (struct modbus_in_read){ cfg->pos_register + k * cfg->sensor_stride, 3 * width(cfg->pos_format) };
+		r[n++] = (struct modbus_in_read){ cfg->pos_register + k * cfg->sensor_stride,
+						  3 * width(cfg->pos_format) };
 		if (on)
 			r[n++] = (struct modbus_in_read){ cfg->ori_register + k * cfg->sensor_stride, on };
 	}
@@ -295,7 +301,8 @@ static void set_link(struct modbus_in *m, int link, int err)
 	atomic_store_explicit(&m->link, (uint32_t)link, memory_order_release);
 	/* one line per change, not per attempt */
 	if (link == MODBUS_IN_UP && prev != MODBUS_IN_UP)
-		pr_info("source %s: Modbus %s: %s", m->name, m->where, prev == MODBUS_IN_DOWN ? "answering again" : "connected");
+		pr_info("source %s: Modbus %s: %s", m->name, m->where,
+			prev == MODBUS_IN_DOWN ? "answering again" : "connected");
 	else if (link == MODBUS_IN_DOWN && prev != MODBUS_IN_DOWN)
 		pr_warning("source %s: Modbus %s: %s; retrying (after 0.2 s, then up to every 5 s)", m->name, m->where,
 			   modbus_strerror(err));
@@ -310,8 +317,9 @@ static int poll_device(struct modbus_in *m)
 	for (int i = 0; i < m->reads; i++) {
 		const struct modbus_in_read *r = &m->read[i];
 		uint16_t *dst = m->img + (r->addr - m->lo);
-		int rc = cfg->register_type == CFG_REGS_INPUT ? modbus_read_input_registers(m->ctx, r->addr, r->count, dst)
-							      : modbus_read_registers(m->ctx, r->addr, r->count, dst);
+		int rc = cfg->register_type == CFG_REGS_INPUT
+				 ? modbus_read_input_registers(m->ctx, r->addr, r->count, dst)
+				 : modbus_read_registers(m->ctx, r->addr, r->count, dst);
 
 		if (rc != r->count)
 			return rc < 0 ? errno : EMBBADDATA;
@@ -362,7 +370,8 @@ static void *modbus_in_thread(void *arg)
 				set_link(m, MODBUS_IN_DOWN, errno);
 				if (wait_until(m, clock_ns(CLOCK_MONOTONIC) + backoff))
 					break;
-				backoff = backoff * 2 > MODBUS_IN_BACKOFF_MAX_NS ? MODBUS_IN_BACKOFF_MAX_NS : backoff * 2;
+				backoff =
+					backoff * 2 > MODBUS_IN_BACKOFF_MAX_NS ? MODBUS_IN_BACKOFF_MAX_NS : backoff * 2;
 				continue;
 			}
 			connected = true;
@@ -545,11 +554,14 @@ static void modbus_in_report(struct tracker *t, FILE *out, bool json)
 	int e = atomic_load_explicit(&m->last_errno, memory_order_relaxed);
 
 	if (json) {
-		fprintf(out, ",\"modbus\":{\"device\":\"%s\",\"link\":\"%s\",\"last_error\":\"%s\",\"polls\":%llu,"
-			"\"connects\":%llu,\"losses\":%llu,\"timeouts\":%llu,\"exceptions\":%llu,\"reads_per_poll\":%d}",
+		fprintf(out,
+			",\"modbus\":{\"device\":\"%s\",\"link\":\"%s\",\"last_error\":\"%s\",\"polls\":%llu,"
+			"\"connects\":%llu,\"losses\":%llu,\"timeouts\":%llu,\"exceptions\":%llu,\"reads_per_poll\":%"
+			"d}",
 			m->where, links[link], e ? modbus_strerror(e) : "", (unsigned long long)ctr_get(&m->polls),
 			(unsigned long long)ctr_get(&m->connects), (unsigned long long)ctr_get(&m->losses),
-			(unsigned long long)ctr_get(&m->timeouts), (unsigned long long)ctr_get(&m->exceptions), m->reads);
+			(unsigned long long)ctr_get(&m->timeouts), (unsigned long long)ctr_get(&m->exceptions),
+			m->reads);
 		return;
 	}
 	fprintf(out, "  %s: Modbus %s %s%s%s: %llu polls, %llu connects, %llu losses, %llu timeouts, %llu exceptions\n",

@@ -49,7 +49,7 @@
 #include <syslog.h>
 
 struct polhemus_timing polhemus_timing = {
-	.drain_ms = 50,   /* what the Polhemus drivers use */
+	.drain_ms = 50, /* what the Polhemus drivers use */
 	.stall_ms = 500,
 	.search_ms = 200,
 	.restarts = 2,
@@ -130,7 +130,7 @@ struct polhemus_codec_st {
 	uint32_t frame[CFG_MAX_STATIONS + 1];
 	uint64_t error_records; /* records whose error byte was not a space */
 	uint8_t last_error;
-	uint64_t skipped;       /* bytes dropped while looking for a header */
+	uint64_t skipped; /* bytes dropped while looking for a header */
 	size_t len;
 	uint8_t buf[POLHEMUS_BUF];
 };
@@ -349,19 +349,19 @@ struct polhemus {
 	libusb_context *ctx;
 	libusb_hotplug_callback_handle hp;
 	bool hotplug;
-	_Atomic bool arrived;   /* a hot-plug arrival since the last search */
+	_Atomic bool arrived; /* a hot-plug arrival since the last search */
 	libusb_device_handle *h;
 	const struct polhemus_product *prod;
 	char port[64];
 	uint8_t ep_in, ep_out;
 	uint16_t out_packet;
 	bool ever_up;
-	char told_fw[64];       /* the port last told to need firmware */
+	char told_fw[64];	/* the port last told to need firmware */
 	uint64_t error_records; /* told so far */
-	int failures;           /* set-ups or streams that failed in a row (notes are spared after the first few) */
-	char told_open[64];     /* the port whose open failure was told (not again every second) */
+	int failures;		/* set-ups or streams that failed in a row (notes are spared after the first few) */
+	char told_open[64];	/* the port whose open failure was told (not again every second) */
 	int told_rc;
-	uint64_t busy_since;    /* CLOCK_MONOTONIC since the interface is held by someone else, 0: it is not */
+	uint64_t busy_since; /* CLOCK_MONOTONIC since the interface is held by someone else, 0: it is not */
 };
 
 /*
@@ -416,7 +416,8 @@ static int usb_drain(struct polhemus *p)
 
 	/* 200 reads at most: a device that never stops talking has not heard P */
 	for (int i = 0; i < 200 && !device_stopping(&p->dev); i++) {
-		int got = 0, rc = libusb_bulk_transfer(p->h, p->ep_in, buf, sizeof(buf), &got, (unsigned)polhemus_timing.drain_ms);
+		int got = 0, rc = libusb_bulk_transfer(p->h, p->ep_in, buf, sizeof(buf), &got,
+						       (unsigned)polhemus_timing.drain_ms);
 
 		if (rc == LIBUSB_ERROR_TIMEOUT && !got)
 			return 0;
@@ -495,16 +496,22 @@ static int usb_open(struct polhemus *p)
 		if (!pr || !model_matches(cfg->model, pr) || (strcmp(cfg->device, "auto") && strcmp(cfg->device, port)))
 			continue;
 		if (pr->needs_firmware) {
-			device_set_status(&p->dev, "Polhemus %s (0f44:%04x) on USB port %s waits for its firmware (fxload)",
+			device_set_status(&p->dev,
+					  "Polhemus %s (0f44:%04x) on USB port %s waits for its firmware (fxload)",
 					  pr->name, pr->pid, port);
 			if (strcmp(p->told_fw, port)) {
 				device_note(&p->dev, LOG_ERR,
-					    "[source %s] Polhemus %s (0f44:%04x) on USB port %s has no firmware yet: it needs "
-					    "fxload at every plug-in. Install Polhemus' Linux tools and add a udev rule beside "
-					    "60-avatargw.rules: ACTION==\"add\", SUBSYSTEM==\"usb\", ATTR{idVendor}==\"0f44\", "
-					    "ATTR{idProduct}==\"%04x\", RUN+=\"/sbin/fxload %s -D $devnode\" (docs/TRACKERS.md); "
+					    "[source %s] Polhemus %s (0f44:%04x) on USB port %s has no firmware yet: "
+					    "it needs "
+					    "fxload at every plug-in. Install Polhemus' Linux tools and add a udev "
+					    "rule beside "
+					    "60-avatargw.rules: ACTION==\"add\", SUBSYSTEM==\"usb\", "
+					    "ATTR{idVendor}==\"0f44\", "
+					    "ATTR{idProduct}==\"%04x\", RUN+=\"/sbin/fxload %s -D $devnode\" "
+					    "(docs/TRACKERS.md); "
 					    "waiting for it as 0f44:%04x",
-					    p->dev.t->name, pr->name, pr->pid, port, pr->pid, pr->fxload, pr->ready_pid);
+					    p->dev.t->name, pr->name, pr->pid, port, pr->pid, pr->fxload,
+					    pr->ready_pid);
 				snprintf(p->told_fw, sizeof(p->told_fw), "%s", port);
 			}
 			continue;
@@ -536,11 +543,11 @@ static int usb_open(struct polhemus *p)
 			return -EACCES;
 		snprintf(p->told_open, sizeof(p->told_open), "%s", pick_port);
 		p->told_rc = rc;
-		device_note(&p->dev, LOG_ERR, "[source %s] Polhemus %s on USB port %s: cannot open: %s%s", p->dev.t->name,
-			    pick_pr->name, pick_port, libusb_strerror(rc),
-			    rc == LIBUSB_ERROR_ACCESS
-				    ? " (install systemd/60-avatargw.rules and be in the group avatargw: README, Setting up a tracker)"
-				    : "");
+		device_note(&p->dev, LOG_ERR, "[source %s] Polhemus %s on USB port %s: cannot open: %s%s",
+			    p->dev.t->name, pick_pr->name, pick_port, libusb_strerror(rc),
+			    rc == LIBUSB_ERROR_ACCESS ? " (install systemd/60-avatargw.rules and be in the group "
+							"avatargw: README, Setting up a tracker)"
+						      : "");
 		p->h = NULL;
 		return -EACCES;
 	}
@@ -553,8 +560,9 @@ static int usb_open(struct polhemus *p)
 	if (rc)
 		goto fail;
 	if (!p->ep_in || !p->ep_out) {
-		device_note(&p->dev, LOG_ERR, "[source %s] Polhemus %s on USB port %s: no bulk endpoints on interface 0",
-			    p->dev.t->name, pick_pr->name, pick_port);
+		device_note(&p->dev, LOG_ERR,
+			    "[source %s] Polhemus %s on USB port %s: no bulk endpoints on interface 0", p->dev.t->name,
+			    pick_pr->name, pick_port);
 		libusb_release_interface(p->h, 0);
 		rc = LIBUSB_ERROR_NOT_FOUND;
 		goto fail;
@@ -568,7 +576,8 @@ fail:
 		if (!p->busy_since)
 			p->busy_since = now;
 		if (now - p->busy_since < POLHEMUS_BUSY_GRACE_MS * 1000000ull) {
-			device_set_status(&p->dev, "Polhemus %s on USB port %s: waiting for its interface to be released",
+			device_set_status(&p->dev,
+					  "Polhemus %s on USB port %s: waiting for its interface to be released",
 					  pick_pr->name, pick_port);
 			libusb_close(p->h);
 			p->h = NULL;
@@ -635,13 +644,17 @@ static int usb_stream(struct polhemus *p)
 			restarts = pipes = errors = 0;
 			if (device_link_of(&p->dev) != DEVICE_UP) {
 				device_set_link(&p->dev, DEVICE_UP);
-				device_set_status(&p->dev, "Polhemus %s on USB port %s: streaming", p->prod->name, p->port);
+				device_set_status(&p->dev, "Polhemus %s on USB port %s: streaming", p->prod->name,
+						  p->port);
 			}
 		}
 		if (cs->error_records != p->error_records) {
-			device_note(&p->dev, LOG_WARNING, "[source %s] Polhemus %s: %llu records with error code '%c' (0x%02x) dropped",
-				    p->dev.t->name, p->prod->name, (unsigned long long)(cs->error_records - p->error_records),
-				    cs->last_error >= 0x20 && cs->last_error < 0x7f ? cs->last_error : '?', cs->last_error);
+			device_note(&p->dev, LOG_WARNING,
+				    "[source %s] Polhemus %s: %llu records with error code '%c' (0x%02x) dropped",
+				    p->dev.t->name, p->prod->name,
+				    (unsigned long long)(cs->error_records - p->error_records),
+				    cs->last_error >= 0x20 && cs->last_error < 0x7f ? cs->last_error : '?',
+				    cs->last_error);
 			p->error_records = cs->error_records;
 		}
 		switch (rc) {
@@ -649,9 +662,11 @@ static int usb_stream(struct polhemus *p)
 		case LIBUSB_ERROR_TIMEOUT:
 			break;
 		case LIBUSB_ERROR_NO_DEVICE:
-			device_note(&p->dev, LOG_ERR, "[source %s] Polhemus %s on USB port %s: unplugged; waiting for it",
-				    p->dev.t->name, p->prod->name, p->port);
-			device_set_status(&p->dev, "Polhemus %s on USB port %s lost; waiting for it", p->prod->name, p->port);
+			device_note(&p->dev, LOG_ERR,
+				    "[source %s] Polhemus %s on USB port %s: unplugged; waiting for it", p->dev.t->name,
+				    p->prod->name, p->port);
+			device_set_status(&p->dev, "Polhemus %s on USB port %s lost; waiting for it", p->prod->name,
+					  p->port);
 			return -1;
 		case LIBUSB_ERROR_PIPE:
 			/* the endpoint halted: clear it and go on; a device that keeps halting is reopened */
@@ -659,7 +674,8 @@ static int usb_stream(struct polhemus *p)
 			if (++pipes >= polhemus_timing.pipe_limit) {
 				if (p->failures < 3)
 					device_note(&p->dev, LOG_ERR,
-						    "[source %s] Polhemus %s: endpoint 0x%02x halted %d times in a row: reopening",
+						    "[source %s] Polhemus %s: endpoint 0x%02x halted %d times in a "
+						    "row: reopening",
 						    p->dev.t->name, p->prod->name, p->ep_in, pipes);
 				device_set_status(&p->dev, "Polhemus %s on USB port %s: endpoint 0x%02x keeps halting",
 						  p->prod->name, p->port, p->ep_in);
@@ -669,8 +685,8 @@ static int usb_stream(struct polhemus *p)
 		default:
 			if (++errors >= 3) {
 				if (p->failures < 3)
-					device_note(&p->dev, LOG_ERR, "[source %s] Polhemus %s: %s: reopening", p->dev.t->name,
-						    p->prod->name, libusb_strerror(rc));
+					device_note(&p->dev, LOG_ERR, "[source %s] Polhemus %s: %s: reopening",
+						    p->dev.t->name, p->prod->name, libusb_strerror(rc));
 				return -2;
 			}
 			continue;
@@ -679,15 +695,17 @@ static int usb_stream(struct polhemus *p)
 			continue;
 		if (restarts >= polhemus_timing.restarts) {
 			if (p->failures < 3)
-				device_note(&p->dev, LOG_ERR, "[source %s] Polhemus %s: no record after %d set-ups: reopening",
+				device_note(&p->dev, LOG_ERR,
+					    "[source %s] Polhemus %s: no record after %d set-ups: reopening",
 					    p->dev.t->name, p->prod->name, restarts);
 			device_set_status(&p->dev, "Polhemus %s on USB port %s: sends nothing", p->prod->name, p->port);
 			return -2;
 		}
 		restarts++;
 		if (p->failures < 3)
-			device_note(&p->dev, LOG_WARNING, "[source %s] Polhemus %s: no record for %d ms: setting it up again",
-				    p->dev.t->name, p->prod->name, polhemus_timing.stall_ms);
+			device_note(&p->dev, LOG_WARNING,
+				    "[source %s] Polhemus %s: no record for %d ms: setting it up again", p->dev.t->name,
+				    p->prod->name, polhemus_timing.stall_ms);
 		rc = usb_setup(p);
 		if (rc == LIBUSB_ERROR_NO_DEVICE)
 			return -1;
@@ -732,17 +750,17 @@ static void polhemus_run(struct device *d)
 	if (!p->ctx)
 		return;
 	if (libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG))
-		p->hotplug = !libusb_hotplug_register_callback(p->ctx, LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED |
-									  LIBUSB_HOTPLUG_EVENT_DEVICE_LEFT,
-							     0, POLHEMUS_VID, LIBUSB_HOTPLUG_MATCH_ANY,
-							     LIBUSB_HOTPLUG_MATCH_ANY, hotplug_cb, p, &p->hp);
+		p->hotplug = !libusb_hotplug_register_callback(
+			p->ctx, LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED | LIBUSB_HOTPLUG_EVENT_DEVICE_LEFT, 0, POLHEMUS_VID,
+			LIBUSB_HOTPLUG_MATCH_ANY, LIBUSB_HOTPLUG_MATCH_ANY, hotplug_cb, p, &p->hp);
 	while (!device_stopping(d)) {
 		atomic_store(&p->arrived, false);
 		device_set_link(d, DEVICE_DOWN);
 		rc = usb_open(p);
 		if (rc == -ENOENT) {
 			if (!told_missing)
-				device_note(d, LOG_WARNING, "[source %s] no Polhemus found (model = %s, device = %s); waiting for one",
+				device_note(d, LOG_WARNING,
+					    "[source %s] no Polhemus found (model = %s, device = %s); waiting for one",
 					    d->t->name, model_names[d->t->cfg->model], d->t->cfg->device);
 			if (!p->told_fw[0])
 				device_set_status(d, "no Polhemus%s%s found; waiting (%s)",
@@ -760,7 +778,8 @@ static void polhemus_run(struct device *d)
 		told_missing = false;
 		if (p->failures < 3)
 			device_note(d, LOG_INFO,
-				    "[source %s] Polhemus %s (0f44:%04x) on USB port %s opened (bulk out 0x%02x, in 0x%02x)",
+				    "[source %s] Polhemus %s (0f44:%04x) on USB port %s opened (bulk out 0x%02x, in "
+				    "0x%02x)",
 				    d->t->name, p->prod->name, p->prod->pid, p->port, p->ep_out, p->ep_in);
 		device_set_status(d, "Polhemus %s on USB port %s: setting up", p->prod->name, p->port);
 		rc = usb_setup(p);
@@ -881,20 +900,25 @@ static int polhemus_list(FILE *out)
 		fprintf(out, "Polhemus %s (0f44:%04x) on USB port %s (bus %u, address %u)\n", pr->name, pr->pid, port,
 			libusb_get_bus_number(list[i]), libusb_get_device_address(list[i]));
 		if (pr->needs_firmware) {
-			fprintf(out, "  no firmware yet: load it with fxload %s -D /dev/bus/usb/%03u/%03u (Polhemus' Linux "
+			fprintf(out,
+				"  no firmware yet: load it with fxload %s -D /dev/bus/usb/%03u/%03u (Polhemus' Linux "
 				"tools), or add the udev rule of docs/TRACKERS.md; it then shows up as 0f44:%04x\n",
 				pr->fxload, libusb_get_bus_number(list[i]), libusb_get_device_address(list[i]),
 				pr->ready_pid);
 		} else if ((rc = libusb_open(list[i], &h))) {
 			fprintf(out, "  cannot open it: %s%s\n", libusb_strerror(rc),
-				rc == LIBUSB_ERROR_ACCESS ? " (udev rule and group avatargw: README, Setting up a tracker)" : "");
+				rc == LIBUSB_ERROR_ACCESS
+					? " (udev rule and group avatargw: README, Setting up a tracker)"
+					: "");
 		} else {
 			libusb_close(h);
 		}
-		fprintf(out, "  [source %s]\n  type = polhemus\n  model = %s\n  device = %s\n", name, model_names[pr->model],
-			port);
-		fprintf(out, "  sensors = head left_hand right_hand\n  ; stations 1, 2, 3 are then %s/head, %s/left_hand, "
-			"%s/right_hand\n\n", name, name, name);
+		fprintf(out, "  [source %s]\n  type = polhemus\n  model = %s\n  device = %s\n", name,
+			model_names[pr->model], port);
+		fprintf(out,
+			"  sensors = head left_hand right_hand\n  ; stations 1, 2, 3 are then %s/head, %s/left_hand, "
+			"%s/right_hand\n\n",
+			name, name, name);
 	}
 	if (n >= 0)
 		libusb_free_device_list(list, 1);

@@ -25,11 +25,11 @@
 struct polhemus_product {
 	uint16_t pid;
 	const char *name;
-	int model;           /* enum cfg_polhemus_model */
-	bool needs_firmware; /* the id before fxload sent the firmware */
-	uint16_t ready_pid;  /* needs_firmware: the id it comes back with */
-	const char *fxload;  /* needs_firmware: the fxload arguments Polhemus' tools use */
-	double rate_hz;      /* per sensor, continuous mode, default */
+	int model;	       /* enum cfg_polhemus_model */
+	bool needs_firmware;   /* the id before fxload sent the firmware */
+	uint16_t ready_pid;    /* needs_firmware: the id it comes back with */
+	const char *fxload;    /* needs_firmware: the fxload arguments Polhemus' tools use */
+	double rate_hz;	       /* per sensor, continuous mode, default */
 	uint8_t ep_out, ep_in; /* known bulk endpoints (0: take them from the descriptor) */
 };
 
@@ -38,11 +38,11 @@ const struct polhemus_product *polhemus_product(uint16_t pid);
 
 /* The driver's waits, ms (a variable so that the tests of the retry paths run quickly). */
 struct polhemus_timing {
-	int drain_ms;    /* reads this short with nothing in them end a drain */
-	int stall_ms;    /* no record for this long while streaming: set up again */
-	int search_ms;   /* no device: look again this often (hot-plug events wake it sooner) */
-	int restarts;    /* set-ups without a record before the device is closed and reopened */
-	int pipe_limit;  /* halted endpoints in a row (cleared each time) before the device is reopened */
+	int drain_ms;	/* reads this short with nothing in them end a drain */
+	int stall_ms;	/* no record for this long while streaming: set up again */
+	int search_ms;	/* no device: look again this often (hot-plug events wake it sooner) */
+	int restarts;	/* set-ups without a record before the device is closed and reopened */
+	int pipe_limit; /* halted endpoints in a row (cleared each time) before the device is reopened */
 };
 
 extern struct polhemus_timing polhemus_timing;

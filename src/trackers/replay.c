@@ -45,7 +45,7 @@
 #define CSV_ROLES 3
 
 struct replay_ev {
-	double t;          /* s from the first event */
+	double t; /* s from the first event */
 	uint32_t sensor;
 	uint32_t buttons;
 	struct dq pose;
@@ -65,9 +65,9 @@ struct replay_track {
 struct replay {
 	struct replay_ev *ev;
 	size_t n_ev;
-	size_t *inst;           /* first event of each instant, n_inst + 1 entries */
+	size_t *inst; /* first event of each instant, n_inst + 1 entries */
 	size_t n_inst;
-	double duration;        /* of one pass, s: last time + the mean spacing of instants */
+	double duration; /* of one pass, s: last time + the mean spacing of instants */
 	uint32_t n_sensors;
 	int malformed;
 	int first_bad_line;
@@ -78,9 +78,9 @@ struct replay {
 	double sample_period;
 	/* playback (the loop) */
 	uint64_t t0_ns;
-	int64_t last;           /* clocked: last event released, counting passes (pass * n_ev + index) */
-	int64_t cur_inst;       /* stepped: last instant released, counting passes; -1 none */
-	int64_t last_sample;    /* interpolated: last sample index released (clip time / period) */
+	int64_t last;		    /* clocked: last event released, counting passes (pass * n_ev + index) */
+	int64_t cur_inst;	    /* stepped: last instant released, counting passes; -1 none */
+	int64_t last_sample;	    /* interpolated: last sample index released (clip time / period) */
 	_Atomic uint64_t steps_req; /* stepped: added by the control thread */
 	uint64_t steps_done;
 	int tfd;
@@ -309,8 +309,10 @@ static int parse_csv(struct replay *rp, char *text, const char *path, char *err,
 		*next++ = '\0';
 	ct = header_columns(text, col, missing, sizeof(missing));
 	if (ct < 0) {
-		snprintf(err, errlen, "file: %s:1: no column '%s' (a sensor CSV has t, head_x..head_qz, "
-			 "lhand_*, rhand_*)", path, missing);
+		snprintf(err, errlen,
+			 "file: %s:1: no column '%s' (a sensor CSV has t, head_x..head_qz, "
+			 "lhand_*, rhand_*)",
+			 path, missing);
 		return -1;
 	}
 	maxcol = ct;
@@ -684,7 +686,8 @@ static double clip_elapsed(const struct replay *rp, const struct cfg_source *cfg
 }
 
 /* the monotonic time at which clip time ct (counting passes) was due */
-static uint64_t due_at(const struct replay *rp, const struct cfg_source *cfg, double ct, const struct tracker_clock *now)
+static uint64_t due_at(const struct replay *rp, const struct cfg_source *cfg, double ct,
+		       const struct tracker_clock *now)
 {
 	uint64_t due = rp->t0_ns + (uint64_t)llround((ct - cfg->start) / cfg->speed * 1e9);
 

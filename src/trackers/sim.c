@@ -32,13 +32,13 @@
 
 struct sim {
 	int people;
-	int n_table;              /* samples per cycle */
-	struct dq *table;         /* [n_table][3]: head, left hand, right hand at the origin */
+	int n_table;	  /* samples per cycle */
+	struct dq *table; /* [n_table][3]: head, left hand, right hand at the origin */
 	uint64_t period_ns;
-	uint64_t t0_ns;           /* CLOCK_MONOTONIC of sample 0 */
-	int64_t last;             /* last sample index delivered */
+	uint64_t t0_ns; /* CLOCK_MONOTONIC of sample 0 */
+	int64_t last;	/* last sample index delivered */
 	int tfd;
-	bool tfd_used;            /* an event-mode loop waits on tfd (sim_fd was asked) */
+	bool tfd_used; /* an event-mode loop waits on tfd (sim_fd was asked) */
 };
 
 static const char *const roles[SIM_ROLES] = { "head", "left_hand", "right_hand" };
@@ -73,7 +73,7 @@ static double wave(double t, int cycles, double ph)
 
 static void sim_pose_at(const struct avatar *av, uint32_t seed, double t, struct dq out[SIM_ROLES])
 {
-	static const int cyc[ARM_DOF][2] = { { 3, 7 }, { 4, 9 }, { 5, 11 }, { 3, 8 },
+	static const int cyc[ARM_DOF][2] = { { 3, 7 },	{ 4, 9 },  { 5, 11 }, { 3, 8 },
 					     { 6, 13 }, { 4, 10 }, { 7, 15 }, { 5, 12 } };
 	double yaw = 0.45 * wave(t, 2, phase(seed, 100)) + 0.1 * wave(t, 5, phase(seed, 101));
 	double pitch = 0.12 * wave(t, 3, phase(seed, 102));

@@ -31,19 +31,19 @@ enum tracker_state {
 #define SENSOR_ANALOG_MAX 4 /* analog values a sensor may carry (joystick x, y, trigger, ...) */
 
 struct sensor_slot {
-	struct dq pose;      /* world */
-	uint32_t buttons;    /* bit i: button i pressed (devices that have buttons) */
+	struct dq pose;			 /* world */
+	uint32_t buttons;		 /* bit i: button i pressed (devices that have buttons) */
 	float analog[SENSOR_ANALOG_MAX]; /* -1..1 for axes, 0..1 for triggers; 0 when absent */
-	uint64_t t_ns;       /* tracker sample time, CLOCK_REALTIME */
-	uint64_t arrival_ns; /* CLOCK_MONOTONIC when the daemon took it in */
-	uint32_t count;      /* samples taken in */
+	uint64_t t_ns;			 /* tracker sample time, CLOCK_REALTIME */
+	uint64_t arrival_ns;		 /* CLOCK_MONOTONIC when the daemon took it in */
+	uint32_t count;			 /* samples taken in */
 	bool seen;
-	bool inputs;         /* buttons and analog are the device's (published), not just absent */
+	bool inputs; /* buttons and analog are the device's (published), not just absent */
 };
 
 struct tracker_clock {
-	uint64_t mono_ns;     /* CLOCK_MONOTONIC now */
-	int64_t real_off_ns;  /* CLOCK_REALTIME - CLOCK_MONOTONIC */
+	uint64_t mono_ns;    /* CLOCK_MONOTONIC now */
+	int64_t real_off_ns; /* CLOCK_REALTIME - CLOCK_MONOTONIC */
 };
 
 struct tracker_driver {
@@ -85,7 +85,7 @@ struct tracker_stats {
 	_Atomic uint64_t samples;
 	_Atomic uint64_t malformed;
 	_Atomic uint64_t faults;
-	_Atomic uint64_t lost;       /* samples the device numbered but never delivered (sequence gaps) */
+	_Atomic uint64_t lost;	     /* samples the device numbered but never delivered (sequence gaps) */
 	_Atomic uint64_t reconnects; /* the device came back (or restarted its stream) after a fault */
 	_Atomic uint32_t state;
 };
@@ -96,14 +96,14 @@ struct tracker {
 	char name[CFG_NAME_MAX];
 	int n_sensors;
 	struct sensor_slot *slot;
-	struct dq world;          /* tracker frame -> world */
-	bool world_identity;      /* the tracker's frame is the world's: no product per sample */
-	struct dq *mount;         /* per sensor: the tracked point in the sensor's frame (mount_SENSOR) */
-	bool *mounted;            /* per sensor: mount is not the identity */
+	struct dq world;     /* tracker frame -> world */
+	bool world_identity; /* the tracker's frame is the world's: no product per sample */
+	struct dq *mount;    /* per sensor: the tracked point in the sensor's frame (mount_SENSOR) */
+	bool *mounted;	     /* per sensor: mount is not the identity */
 	struct tracker_stats st;
-	void *priv;               /* the driver's state */
-	struct recorder *rec;     /* records every sample when not NULL (record/recorder.h) */
-	uint16_t rec_source;      /* this tracker's index in the recording */
+	void *priv;	      /* the driver's state */
+	struct recorder *rec; /* records every sample when not NULL (record/recorder.h) */
+	uint16_t rec_source;  /* this tracker's index in the recording */
 };
 
 /* the table: index = cfg_source.driver */

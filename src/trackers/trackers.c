@@ -14,12 +14,7 @@
 #include <string.h>
 
 const struct tracker_driver *const trackers_table[] = {
-	&sim_driver,
-	&replay_driver,
-	&modbus_driver,
-	&can_driver,
-	&hydra_driver,
-	&polhemus_driver,
+	&sim_driver, &replay_driver, &modbus_driver, &can_driver, &hydra_driver, &polhemus_driver,
 };
 
 const int trackers_count = (int)(sizeof(trackers_table) / sizeof(trackers_table[0]));

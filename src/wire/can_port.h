@@ -15,8 +15,8 @@
 #include <stddef.h>
 
 struct can_port {
-	int fd;        /* -1: closed */
-	bool is_can;   /* a PF_CAN socket (else an inherited descriptor) */
+	int fd;	     /* -1: closed */
+	bool is_can; /* a PF_CAN socket (else an inherited descriptor) */
 };
 
 /*

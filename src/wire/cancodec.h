@@ -31,29 +31,29 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define CANCODEC_JOINTS 17          /* chest yaw, right j1..j8, left j1..j8 (the wire protocol's order) */
-#define CANCODEC_FRAMES 5           /* frames per avatar and cycle */
-#define CANCODEC_ID_STRIDE 8        /* identifiers from one avatar's status frame to the next's */
-#define CANCODEC_UNKNOWN INT16_MIN  /* an angle that is not known */
-#define CANCODEC_NO_ID UINT32_MAX   /* no position frames */
+#define CANCODEC_JOINTS 17	   /* chest yaw, right j1..j8, left j1..j8 (the wire protocol's order) */
+#define CANCODEC_FRAMES 5	   /* frames per avatar and cycle */
+#define CANCODEC_ID_STRIDE 8	   /* identifiers from one avatar's status frame to the next's */
+#define CANCODEC_UNKNOWN INT16_MIN /* an angle that is not known */
+#define CANCODEC_NO_ID UINT32_MAX  /* no position frames */
 
 enum cancodec_frame { CANCODEC_STATUS, CANCODEC_RIGHT_1, CANCODEC_RIGHT_2, CANCODEC_LEFT_1, CANCODEC_LEFT_2 };
 
 /* STATUS flags: bits 0-3 are the wire protocol's FRAME flags */
-#define CANCODEC_F_STALE 0x01     /* a sensor is stale or missing */
+#define CANCODEC_F_STALE 0x01	  /* a sensor is stale or missing */
 #define CANCODEC_F_UNREACHED 0x02 /* an arm's target was out of reach: closest posture */
-#define CANCODEC_F_HELD 0x04      /* no head: the previous posture repeated */
+#define CANCODEC_F_HELD 0x04	  /* no head: the previous posture repeated */
 #define CANCODEC_F_NEW_SAMPLE 0x08
-#define CANCODEC_F_LIMITED 0x10   /* safe mode clamped or slowed a joint of this command */
-#define CANCODEC_F_SAFE 0x40      /* sent by an output in safe mode */
-#define CANCODEC_F_VALID 0x80     /* every angle is known */
+#define CANCODEC_F_LIMITED 0x10 /* safe mode clamped or slowed a joint of this command */
+#define CANCODEC_F_SAFE 0x40	/* sent by an output in safe mode */
+#define CANCODEC_F_VALID 0x80	/* every angle is known */
 
 struct cancodec_avatar {
-	uint8_t counter;   /* +1 per command sent, wraps */
-	uint8_t flags;     /* CANCODEC_F_* */
-	uint8_t sensors;   /* 2 bits per sensor (head, left hand, right hand): 0 OK, 1 STALE, 2 MISSING */
-	uint8_t ik;        /* bit 0: right arm reached its target, bit 1: left arm */
-	uint16_t age_ms;   /* age of the newest sensor sample, saturating */
+	uint8_t counter;		/* +1 per command sent, wraps */
+	uint8_t flags;			/* CANCODEC_F_* */
+	uint8_t sensors;		/* 2 bits per sensor (head, left hand, right hand): 0 OK, 1 STALE, 2 MISSING */
+	uint8_t ik;			/* bit 0: right arm reached its target, bit 1: left arm */
+	uint16_t age_ms;		/* age of the newest sensor sample, saturating */
 	int16_t joint[CANCODEC_JOINTS]; /* 0.01 degree */
 };
 
@@ -74,11 +74,11 @@ int cancodec_decode_avatar(const struct can_frame *f, canid_t id0, struct cancod
 /* ---- sensors in (the can source) ------------------------------------------------- */
 
 struct cancodec_sensor_map {
-	canid_t ori_id;    /* sensor 0's orientation frame */
-	canid_t pos_id;    /* sensor 0's position frame, or CANCODEC_NO_ID */
-	int n;             /* sensors */
+	canid_t ori_id;	   /* sensor 0's orientation frame */
+	canid_t pos_id;	   /* sensor 0's position frame, or CANCODEC_NO_ID */
+	int n;		   /* sensors */
 	double quat_scale; /* the count that stands for 1.0 */
-	bool xyzw;         /* components in the order x y z w (else w x y z) */
+	bool xyzw;	   /* components in the order x y z w (else w x y z) */
 	double pos_scale;  /* metres per count */
 };
 
@@ -86,8 +86,8 @@ enum cancodec_kind { CANCODEC_ORIENTATION, CANCODEC_POSITION };
 
 struct cancodec_sensor_value {
 	int sensor;
-	int kind;        /* enum cancodec_kind */
-	double v[4];     /* unit quaternion w x y z, or position x y z in metres */
+	int kind;    /* enum cancodec_kind */
+	double v[4]; /* unit quaternion w x y z, or position x y z in metres */
 };
 
 /*

@@ -9,14 +9,13 @@
 #include <string.h>
 
 const char *const wire_joint_names[WIRE_JOINTS] = {
-	"chest_yaw",
-	"r_girdle", "r_sh_abd", "r_sh_flex", "r_sh_rot", "r_elbow", "r_pronation", "r_wr_flex", "r_wr_dev",
-	"l_girdle", "l_sh_abd", "l_sh_flex", "l_sh_rot", "l_elbow", "l_pronation", "l_wr_flex", "l_wr_dev",
+	"chest_yaw",   "r_girdle",  "r_sh_abd",	   "r_sh_flex", "r_sh_rot", "r_elbow",
+	"r_pronation", "r_wr_flex", "r_wr_dev",	   "l_girdle",	"l_sh_abd", "l_sh_flex",
+	"l_sh_rot",    "l_elbow",   "l_pronation", "l_wr_flex", "l_wr_dev",
 };
 
 const char *const wire_segment_names[WIRE_SEGMENTS] = {
-	"chest", "head", "r_shoulder", "r_elbow", "r_wrist", "r_hand",
-	"l_shoulder", "l_elbow", "l_wrist", "l_hand",
+	"chest", "head", "r_shoulder", "r_elbow", "r_wrist", "r_hand", "l_shoulder", "l_elbow", "l_wrist", "l_hand",
 };
 
 const char *const wire_sensor_names[WIRE_SENSORS] = { "head", "left_hand", "right_hand" };
@@ -24,15 +23,24 @@ const char *const wire_sensor_names[WIRE_SENSORS] = { "head", "left_hand", "righ
 const char *wire_strerror(int err)
 {
 	switch (err < 0 ? -err : err) {
-	case 0: return "no error";
-	case WIRE_ESHORT: return "message shorter than its header says";
-	case WIRE_EMAGIC: return "not an avatargw message (bad magic)";
-	case WIRE_EVERSION: return "unsupported protocol version";
-	case WIRE_ETYPE: return "unexpected message type";
-	case WIRE_ECOUNT: return "counts do not fit this protocol version";
-	case WIRE_ELONG: return "message too long";
-	case WIRE_ESTRING: return "name too long";
-	default: return "unknown wire error";
+	case 0:
+		return "no error";
+	case WIRE_ESHORT:
+		return "message shorter than its header says";
+	case WIRE_EMAGIC:
+		return "not an avatargw message (bad magic)";
+	case WIRE_EVERSION:
+		return "unsupported protocol version";
+	case WIRE_ETYPE:
+		return "unexpected message type";
+	case WIRE_ECOUNT:
+		return "counts do not fit this protocol version";
+	case WIRE_ELONG:
+		return "message too long";
+	case WIRE_ESTRING:
+		return "name too long";
+	default:
+		return "unknown wire error";
 	}
 }
 
@@ -364,9 +372,9 @@ int wire_decode_frame(const uint8_t *buf, size_t len, struct wire_frame *f)
 /* ---- DESCRIBE ----------------------------------------------------------------- */
 
 /* the longest DESCRIBE, every string at its maximum, fits one datagram */
-#define WIRE_DESCRIBE_WORST                                                                                     \
-	(WIRE_HEADER_LEN + 32 + (1 + WIRE_NAME_MAX) + (1 + 4 * WIRE_NAME_MAX) +                                  \
-	 WIRE_JOINTS * (1 + WIRE_NAME_MAX + 1 + 8 * 4) + WIRE_SEGMENTS * (1 + WIRE_NAME_MAX + 1) +               \
+#define WIRE_DESCRIBE_WORST                                                                                            \
+	(WIRE_HEADER_LEN + 32 + (1 + WIRE_NAME_MAX) + (1 + 4 * WIRE_NAME_MAX) +                                        \
+	 WIRE_JOINTS * (1 + WIRE_NAME_MAX + 1 + 8 * 4) + WIRE_SEGMENTS * (1 + WIRE_NAME_MAX + 1) +                     \
 	 WIRE_SENSORS * (1 + WIRE_NAME_MAX))
 _Static_assert(WIRE_DESCRIBE_WORST <= WIRE_MAX_MSG, "a DESCRIBE can exceed WIRE_MAX_MSG");
 

@@ -20,24 +20,24 @@
 #include <stdint.h>
 
 struct devtest {
-	const char *source;       /* the source's name and its type, in conf and in the listing */
-	const char *conf;         /* a configuration with that source on the simulated device */
-	unsigned sensors;         /* the FRAME sensors it feeds: bits 1u << WIRE_S_... */
-	bool inputs;              /* they have buttons and analog values (the conf's other sources have none) */
+	const char *source; /* the source's name and its type, in conf and in the listing */
+	const char *conf;   /* a configuration with that source on the simulated device */
+	unsigned sensors;   /* the FRAME sensors it feeds: bits 1u << WIRE_S_... */
+	bool inputs;	    /* they have buttons and analog values (the conf's other sources have none) */
 	const struct tracker_driver *drv;
-	void (*plug)(void);       /* the device appears (the way this test wants it) */
+	void (*plug)(void); /* the device appears (the way this test wants it) */
 	void (*unplug)(void);
 	void (*deny_open)(bool deny); /* opening it fails for want of permission, or no longer */
-	const char *denied;       /* what the driver says of that permission (the library's words) */
-	void (*stepped)(bool on); /* stepped play: a report only when the test releases one */
-	bool (*set_up)(void);     /* the device saw the driver's handshake through (stepped: no report yet) */
-	uint64_t (*reads)(void);  /* reports (or frames) the driver has read from it so far */
+	const char *denied;	      /* what the driver says of that permission (the library's words) */
+	void (*stepped)(bool on);     /* stepped play: a report only when the test releases one */
+	bool (*set_up)(void);	      /* the device saw the driver's handshake through (stepped: no report yet) */
+	uint64_t (*reads)(void);      /* reports (or frames) the driver has read from it so far */
 };
 
 /* predicates for gwt_until (arg: the struct devtest) */
-bool devtest_ok(struct gwt *t, void *dev);      /* the source is OK, and its sensors in the last FRAME */
+bool devtest_ok(struct gwt *t, void *dev);	/* the source is OK, and its sensors in the last FRAME */
 bool devtest_missing(struct gwt *t, void *dev); /* the source is FAULTY, its sensors MISSING */
-bool devtest_stale(struct gwt *t, void *dev);   /* the source is STALE, its sensors too */
+bool devtest_stale(struct gwt *t, void *dev);	/* the source is STALE, its sensors too */
 
 /*
  * Cycles for at least ms, and until the driver has read n more reports than

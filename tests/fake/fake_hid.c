@@ -30,7 +30,7 @@ static struct {
 	unsigned gen;
 	int deny;
 	uint8_t seq;
-	char damage[64];  /* what happens to the next reports, a letter each (fake_hid_damage) */
+	char damage[64]; /* what happens to the next reports, a letter each (fake_hid_damage) */
 	int damage_at;
 	uint64_t stall_until;
 	struct fake_hid_stats st;

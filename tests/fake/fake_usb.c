@@ -178,7 +178,6 @@ void fake_usb_split(int at)
 	pthread_mutex_unlock(&U.p.mu);
 }
 
-
 void fake_usb_skip(int n)
 {
 	pthread_mutex_lock(&U.p.mu);

@@ -15,9 +15,9 @@
 
 struct gwt {
 	struct gateway g;
-	struct wire_frame f;   /* the last FRAME published */
+	struct wire_frame f; /* the last FRAME published */
 	uint64_t frames;
-	char notes[8192];      /* what the drivers left for the log, one per line */
+	char notes[8192]; /* what the drivers left for the log, one per line */
 	bool open;
 };
 
@@ -41,9 +41,9 @@ uint64_t gwt_ms(void);
 void gwt_sleep_ms(int ms);
 
 /* predicates */
-bool gwt_tracker_ok(struct gwt *t, void *name);     /* the tracker is OK and its last frame's sensors too */
+bool gwt_tracker_ok(struct gwt *t, void *name); /* the tracker is OK and its last frame's sensors too */
 bool gwt_tracker_faulty(struct gwt *t, void *name);
 bool gwt_tracker_stale(struct gwt *t, void *name);
-bool gwt_tracker_ended(struct gwt *t, void *name);     /* a capture played to its end */
+bool gwt_tracker_ended(struct gwt *t, void *name); /* a capture played to its end */
 
 #endif /* AGW_TEST_GWTEST_H */

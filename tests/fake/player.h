@@ -28,14 +28,17 @@ struct player {
 	bool stepped;
 	int period_us;
 	long released;
-	int idx, dir;       /* the next capture index, and which way the play goes */
-	uint64_t next_due;  /* free-running: when the next report is due (CLOCK_MONOTONIC) */
+	int idx, dir;	   /* the next capture index, and which way the play goes */
+	uint64_t next_due; /* free-running: when the next report is due (CLOCK_MONOTONIC) */
 	uint8_t inj[PLAYER_INJ_MAX][PLAYER_INJ_LEN];
 	size_t inj_len[PLAYER_INJ_MAX];
 	int inj_head, inj_n;
 };
 
-#define PLAYER_INIT { .mu = PTHREAD_MUTEX_INITIALIZER }
+#define PLAYER_INIT                                                                                                    \
+	{                                                                                                              \
+		.mu = PTHREAD_MUTEX_INITIALIZER                                                                        \
+	}
 
 uint64_t player_now_ns(void);
 /* the condition variable on CLOCK_MONOTONIC (once), the capture (once; aborts naming who if it cannot be read),

@@ -23,7 +23,7 @@
  */
 #include <glm/glm.hpp>
 #include <glm/gtc/matrix_transform.hpp> // glm::rotate, glm::translate
-#include <glm/gtc/quaternion.hpp>       // glm::quat, glm::mat4_cast, glm::quat_cast
+#include <glm/gtc/quaternion.hpp>	// glm::quat, glm::mat4_cast, glm::quat_cast
 
 #include <arpa/inet.h>
 #include <net/if.h>
@@ -44,7 +44,8 @@
 
 #include "avatargw/wire.h"
 
-namespace {
+namespace
+{
 
 /* ---- options ------------------------------------------------------------------- */
 
@@ -52,7 +53,7 @@ struct options {
 	int port = WIRE_DEFAULT_PORT;
 	std::string group;     // multicast group to join, empty: unicast
 	std::string iface;     // interface for the group, empty: the kernel's choice
-	long count = 0;        // frames to check, 0: until SIGINT
+	long count = 0;	       // frames to check, 0: until SIGINT
 	double tol_pos = 1e-4; // metres
 	double tol_rot = 1e-3; // radians
 	long avatar = -1;      // -1: every avatar
@@ -405,7 +406,8 @@ int main(int argc, char **argv)
 	if (fd < 0)
 		return 1;
 
-	struct sigaction sa {};
+	struct sigaction sa {
+	};
 	sa.sa_handler = on_signal; // no SA_RESTART: poll() returns EINTR
 	sigaction(SIGINT, &sa, nullptr);
 	sigaction(SIGTERM, &sa, nullptr);

@@ -86,8 +86,8 @@ int bench_load_limits(const char *tool, const char *path, struct arm_limits *lim
 		if (strspn(line, " \t\r\n") == strlen(line))
 			continue;
 		if (sscanf(line, "%lf %lf", &lo, &hi) != 2 || lo > hi || lo < -180 || hi > 180) {
-			fprintf(stderr, "%s: %s:%d: expected 'lo hi' in degrees, lo <= hi, in [-180, 180]\n", tool, path,
-				lineno);
+			fprintf(stderr, "%s: %s:%d: expected 'lo hi' in degrees, lo <= hi, in [-180, 180]\n", tool,
+				path, lineno);
 			fclose(f);
 			return -1;
 		}

@@ -16,8 +16,8 @@
 
 struct bench_row {
 	double q[ARM_DOF]; /* generating angles, radians */
-	double p[3];       /* target position, metres */
-	double r[4];       /* target orientation, w x y z */
+	double p[3];	   /* target position, metres */
+	double r[4];	   /* target orientation, w x y z */
 };
 
 /* at most max rows (SIZE_MAX: all) into a malloc'ed *out; 0, or -1 after printing why */
