@@ -84,7 +84,7 @@ DEP_LIBS += $(ZLIB_LIBS)
 DEP_LIBS += $(HIDAPI_LIBS)
 DEP_LIBS += $(LIBUSB_LIBS)
 LIBS = $(DEP_LIBS) -lpthread -lm
-GW_SRC = $(filter-out src/daemon/main.c,$(wildcard src/wire/*.c src/config/*.c src/trackers/*.c \
+GW_SRC = $(filter-out src/daemon/main.c,$(wildcard src/base/*.c src/wire/*.c src/config/*.c src/trackers/*.c \
 	src/frames/*.c src/publish/*.c src/record/*.c src/daemon/*.c))
 GW_OBJ = $(patsubst src/%.c,$(BUILD)/obj/%.o,$(GW_SRC)) $(BUILD)/obj/gen/builtin.o
 # files compiled into the daemon: the demo configuration and its clip

@@ -156,7 +156,7 @@ static void test_loop_allocates_nothing(void **state)
 	assert_int_equal(connect(ux, (struct sockaddr *)&sun, sizeof(sun)), 0);
 	sleep_ms(300); /* warm: accepted, first DESCRIBEs out, the slow buffer full */
 	before = mallinfo2();
-	rec_before = stat_get(&recorder_stats(rec)->records);
+	rec_before = ctr_get(&recorder_stats(rec)->records);
 	atomic_store(&counting, 1);
 	for (int i = 0; i < 20; i++) {
 		sleep_ms(50);
@@ -169,9 +169,9 @@ static void test_loop_allocates_nothing(void **state)
 	loop_stop(l);
 	/* the recorder wrote all along, and lost nothing */
 	print_message("recorded %llu records while counting\n",
-		      (unsigned long long)(stat_get(&recorder_stats(rec)->records) - rec_before));
-	assert_true(stat_get(&recorder_stats(rec)->records) - rec_before > 1000);
-	assert_int_equal(stat_get(&recorder_stats(rec)->dropped_records), 0);
+		      (unsigned long long)(ctr_get(&recorder_stats(rec)->records) - rec_before));
+	assert_true(ctr_get(&recorder_stats(rec)->records) - rec_before > 1000);
+	assert_int_equal(ctr_get(&recorder_stats(rec)->dropped_records), 0);
 	recorder_close(rec);
 	{
 		DIR *d = opendir("/tmp/avatargw-test-alloc-rec");
@@ -188,15 +188,15 @@ static void test_loop_allocates_nothing(void **state)
 		rmdir("/tmp/avatargw-test-alloc-rec");
 	}
 	for (int i = 0; i < g.n_avatars; i++)
-		frames += stat_get(&g.av[i].st.frames);
+		frames += ctr_get(&g.av[i].st.frames);
 	print_message("cycles %llu, frames %llu, tcp dropped %llu, allocations while running: %ld\n",
-		      (unsigned long long)stat_get(&g.st.cycles), (unsigned long long)frames,
-		      (unsigned long long)stat_get(&g.out[1].st.dropped), n);
+		      (unsigned long long)ctr_get(&g.st.cycles), (unsigned long long)frames,
+		      (unsigned long long)ctr_get(&g.out[1].st.dropped), n);
 	/* the loop did run, the slow subscriber did lose messages, and nothing was allocated */
-	assert_true(stat_get(&g.st.cycles) > 200);
+	assert_true(ctr_get(&g.st.cycles) > 200);
 	assert_int_equal(g.n_avatars, 5);
-	assert_true(stat_get(&g.out[1].st.dropped) > 0);
-	assert_int_equal(stat_get(&g.out[1].st.clients), 1);
+	assert_true(ctr_get(&g.out[1].st.dropped) > 0);
+	assert_int_equal(ctr_get(&g.out[1].st.clients), 1);
 	assert_int_equal(n, 0);
 	assert_int_equal(before.uordblks, after.uordblks);
 	assert_int_equal(before.hblkhd, after.hblkhd);
@@ -280,8 +280,8 @@ static void test_bus_loop_allocates_nothing(void **state)
 	sleep_ms(400); /* warm: the source connected, DESCRIBEs out, a client served */
 	req0 = count_in(&g.out[0], "requests");
 	cmd0 = count_in(&g.out[1], "commands");
-	samples0 = stat_get(&g.trk[1].st.samples);
-	mbin0 = stat_get(&g.trk[2].st.samples);
+	samples0 = ctr_get(&g.trk[1].st.samples);
+	mbin0 = ctr_get(&g.trk[2].st.samples);
 	before = mallinfo2();
 	atomic_store(&allocs, 0);
 	atomic_store(&counting, 1);
@@ -303,15 +303,15 @@ static void test_bus_loop_allocates_nothing(void **state)
 		      "allocations while running: %ld\n",
 		      (unsigned long long)(count_in(&g.out[0], "requests") - req0),
 		      (unsigned long long)(count_in(&g.out[1], "commands") - cmd0),
-		      (unsigned long long)(stat_get(&g.trk[1].st.samples) - samples0),
-		      (unsigned long long)(stat_get(&g.trk[2].st.samples) - mbin0), n);
+		      (unsigned long long)(ctr_get(&g.trk[1].st.samples) - samples0),
+		      (unsigned long long)(ctr_get(&g.trk[2].st.samples) - mbin0), n);
 	loop_stop(l);
 	/* everything ran */
 	assert_true(count_in(&g.out[0], "requests") - req0 > 40); /* ours and the modbus source's */
 	assert_true(count_in(&g.out[1], "commands") - cmd0 > 50);
 	assert_true(count_in(&g.out[2], "commands") > 50);
-	assert_int_equal(stat_get(&g.trk[1].st.samples) - samples0, 40);
-	assert_true(stat_get(&g.trk[2].st.samples) - mbin0 > 10);
+	assert_int_equal(ctr_get(&g.trk[1].st.samples) - samples0, 40);
+	assert_true(ctr_get(&g.trk[2].st.samples) - mbin0 > 10);
 	/* and allocated nothing */
 	assert_int_equal(n, 0);
 	assert_int_equal(before.uordblks, after.uordblks);

@@ -184,7 +184,7 @@ static uint64_t out_stat(struct gateway *g, const char *name, size_t off)
 {
 	for (int i = 0; i < g->n_outputs; i++)
 		if (!strcmp(g->out[i].name, name))
-			return stat_get((_Atomic uint64_t *)((char *)&g->out[i].st + off));
+			return ctr_get((_Atomic uint64_t *)((char *)&g->out[i].st + off));
 	fail_msg("no output %s", name);
 	return 0;
 }
@@ -235,10 +235,10 @@ static void test_renderer_outputs_keep_the_loop_clean(void **state)
 	loop_stop(l);
 	print_message("loop cycles %llu; loop thread: %ld allocations, %ld library calls; other threads: %ld "
 		      "library calls; read %ld bytes of VRPN, %ld of WebSocket\n",
-		      (unsigned long long)stat_get(&g.st.cycles), atomic_load(&loop_allocs),
+		      (unsigned long long)ctr_get(&g.st.cycles), atomic_load(&loop_allocs),
 		      atomic_load(&loop_lib_calls), atomic_load(&other_lib_calls), got_vrpn, got_ws);
 	/* the outputs worked meanwhile... */
-	assert_true(stat_get(&g.st.cycles) > 300);
+	assert_true(ctr_get(&g.st.cycles) > 300);
 	assert_true(got_vrpn > 100000);
 	assert_true(got_ws > 10000);
 	assert_true(out_stat(&g, "m", offsetof(struct output_stats, sent)) > 50);

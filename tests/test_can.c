@@ -35,7 +35,8 @@
 
 #include "avatargw/wire.h"
 #include "config/config.h"
-#include "daemon/stats.h"
+#include "base/counter.h"
+#include "base/hist.h"
 #include "ik/ik.h"
 #include "publish/output.h"
 #include "trackers/tracker.h"
@@ -602,7 +603,7 @@ static void test_out_plain_mode(void **state)
 	assert_true(read_command(x, 0x300, &a));
 	assert_int_equal(a.counter, 1);
 	assert_false(read_command(x, 0x300, &a));
-	assert_int_equal(stat_get(&x->o.st.sent), 15);
+	assert_int_equal(ctr_get(&x->o.st.sent), 15);
 	assert_int_equal(report_value(&x->o, "commands"), 3);
 	out_teardown(x);
 }
@@ -757,19 +758,19 @@ static void test_out_full_queue(void **state)
 
 	(void)state;
 	/* the test's end reads nothing until the queue is full */
-	while (stat_get(&x->o.st.dropped) == 0) {
+	while (ctr_get(&x->o.st.dropped) == 0) {
 		send_frame(x, 0, deg, 0);
 		assert_true(++n < 1000000);
 	}
-	sent = stat_get(&x->o.st.sent);
-	dropped = stat_get(&x->o.st.dropped);
+	sent = ctr_get(&x->o.st.sent);
+	dropped = ctr_get(&x->o.st.dropped);
 	whole = report_value(&x->o, "commands");
 	print_message("queue full after %llu frames\n", (unsigned long long)sent);
 	/* what the port took is all there; the command that did not fit lost the rest of its frames */
 	assert_int_equal((uint64_t)peer_count(x->sv[1]), sent);
 	assert_int_equal(sent % 5 + dropped, 5);
 	assert_int_equal(whole, sent / 5);
-	assert_int_equal(stat_get(&x->o.st.errors), 0);
+	assert_int_equal(ctr_get(&x->o.st.errors), 0);
 	/* drained: commands flow again, and the counter counted whole commands only */
 	send_frame(x, 0, deg, 0);
 	assert_true(read_command(x, 0x100, &a));
@@ -799,8 +800,8 @@ static void test_out_without_can(void **state)
 	(void)state;
 	send_describe(x, 0, 100);
 	send_frame(x, 0, deg, 0);
-	assert_int_equal(stat_get(&x->o.st.sent), 0);
-	assert_int_equal(stat_get(&x->o.st.errors), 0);
+	assert_int_equal(ctr_get(&x->o.st.sent), 0);
+	assert_int_equal(ctr_get(&x->o.st.errors), 0);
 	x->o.ops->report(&x->o, m, true);
 	fclose(m);
 	print_message("%s\n", buf);

@@ -139,7 +139,7 @@ static void test_round_trip(void **state)
 	assert_int_equal(loop_start(&l, &g, err, sizeof(err)), 0);
 	sleep_ms(600);
 	loop_stop(l);
-	took = stat_get(&g.trk[0].st.samples);
+	took = ctr_get(&g.trk[0].st.samples);
 	recorder_close(rec);
 	assert_int_equal(list_files(dir, files, 4), 1);
 	assert_int_equal(rec_index_load(files[0], &ix, err, sizeof(err)), 0);
@@ -197,7 +197,7 @@ static void rotation(const char *keys, double max_size)
 	assert_int_equal(loop_start(&l, &g, err, sizeof(err)), 0);
 	sleep_ms(700);
 	loop_stop(l);
-	took = stat_get(&g.trk[0].st.samples);
+	took = ctr_get(&g.trk[0].st.samples);
 	recorder_close(rec);
 	n = list_files(dir, files, 32);
 	print_message("%d files\n", n);
@@ -257,7 +257,7 @@ static void test_overflow_marked(void **state)
 	st = recorder_stats(rec);
 	sleep_ms(50);
 	{
-		uint64_t dropped = stat_get(&st->dropped_records);
+		uint64_t dropped = ctr_get(&st->dropped_records);
 
 		print_message("dropped %llu of %d\n", (unsigned long long)dropped, pushes);
 		assert_true(dropped > 0);
@@ -292,10 +292,10 @@ static void test_unwritable(void **state)
 	sleep_ms(300);
 	loop_stop(l);
 	st = recorder_stats(rec);
-	assert_true(stat_get(&st->write_errors) > 0);
-	assert_true(stat_get(&st->skipped_records) > 0);
-	assert_true(stat_get(&st->files) == 0);
-	assert_true(stat_get(&g.st.cycles) > 30);
+	assert_true(ctr_get(&st->write_errors) > 0);
+	assert_true(ctr_get(&st->skipped_records) > 0);
+	assert_true(ctr_get(&st->files) == 0);
+	assert_true(ctr_get(&g.st.cycles) > 30);
 	recorder_close(rec);
 	gw_close(&g);
 }

@@ -8,7 +8,8 @@
  * server against the daemon's UDP stream.
  */
 #include "config/config.h"
-#include "daemon/stats.h"
+#include "base/counter.h"
+#include "base/hist.h"
 #include "publish/output.h"
 
 #include "avatargw/wire.h"
@@ -317,7 +318,7 @@ static void test_reload_keeps_or_drops_clients(void **state)
 	peer_connect(&p, a.port);
 	for (int i = 0; i < 3; i++)
 		cycle(&a.o, &m, 1);
-	assert_int_equal(stat_get(&a.o.st.clients), 1);
+	assert_int_equal(ctr_get(&a.o.st.clients), 1);
 	/* the same devices: the new output takes the server and its client over */
 	b.port = a.port;
 	open_output(&b, "Avatar%d", &a.o);
@@ -326,7 +327,7 @@ static void test_reload_keeps_or_drops_clients(void **state)
 	close_output(&a);
 	for (int i = 0; i < 3; i++)
 		cycle(&b.o, &m, 1);
-	assert_int_equal(stat_get(&b.o.st.clients), 1);
+	assert_int_equal(ctr_get(&b.o.st.clients), 1);
 	peer_read(&p);
 	while (peer_next(&p, &msg, &pos))
 		n += is(&p, &msg, "vrpn_Tracker Pos_Quat");
@@ -337,7 +338,7 @@ static void test_reload_keeps_or_drops_clients(void **state)
 	assert_true(c.o.adopted);
 	close_output(&b);
 	cycle(&c.o, &m, 1);
-	assert_int_equal(stat_get(&c.o.st.clients), 0);
+	assert_int_equal(ctr_get(&c.o.st.clients), 0);
 	{
 		char x;
 

@@ -4,7 +4,7 @@
  * take its time; it reads the loop's counters with relaxed atomic loads.
  */
 #include "daemon/ctl.h"
-#include "daemon/seqlock.h"
+#include "base/seqlock.h"
 
 #include "record/recorder.h"
 #include "trackers/replay.h"
@@ -100,7 +100,7 @@ int ctl_rates_update(struct ctl_rates *r, struct gateway *g)
 	}
 	dt = t - r->t;
 	for (int i = 0; i < g->n_trackers; i++) {
-		uint64_t s = stat_get(&g->trk[i].st.samples);
+		uint64_t s = ctr_get(&g->trk[i].st.samples);
 
 		if (r->t > 0 && dt > 0)
 			r->trk_rate[i] =
@@ -108,7 +108,7 @@ int ctl_rates_update(struct ctl_rates *r, struct gateway *g)
 		r->trk_samples[i] = s;
 	}
 	for (int i = 0; i < g->n_avatars; i++) {
-		uint64_t f = stat_get(&g->av[i].st.frames);
+		uint64_t f = ctr_get(&g->av[i].st.frames);
 
 		if (r->t > 0 && dt > 0)
 			r->av_rate[i] = (double)(f - r->av_frames[i]) / dt;
@@ -171,12 +171,12 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 			"\"work_us\":{\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f},"
 			"\"work_cpu_us\":{\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f},"
 			"\"wake_late_us\":{\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f}},",
-			(unsigned long long)stat_get(&g->st.cycles), (unsigned long long)stat_get(&g->st.overruns),
-			(unsigned long long)stat_get(&g->st.poll_errors), us(hist_percentile(wk, 0.5)),
-			us(hist_percentile(wk, 0.99)), us(stat_get(&wk->max_ns)),
+			(unsigned long long)ctr_get(&g->st.cycles), (unsigned long long)ctr_get(&g->st.overruns),
+			(unsigned long long)ctr_get(&g->st.poll_errors), us(hist_percentile(wk, 0.5)),
+			us(hist_percentile(wk, 0.99)), us(ctr_get(&wk->max_ns)),
 			us(hist_percentile(&g->st.work_cpu, 0.5)), us(hist_percentile(&g->st.work_cpu, 0.99)),
-			us(stat_get(&g->st.work_cpu.max_ns)), us(hist_percentile(wa, 0.5)),
-			us(hist_percentile(wa, 0.99)), us(stat_get(&wa->max_ns)));
+			us(ctr_get(&g->st.work_cpu.max_ns)), us(hist_percentile(wa, 0.5)),
+			us(hist_percentile(wa, 0.99)), us(ctr_get(&wa->max_ns)));
 		fputs("\"sources\":[", out);
 		for (int i = 0; i < g->n_trackers; i++) {
 			struct tracker *t = &g->trk[i];
@@ -187,11 +187,11 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 				"\"reconnects\":%llu",
 				i ? "," : "", t->name, t->drv->name,
 				tracker_states[atomic_load_explicit(&t->st.state, memory_order_relaxed) & 3],
-				t->n_sensors, (unsigned long long)stat_get(&t->st.samples),
+				t->n_sensors, (unsigned long long)ctr_get(&t->st.samples),
 				r && i < r->n_trackers ? r->trk_rate[i] : 0.0,
-				(unsigned long long)stat_get(&t->st.malformed),
-				(unsigned long long)stat_get(&t->st.faults), (unsigned long long)stat_get(&t->st.lost),
-				(unsigned long long)stat_get(&t->st.reconnects));
+				(unsigned long long)ctr_get(&t->st.malformed),
+				(unsigned long long)ctr_get(&t->st.faults), (unsigned long long)ctr_get(&t->st.lost),
+				(unsigned long long)ctr_get(&t->st.reconnects));
 			if (t->drv->status) {
 				char dev[256];
 
@@ -207,7 +207,7 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 		fputs("],\"avatars\":[", out);
 		for (int i = 0; i < g->n_avatars; i++) {
 			struct gw_avatar *a = &g->av[i];
-			uint64_t solves = stat_get(&a->st.ik_solves);
+			uint64_t solves = ctr_get(&a->st.ik_solves);
 
 			fprintf(out,
 				"%s{\"name\":\"%s\",\"id\":%u,\"state\":\"%s\",\"frames\":%llu,\"rate_hz\":%.2f,"
@@ -216,17 +216,16 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 				"\"latency_us\":{\"n\":%llu,\"p50\":%.1f,\"p99\":%.1f,\"p999\":%.1f,\"max\":%.1f}}",
 				i ? "," : "", a->cfg->name, a->cfg->id,
 				sensor_states[atomic_load_explicit(&a->st.state, memory_order_relaxed) % 3],
-				(unsigned long long)stat_get(&a->st.frames),
-				r && i < r->n_avatars ? r->av_rate[i] : 0.0,
-				(unsigned long long)stat_get(&a->st.new_frames),
-				(unsigned long long)stat_get(&a->st.stale_frames),
-				(unsigned long long)stat_get(&a->st.held),
-				solves ? (double)stat_get(&a->st.ik_iters) / (double)solves : 0.0,
-				(unsigned long long)stat_get(&a->st.ik_unreached),
-				(unsigned long long)stat_get(&a->st.nan_blocked),
-				(unsigned long long)stat_get(&a->st.latency.n),
-				us(hist_percentile(&a->st.latency, 0.5)), us(hist_percentile(&a->st.latency, 0.99)),
-				us(hist_percentile(&a->st.latency, 0.999)), us(stat_get(&a->st.latency.max_ns)));
+				(unsigned long long)ctr_get(&a->st.frames), r && i < r->n_avatars ? r->av_rate[i] : 0.0,
+				(unsigned long long)ctr_get(&a->st.new_frames),
+				(unsigned long long)ctr_get(&a->st.stale_frames),
+				(unsigned long long)ctr_get(&a->st.held),
+				solves ? (double)ctr_get(&a->st.ik_iters) / (double)solves : 0.0,
+				(unsigned long long)ctr_get(&a->st.ik_unreached),
+				(unsigned long long)ctr_get(&a->st.nan_blocked),
+				(unsigned long long)ctr_get(&a->st.latency.n), us(hist_percentile(&a->st.latency, 0.5)),
+				us(hist_percentile(&a->st.latency, 0.99)), us(hist_percentile(&a->st.latency, 0.999)),
+				us(ctr_get(&a->st.latency.max_ns)));
 		}
 		fputs("],\"outputs\":[", out);
 		for (int i = 0; i < g->n_outputs; i++) {
@@ -237,14 +236,12 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 				"\"clients\":%llu,\"accepted\":%llu,\"refused\":%llu,\"closed\":%llu,\"gso_off\":%llu,"
 				"\"malformed\":%llu",
 				i ? "," : "", o->name, out_types[o->cfg->type],
-				(unsigned long long)stat_get(&o->st.sent), (unsigned long long)stat_get(&o->st.dropped),
-				(unsigned long long)stat_get(&o->st.errors),
-				(unsigned long long)stat_get(&o->st.clients),
-				(unsigned long long)stat_get(&o->st.accepted),
-				(unsigned long long)stat_get(&o->st.refused),
-				(unsigned long long)stat_get(&o->st.closed),
-				(unsigned long long)stat_get(&o->st.gso_off),
-				(unsigned long long)stat_get(&o->st.malformed));
+				(unsigned long long)ctr_get(&o->st.sent), (unsigned long long)ctr_get(&o->st.dropped),
+				(unsigned long long)ctr_get(&o->st.errors), (unsigned long long)ctr_get(&o->st.clients),
+				(unsigned long long)ctr_get(&o->st.accepted),
+				(unsigned long long)ctr_get(&o->st.refused), (unsigned long long)ctr_get(&o->st.closed),
+				(unsigned long long)ctr_get(&o->st.gso_off),
+				(unsigned long long)ctr_get(&o->st.malformed));
 			if (o->ops->report)
 				o->ops->report(o, out, true);
 			fputc('}', out);
@@ -262,12 +259,12 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 				"\"bytes\":%llu,\"flushes\":%llu,\"dropped\":%llu,\"skipped\":%llu,\"write_errors\":%"
 				"llu,"
 				"\"buffer_used\":%llu,\"buffer_size\":%llu}",
-				g->cfg.daemon.record_dir, file, (unsigned long long)stat_get(&rs->files),
-				(unsigned long long)stat_get(&rs->records), (unsigned long long)stat_get(&rs->bytes),
-				(unsigned long long)stat_get(&rs->flushes),
-				(unsigned long long)stat_get(&rs->dropped_records),
-				(unsigned long long)stat_get(&rs->skipped_records),
-				(unsigned long long)stat_get(&rs->write_errors), (unsigned long long)used,
+				g->cfg.daemon.record_dir, file, (unsigned long long)ctr_get(&rs->files),
+				(unsigned long long)ctr_get(&rs->records), (unsigned long long)ctr_get(&rs->bytes),
+				(unsigned long long)ctr_get(&rs->flushes),
+				(unsigned long long)ctr_get(&rs->dropped_records),
+				(unsigned long long)ctr_get(&rs->skipped_records),
+				(unsigned long long)ctr_get(&rs->write_errors), (unsigned long long)used,
 				(unsigned long long)cap);
 		}
 		fputs("}\n", out);
@@ -280,9 +277,9 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 	fprintf(out,
 		"loop: %llu cycles, %llu overruns, work p50 %.1f p99 %.1f max %.1f us, wake-up late p99 %.1f max %.1f "
 		"us\n",
-		(unsigned long long)stat_get(&g->st.cycles), (unsigned long long)stat_get(&g->st.overruns),
-		us(hist_percentile(wk, 0.5)), us(hist_percentile(wk, 0.99)), us(stat_get(&wk->max_ns)),
-		us(hist_percentile(wa, 0.99)), us(stat_get(&wa->max_ns)));
+		(unsigned long long)ctr_get(&g->st.cycles), (unsigned long long)ctr_get(&g->st.overruns),
+		us(hist_percentile(wk, 0.5)), us(hist_percentile(wk, 0.99)), us(ctr_get(&wk->max_ns)),
+		us(hist_percentile(wa, 0.99)), us(ctr_get(&wa->max_ns)));
 	fprintf(out, "\n%-16s %-8s %-7s %8s %10s %9s %7s %7s %6s\n", "SOURCE", "DRIVER", "STATE", "RATE/s", "SAMPLES",
 		"MALFORMED", "FAULTS", "LOST", "RECONN");
 	for (int i = 0; i < g->n_trackers; i++) {
@@ -290,9 +287,9 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 
 		fprintf(out, "%-16s %-8s %-7s %8.1f %10llu %9llu %7llu %7llu %6llu\n", t->name, t->drv->name,
 			tracker_states[atomic_load_explicit(&t->st.state, memory_order_relaxed) & 3],
-			r && i < r->n_trackers ? r->trk_rate[i] : 0.0, (unsigned long long)stat_get(&t->st.samples),
-			(unsigned long long)stat_get(&t->st.malformed), (unsigned long long)stat_get(&t->st.faults),
-			(unsigned long long)stat_get(&t->st.lost), (unsigned long long)stat_get(&t->st.reconnects));
+			r && i < r->n_trackers ? r->trk_rate[i] : 0.0, (unsigned long long)ctr_get(&t->st.samples),
+			(unsigned long long)ctr_get(&t->st.malformed), (unsigned long long)ctr_get(&t->st.faults),
+			(unsigned long long)ctr_get(&t->st.lost), (unsigned long long)ctr_get(&t->st.reconnects));
 		if (t->drv->status) {
 			char dev[256];
 
@@ -304,25 +301,25 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 		"STALE", "HELD", "IK_IT/ARM", "UNREACHED", "NAN", "LATENCY us p50/p99/max");
 	for (int i = 0; i < g->n_avatars; i++) {
 		struct gw_avatar *a = &g->av[i];
-		uint64_t solves = stat_get(&a->st.ik_solves);
+		uint64_t solves = ctr_get(&a->st.ik_solves);
 
 		fprintf(out, "%-16s %5u %-6s %8.1f %9llu %7llu %6llu %8.2f %9llu %5llu %10.1f/%.1f/%.1f\n",
 			a->cfg->name, a->cfg->id,
 			sensor_states[atomic_load_explicit(&a->st.state, memory_order_relaxed) % 3],
-			r && i < r->n_avatars ? r->av_rate[i] : 0.0, (unsigned long long)stat_get(&a->st.frames),
-			(unsigned long long)stat_get(&a->st.stale_frames), (unsigned long long)stat_get(&a->st.held),
-			solves ? (double)stat_get(&a->st.ik_iters) / (double)solves : 0.0,
-			(unsigned long long)stat_get(&a->st.ik_unreached),
-			(unsigned long long)stat_get(&a->st.nan_blocked), us(hist_percentile(&a->st.latency, 0.5)),
-			us(hist_percentile(&a->st.latency, 0.99)), us(stat_get(&a->st.latency.max_ns)));
+			r && i < r->n_avatars ? r->av_rate[i] : 0.0, (unsigned long long)ctr_get(&a->st.frames),
+			(unsigned long long)ctr_get(&a->st.stale_frames), (unsigned long long)ctr_get(&a->st.held),
+			solves ? (double)ctr_get(&a->st.ik_iters) / (double)solves : 0.0,
+			(unsigned long long)ctr_get(&a->st.ik_unreached),
+			(unsigned long long)ctr_get(&a->st.nan_blocked), us(hist_percentile(&a->st.latency, 0.5)),
+			us(hist_percentile(&a->st.latency, 0.99)), us(ctr_get(&a->st.latency.max_ns)));
 	}
 	fprintf(out, "\n%-16s %-9s %10s %9s %7s %8s\n", "OUTPUT", "TYPE", "SENT", "DROPPED", "ERRORS", "CLIENTS");
 	for (int i = 0; i < g->n_outputs; i++) {
 		struct output *o = &g->out[i];
 
 		fprintf(out, "%-16s %-9s %10llu %9llu %7llu %8llu\n", o->name, out_types[o->cfg->type],
-			(unsigned long long)stat_get(&o->st.sent), (unsigned long long)stat_get(&o->st.dropped),
-			(unsigned long long)stat_get(&o->st.errors), (unsigned long long)stat_get(&o->st.clients));
+			(unsigned long long)ctr_get(&o->st.sent), (unsigned long long)ctr_get(&o->st.dropped),
+			(unsigned long long)ctr_get(&o->st.errors), (unsigned long long)ctr_get(&o->st.clients));
 	}
 	for (int i = 0; i < g->n_trackers; i++)
 		if (g->trk[i].drv->report)
@@ -338,11 +335,11 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 		fprintf(out,
 			"\nrecording: %s\n  %llu files, %llu records, %.1f MiB written, %llu dropped (buffer full), "
 			"%llu not written, %llu write errors\n",
-			file[0] ? file : "(no file open)", (unsigned long long)stat_get(&rs->files),
-			(unsigned long long)stat_get(&rs->records), (double)stat_get(&rs->bytes) / 1048576.0,
-			(unsigned long long)stat_get(&rs->dropped_records),
-			(unsigned long long)stat_get(&rs->skipped_records),
-			(unsigned long long)stat_get(&rs->write_errors));
+			file[0] ? file : "(no file open)", (unsigned long long)ctr_get(&rs->files),
+			(unsigned long long)ctr_get(&rs->records), (double)ctr_get(&rs->bytes) / 1048576.0,
+			(unsigned long long)ctr_get(&rs->dropped_records),
+			(unsigned long long)ctr_get(&rs->skipped_records),
+			(unsigned long long)ctr_get(&rs->write_errors));
 	}
 }
 

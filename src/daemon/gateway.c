@@ -3,8 +3,9 @@
  * gateway.c - a configuration made real, and the body of one cycle.
  */
 #include "daemon/gateway.h"
+#include "base/clock.h"
 
-#include "daemon/seqlock.h"
+#include "base/seqlock.h"
 #include "publish/encode.h"
 #include "record/recorder.h"
 
@@ -15,19 +16,11 @@
 #include <string.h>
 #include <time.h>
 
-uint64_t gw_mono_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
-
 void gw_clock(struct tracker_clock *c)
 {
 	struct timespec r;
 
-	c->mono_ns = gw_mono_ns();
+	c->mono_ns = mono_ns();
 	clock_gettime(CLOCK_REALTIME, &r);
 	c->real_off_ns = (int64_t)((uint64_t)r.tv_sec * 1000000000ull + (uint64_t)r.tv_nsec) - (int64_t)c->mono_ns;
 }
@@ -173,7 +166,7 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 		}
 		g->n_avatars++;
 	}
-	describe_soon(g, gw_mono_ns());
+	describe_soon(g, mono_ns());
 	for (int i = 0; i < g->cfg.n_outputs; i++) {
 		struct output *prev = NULL;
 
@@ -238,9 +231,9 @@ static void poll_trackers(struct gateway *g, const struct tracker_clock *now)
 		uint64_t newest = 0;
 
 		if (rc < 0) {
-			stat_add(&g->st.poll_errors, 1);
+			ctr_add(&g->st.poll_errors, 1);
 			if (st != TRACKER_FAULTY)
-				stat_add(&t->st.faults, 1);
+				ctr_add(&t->st.faults, 1);
 			atomic_store_explicit(&t->st.state, TRACKER_FAULTY, memory_order_relaxed);
 			continue;
 		}
@@ -284,12 +277,12 @@ static void prefetch_ahead(const struct gateway *g, int i)
 }
 
 /* the probed avatar's sensors, for the control thread (struct gw_probe) */
-static void probe_write(struct gateway *g, int idx, const struct pose_frame *pf, uint64_t mono_ns)
+static void probe_write(struct gateway *g, int idx, const struct pose_frame *pf, uint64_t now_ns)
 {
 	uint32_t w[GW_PROBE_WORDS];
 
-	w[0] = (uint32_t)mono_ns;
-	w[1] = (uint32_t)(mono_ns >> 32);
+	w[0] = (uint32_t)now_ns;
+	w[1] = (uint32_t)(now_ns >> 32);
 	w[2] = (uint32_t)idx;
 	for (int r = 0; r < FRAME_SENSORS; r++) {
 		uint32_t *o = w + GW_PROBE_HEAD + r * GW_PROBE_SENSOR_WORDS;
@@ -359,22 +352,22 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 			a->have_pose = true;
 			in.pose = &a->pose;
 			for (int side = 0; side < 2; side++) {
-				stat_add(&a->st.ik_iters, (uint64_t)next.res[side].iters);
+				ctr_add(&a->st.ik_iters, (uint64_t)next.res[side].iters);
 				if (next.res[side].flags & (IK_UNREACHABLE | IK_BAD_TARGET))
-					stat_add(&a->st.ik_unreached, 1);
+					ctr_add(&a->st.ik_unreached, 1);
 			}
-			stat_add(&a->st.ik_solves, 2);
+			ctr_add(&a->st.ik_solves, 2);
 		} else if (a->have_pose) {
 			in.pose = &a->pose;
 			in.held = true;
-			stat_add(&a->st.held, 1);
+			ctr_add(&a->st.held, 1);
 		}
 		memset(&wf.h, 0, sizeof(wf.h));
 		encode_frame(&in, &wf);
 		frame_inputs(pf, &wf); /* buttons and analog values: an input block after the FRAME */
 		if (in.pose && !encode_frame_finite(&wf)) {
 			/* never publish a NaN posture: count, and forget it as a seed */
-			stat_add(&a->st.nan_blocked, 1);
+			ctr_add(&a->st.nan_blocked, 1);
 			a->have_pose = false;
 			continue;
 		}
@@ -387,13 +380,13 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		g->msgs[n].len = (uint16_t)wire_encode_frame(&wf, slot_of(g, frames));
 		n++;
 		frames++;
-		stat_add(&a->st.frames, 1);
+		ctr_add(&a->st.frames, 1);
 		if (pf->new_sample) {
-			stat_add(&a->st.new_frames, 1);
+			ctr_add(&a->st.new_frames, 1);
 			a->pose_arrival_ns = pf->arrival_ns;
 		}
 		if (wf.h.flags & WIRE_F_STALE)
-			stat_add(&a->st.stale_frames, 1);
+			ctr_add(&a->st.stale_frames, 1);
 		if (now->mono_ns >= a->next_describe_ns) {
 			uint8_t *d = a->describe_msg;
 
@@ -421,7 +414,7 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 	if (g->rec)
 		recorder_messages(g->rec, now->mono_ns, g->msgs, n);
 	for (int o = 0; o < g->n_outputs; o++) {
-		uint64_t acc = stat_get(&g->out[o].st.accepted);
+		uint64_t acc = ctr_get(&g->out[o].st.accepted);
 
 		g->out[o].ops->service(&g->out[o]);
 		g->out[o].ops->send(&g->out[o], g->msgs, n);
@@ -430,10 +423,10 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		 * DESCRIBE now, not a second later. Not for a Modbus client: an HMI
 		 * that connects for every poll would flood every other output.
 		 */
-		if (stat_get(&g->out[o].st.accepted) != acc && g->out[o].cfg->type != CFG_OUT_MODBUS)
+		if (ctr_get(&g->out[o].st.accepted) != acc && g->out[o].cfg->type != CFG_OUT_MODBUS)
 			describe_soon(g, now->mono_ns);
 	}
-	sent_ns = gw_mono_ns();
+	sent_ns = mono_ns();
 	for (int i = 0; i < g->n_avatars; i++) {
 		struct gw_avatar *a = &g->av[i];
 
@@ -443,6 +436,6 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 			a->pose_arrival_ns = 0;
 		}
 	}
-	stat_add(&g->st.cycles, 1);
+	ctr_add(&g->st.cycles, 1);
 	return frames;
 }

@@ -11,7 +11,9 @@
 
 #include "avatargw/wire.h"
 #include "config/config.h"
-#include "daemon/stats.h"
+#include "base/clock.h"
+#include "base/counter.h"
+#include "base/hist.h"
 #include "frames/frame.h"
 #include "ik/avatar.h"
 #include "publish/output.h"
@@ -119,7 +121,6 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now);
 /* descriptors that wake an event-mode loop (trackers with one); returns how many were written */
 int gw_event_fds(struct gateway *g, int *fds, int max);
 
-uint64_t gw_mono_ns(void);
 void gw_clock(struct tracker_clock *c);
 
 #endif /* AGW_GATEWAY_H */

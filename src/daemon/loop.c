@@ -128,7 +128,7 @@ static void *loop_main(void *arg)
 		}
 		if (!next) {
 			period = (uint64_t)(1e9 / g->cfg.daemon.rate);
-			next = gw_mono_ns() + period;
+			next = mono_ns() + period;
 		}
 		if (l->epfd >= 0) {
 			struct epoll_event ev[CFG_MAX_SOURCES];
@@ -143,7 +143,7 @@ static void *loop_main(void *arg)
 
 			if (g->cfg.daemon.busy_wait) {
 				/* a CPU that never idles keeps its caches: the cycle starts warm */
-				while (gw_mono_ns() < next)
+				while (mono_ns() < next)
 					cpu_relax();
 			} else {
 				ts_from_ns(next, &ts);
@@ -158,7 +158,7 @@ static void *loop_main(void *arg)
 		}
 		gw_cycle(g, &now);
 		{
-			uint64_t end = gw_mono_ns(), cpu1 = thread_cpu_ns();
+			uint64_t end = mono_ns(), cpu1 = thread_cpu_ns();
 
 			hist_add(&g->st.work, end - now.mono_ns);
 			hist_add(&g->st.work_cpu, cpu1 > cpu0 ? cpu1 - cpu0 : 0);
@@ -166,7 +166,7 @@ static void *loop_main(void *arg)
 				next += period;
 				if (end > next) {
 					/* overran: skip to the next boundary ahead */
-					stat_add(&g->st.overruns, 1);
+					ctr_add(&g->st.overruns, 1);
 					next += ((end - next) / period + 1) * period;
 				}
 			}

@@ -13,7 +13,7 @@
 #include "config/config.h"
 #include "daemon/ctl.h"
 #include "daemon/gateway.h"
-#include "daemon/log.h"
+#include "base/log.h"
 #include "daemon/loop.h"
 #include "daemon/notify.h"
 #include "record/recorder.h"
@@ -148,7 +148,7 @@ static void report(struct seen *s, struct gateway *g)
 	drain_notes(g);
 	if (!s->dropped || !s->errors || !s->nan || !s->malformed || !s->faults)
 		return;
-	if ((v = stat_get(&g->st.overruns)) != s->overruns) {
+	if ((v = ctr_get(&g->st.overruns)) != s->overruns) {
 		pr_warning("loop: %llu overruns (cycles that missed their deadline), %llu in all",
 			   (unsigned long long)(v - s->overruns), (unsigned long long)v);
 		s->overruns = v;
@@ -156,12 +156,12 @@ static void report(struct seen *s, struct gateway *g)
 	for (int i = 0; i < s->n_out; i++) {
 		struct output *o = &g->out[i];
 
-		if ((v = stat_get(&o->st.dropped)) != s->dropped[i]) {
+		if ((v = ctr_get(&o->st.dropped)) != s->dropped[i]) {
 			pr_info("output %s: %llu messages dropped (a full socket or a slow subscriber), %llu in all",
 				o->name, (unsigned long long)(v - s->dropped[i]), (unsigned long long)v);
 			s->dropped[i] = v;
 		}
-		if ((v = stat_get(&o->st.errors)) != s->errors[i]) {
+		if ((v = ctr_get(&o->st.errors)) != s->errors[i]) {
 			pr_warning("output %s: %llu send errors, last: %s", o->name,
 				   (unsigned long long)(v - s->errors[i]),
 				   strerror(atomic_load_explicit(&o->st.last_errno, memory_order_relaxed)));
@@ -169,7 +169,7 @@ static void report(struct seen *s, struct gateway *g)
 		}
 	}
 	for (int i = 0; i < s->n_av; i++)
-		if ((v = stat_get(&g->av[i].st.nan_blocked)) != s->nan[i]) {
+		if ((v = ctr_get(&g->av[i].st.nan_blocked)) != s->nan[i]) {
 			pr_err("avatar %s: %llu frames not published: a number was not finite", g->av[i].cfg->name,
 			       (unsigned long long)(v - s->nan[i]));
 			s->nan[i] = v;
@@ -177,12 +177,12 @@ static void report(struct seen *s, struct gateway *g)
 	for (int i = 0; i < s->n_trk; i++) {
 		struct tracker *t = &g->trk[i];
 
-		if ((v = stat_get(&t->st.malformed)) != s->malformed[i]) {
+		if ((v = ctr_get(&t->st.malformed)) != s->malformed[i]) {
 			pr_warning("source %s: %llu malformed samples dropped", t->name,
 				   (unsigned long long)(v - s->malformed[i]));
 			s->malformed[i] = v;
 		}
-		if ((v = stat_get(&t->st.faults)) != s->faults[i]) {
+		if ((v = ctr_get(&t->st.faults)) != s->faults[i]) {
 			char why[256] = "";
 
 			if (t->drv->status)
@@ -203,12 +203,12 @@ static void final_line(struct gateway *g, struct recorder *rec)
 		const struct recorder_stats *rs = recorder_stats(rec);
 
 		snprintf(tail, sizeof(tail), "; recorder: %llu records, %llu dropped, %llu write errors",
-			 (unsigned long long)stat_get(&rs->records), (unsigned long long)stat_get(&rs->dropped_records),
-			 (unsigned long long)stat_get(&rs->write_errors));
+			 (unsigned long long)ctr_get(&rs->records), (unsigned long long)ctr_get(&rs->dropped_records),
+			 (unsigned long long)ctr_get(&rs->write_errors));
 	}
 	pr_info("stopped after %llu cycles, %llu overruns, %llu poll errors%s",
-		(unsigned long long)stat_get(&g->st.cycles), (unsigned long long)stat_get(&g->st.overruns),
-		(unsigned long long)stat_get(&g->st.poll_errors), tail);
+		(unsigned long long)ctr_get(&g->st.cycles), (unsigned long long)ctr_get(&g->st.overruns),
+		(unsigned long long)ctr_get(&g->st.poll_errors), tail);
 }
 
 static void status_line(struct gateway *g)
@@ -218,7 +218,7 @@ static void status_line(struct gateway *g)
 	for (int i = 0; i < g->n_avatars; i++)
 		ok += atomic_load_explicit(&g->av[i].st.state, memory_order_relaxed) == 0;
 	notify_sendf("STATUS=%d avatars (%d tracking), %d sources, %d outputs, %llu overruns", g->n_avatars, ok,
-		     g->n_trackers, g->n_outputs, (unsigned long long)stat_get(&g->st.overruns));
+		     g->n_trackers, g->n_outputs, (unsigned long long)ctr_get(&g->st.overruns));
 }
 
 /*
@@ -409,7 +409,7 @@ int main(int argc, char **argv)
 			struct config ncfg;
 			int nxt = 1 - cur;
 
-			notify_sendf("RELOADING=1\nMONOTONIC_USEC=%llu", (unsigned long long)(gw_mono_ns() / 1000));
+			notify_sendf("RELOADING=1\nMONOTONIC_USEC=%llu", (unsigned long long)(mono_ns() / 1000));
 			pr_info("reloading %s", path);
 			if (config_load_ex(&ncfg, path, sets, n_sets, err, sizeof(err))) {
 				pr_err("reload rejected, the running configuration stays: %s", err);

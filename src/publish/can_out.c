@@ -23,9 +23,10 @@
  * line and the output stays disabled: the daemon carries on without it.
  */
 #include "publish/output.h"
+#include "base/clock.h"
 
 #include "avatargw/wire.h"
-#include "daemon/log.h"
+#include "base/log.h"
 #include "ik/ik.h"
 #include "wire/can_port.h"
 #include "wire/cancodec.h"
@@ -61,14 +62,6 @@ struct can_out {
 	_Atomic uint64_t no_limits; /* of those: the joint limits were not known yet */
 	_Atomic uint64_t limited;   /* commands with a joint clamped or slowed */
 };
-
-static uint64_t mono_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
 
 static void free_priv(struct can_out *c)
 {
@@ -148,9 +141,9 @@ static bool make_command(struct can_out *c, struct output *o, struct can_avatar 
 		return true;
 	*flags |= CANCODEC_F_SAFE;
 	if (!finite || (wf->h.flags & (WIRE_F_STALE | WIRE_F_HELD | WIRE_F_UNREACHED)) || !a->have_limits) {
-		ctr_add_out(&c->withheld, 1);
+		ctr_add(&c->withheld, 1);
 		if (!a->have_limits)
-			ctr_add_out(&c->no_limits, 1);
+			ctr_add(&c->no_limits, 1);
 		return false;
 	}
 	step = a->have_cmd ? o->cfg->max_speed * fmin((double)(now - a->last_ns) * 1e-9, a->period_s) : INFINITY;
@@ -166,7 +159,7 @@ static bool make_command(struct can_out *c, struct output *o, struct can_avatar 
 	}
 	if (limited) {
 		*flags |= CANCODEC_F_LIMITED;
-		ctr_add_out(&c->limited, 1);
+		ctr_add(&c->limited, 1);
 	}
 	return true;
 }
@@ -201,15 +194,15 @@ static void send_avatar(struct can_out *c, struct output *o, struct can_avatar *
 
 		if (rc == -EAGAIN || rc == -ENOBUFS) {
 			/* the queue is full: the rest of this command (its STATUS too) stays here */
-			ctr_add_out(&o->st.dropped, (uint64_t)(CANCODEC_FRAMES - i));
+			ctr_add(&o->st.dropped, (uint64_t)(CANCODEC_FRAMES - i));
 			break;
 		}
 		if (rc) {
-			ctr_add_out(&o->st.errors, 1);
+			ctr_add(&o->st.errors, 1);
 			atomic_store_explicit(&o->st.last_errno, -rc, memory_order_relaxed);
 			break;
 		}
-		ctr_add_out(&o->st.sent, 1);
+		ctr_add(&o->st.sent, 1);
 		sent++;
 		/* what the receiver now holds: the ramp goes on from there */
 		if (fr == CANCODEC_STATUS) {
@@ -226,7 +219,7 @@ static void send_avatar(struct can_out *c, struct output *o, struct can_avatar *
 	}
 	if (sent == CANCODEC_FRAMES) {
 		a->counter++;
-		ctr_add_out(&c->commands, 1);
+		ctr_add(&c->commands, 1);
 	}
 }
 

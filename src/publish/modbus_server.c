@@ -29,11 +29,12 @@
  * silent client holds a slot for a bounded time and never holds the thread.
  */
 #include "publish/output.h"
+#include "base/clock.h"
 #include "publish/listen.h"
 
 #include "avatargw/wire.h"
-#include "daemon/log.h"
-#include "daemon/seqlock.h"
+#include "base/log.h"
+#include "base/seqlock.h"
 #include "publish/modbus_map.h"
 
 #include <modbus/modbus.h>
@@ -108,14 +109,6 @@ struct mb_server {
 	struct pollfd *pfd;
 	int *pfd_client;
 };
-
-static uint64_t mono_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
 
 /* the server thread is the one writer of every mb_stats counter but updates */
 static void bump(_Atomic uint64_t *c)
@@ -538,7 +531,7 @@ static void modbus_server_send(struct output *o, const struct out_msg *m, int n)
 			now = mono_ns();
 		modbus_map_encode(&wf, s->order, r);
 		block_store(&s->blk[k], r, now);
-		ctr_add_out(&s->st.updates, 1);
+		ctr_add(&s->st.updates, 1);
 	}
 }
 

@@ -24,6 +24,7 @@
  * +y with the back of the hand up at avatargw's rest posture).
  */
 #include "publish/output.h"
+#include "base/clock.h"
 #include "publish/snapshot.h"
 
 #include <lo/lo.h>
@@ -260,21 +261,13 @@ struct osc {
 	double t0; /* start, for /VMC/Ext/T */
 };
 
-static uint64_t mono_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
-
 static void count(struct output *o, struct osc *s, int rc)
 {
 	if (rc >= 0) {
-		ctr_add_out(&o->st.sent, 1);
+		ctr_add(&o->st.sent, 1);
 		return;
 	}
-	ctr_add_out(&o->st.errors, 1);
+	ctr_add(&o->st.errors, 1);
 	atomic_store_explicit(&o->st.last_errno, lo_address_errno(s->addr) ? lo_address_errno(s->addr) : EIO,
 			      memory_order_relaxed);
 }

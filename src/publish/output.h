@@ -12,6 +12,7 @@
 #ifndef AGW_OUTPUT_H
 #define AGW_OUTPUT_H
 
+#include "base/counter.h"
 #include "config/config.h"
 #include "frames/frame.h"
 
@@ -73,12 +74,6 @@ struct output {
 	struct output_stats st;
 	void *priv;
 };
-
-static inline void ctr_add_out(_Atomic uint64_t *c, uint64_t n)
-{
-	/* one writer (the loop) */
-	atomic_store_explicit(c, atomic_load_explicit(c, memory_order_relaxed) + n, memory_order_relaxed);
-}
 
 extern const struct output_ops udp_output_ops;
 extern const struct output_ops stream_output_ops;

@@ -129,7 +129,7 @@ static void drop_client(struct output *o, struct client *c)
 	close(c->fd);
 	c->fd = -1;
 	c->off = c->len = 0;
-	ctr_add_out(&o->st.closed, 1);
+	ctr_add(&o->st.closed, 1);
 	atomic_store_explicit(&o->st.clients, atomic_load_explicit(&o->st.clients, memory_order_relaxed) - 1,
 			      memory_order_relaxed);
 }
@@ -179,13 +179,13 @@ static void stream_send(struct output *o, const struct out_msg *m, int n)
 				c->off = 0;
 			}
 			if (c->len + need > s->buf_size) {
-				ctr_add_out(&o->st.dropped, 1);
+				ctr_add(&o->st.dropped, 1);
 				continue;
 			}
 			wire_put_len(c->buf + c->off + c->len, m[j].len);
 			memcpy(c->buf + c->off + c->len + 4, m[j].data, m[j].len);
 			c->len += need;
-			ctr_add_out(&o->st.sent, 1);
+			ctr_add(&o->st.sent, 1);
 		}
 		flush_client(o, c);
 	}
@@ -206,7 +206,7 @@ static void stream_service(struct output *o)
 				slot = i;
 		if (slot < 0) {
 			close(fd);
-			ctr_add_out(&o->st.refused, 1);
+			ctr_add(&o->st.refused, 1);
 			continue;
 		}
 		if (s->type == CFG_OUT_TCP)
@@ -219,8 +219,8 @@ static void stream_service(struct output *o)
 		}
 		s->cl[slot].fd = fd;
 		s->cl[slot].off = s->cl[slot].len = 0;
-		ctr_add_out(&o->st.accepted, 1);
-		ctr_add_out(&o->st.clients, 1);
+		ctr_add(&o->st.accepted, 1);
+		ctr_add(&o->st.clients, 1);
 	}
 	/* subscribers send nothing: a readable socket means EOF (gone) or noise to discard */
 	for (int i = 0; i < s->max_clients; i++) {

@@ -251,7 +251,7 @@ static void udp_send(struct output *o, const struct out_msg *m, int n)
 
 		if (rc > 0) {
 			for (int j = i; j < i + rc; j++)
-				ctr_add_out(&o->st.sent, u->segs[j]);
+				ctr_add(&o->st.sent, u->segs[j]);
 			i += rc;
 			continue;
 		}
@@ -265,16 +265,16 @@ static void udp_send(struct output *o, const struct out_msg *m, int n)
 				left += u->segs[j];
 			memmove(u->iov, u->mm[i].msg_hdr.msg_iov, (size_t)left * sizeof(*u->iov));
 			u->gso = false;
-			ctr_add_out(&o->st.gso_off, 1);
+			ctr_add(&o->st.gso_off, 1);
 			h = udp_build(u, left);
 			i = 0;
 			continue;
 		}
 		/* the message(s) at i could not go: drop them, carry on with the next */
 		if (rc < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == ENOBUFS)) {
-			ctr_add_out(&o->st.dropped, u->segs[i]);
+			ctr_add(&o->st.dropped, u->segs[i]);
 		} else {
-			ctr_add_out(&o->st.errors, u->segs[i]);
+			ctr_add(&o->st.errors, u->segs[i]);
 			atomic_store_explicit(&o->st.last_errno, rc < 0 ? errno : EIO, memory_order_relaxed);
 		}
 		i++;

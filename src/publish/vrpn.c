@@ -29,6 +29,7 @@
  * go again once there is room, so a client never misses a release.
  */
 #include "publish/output.h"
+#include "base/clock.h"
 #include "publish/listen.h"
 
 #include "avatargw/wire.h"
@@ -147,22 +148,6 @@ struct vrpn {
 	uint8_t rel[REL_MAX];
 	uint8_t dgram[VRPN_UDP_MAX];
 };
-
-static uint64_t mono_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
-
-static uint64_t real_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_REALTIME, &ts);
-	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
 
 /* ---- encoding: big-endian, 8-byte aligned --------------------------------------------- */
 
@@ -378,7 +363,7 @@ static void vcl_drop(struct output *o, struct vcl *c, bool malformed)
 	close(c->fd);
 	c->fd = -1;
 	c->state = VC_FREE;
-	ctr_add_out(malformed ? &o->st.malformed : &o->st.closed, 1);
+	ctr_add(malformed ? &o->st.malformed : &o->st.closed, 1);
 	atomic_store_explicit(&o->st.clients, atomic_load_explicit(&o->st.clients, memory_order_relaxed) - 1,
 			      memory_order_relaxed);
 }
@@ -423,7 +408,7 @@ static void vcl_flush(struct output *o, struct vcl *c)
 
 static void vcl_dropped(struct output *o, struct vcl *c, uint64_t now)
 {
-	ctr_add_out(&o->st.dropped, 1);
+	ctr_add(&o->st.dropped, 1);
 	if (!c->dropping_ns)
 		c->dropping_ns = now;
 }
@@ -785,12 +770,12 @@ static void vrpn_lob(struct output *o, struct vrpn *v, const char *msg, const st
 	struct sockaddr_storage to;
 
 	if (sscanf(msg, "%127s %d", host, &port) != 2 || port < 1024 || port > 65535) {
-		ctr_add_out(&o->st.malformed, 1);
+		ctr_add(&o->st.malformed, 1);
 		return;
 	}
 	for (const char *h = host; *h; h++)
 		if (!isalnum((unsigned char)*h) && *h != '.' && *h != ':' && *h != '-') {
-			ctr_add_out(&o->st.malformed, 1);
+			ctr_add(&o->st.malformed, 1);
 			return;
 		}
 	/* connect to the address the request came from (as VRPN does: the client may have several) */
@@ -809,25 +794,25 @@ static void vrpn_lob(struct output *o, struct vrpn *v, const char *msg, const st
 			slot = i;
 	}
 	if (slot < 0) {
-		ctr_add_out(&o->st.refused, 1);
+		ctr_add(&o->st.refused, 1);
 		return;
 	}
 	fd = socket(to.ss_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
 	if (fd < 0) {
-		ctr_add_out(&o->st.errors, 1);
+		ctr_add(&o->st.errors, 1);
 		atomic_store_explicit(&o->st.last_errno, errno, memory_order_relaxed);
 		return;
 	}
 	if (connect(fd, (struct sockaddr *)&to, from_len) && errno != EINPROGRESS) {
 		close(fd);
-		ctr_add_out(&o->st.errors, 1);
+		ctr_add(&o->st.errors, 1);
 		atomic_store_explicit(&o->st.last_errno, errno, memory_order_relaxed);
 		return;
 	}
 	vcl_start(&v->cl[slot], fd, VC_CONNECTING, now);
 	memcpy(&v->cl[slot].peer, &to, sizeof(to));
 	v->cl[slot].peer_len = from_len;
-	ctr_add_out(&o->st.clients, 1);
+	ctr_add(&o->st.clients, 1);
 }
 
 static void vcl_connected(struct output *o, struct vrpn *v, struct vcl *c, uint64_t now)
@@ -844,7 +829,7 @@ static void vcl_connected(struct output *o, struct vrpn *v, struct vcl *c, uint6
 	c->len += VRPN_COOKIE_LEN;
 	c->state = VC_COOKIE;
 	c->since_ns = now;
-	ctr_add_out(&o->st.accepted, 1);
+	ctr_add(&o->st.accepted, 1);
 	vcl_flush(o, c);
 }
 
@@ -867,13 +852,13 @@ static void vrpn_service(struct output *o)
 				slot = i;
 		if (slot < 0) {
 			close(fd);
-			ctr_add_out(&o->st.refused, 1);
+			ctr_add(&o->st.refused, 1);
 			continue;
 		}
 		vcl_start(&v->cl[slot], fd, VC_CONNECTING, now);
 		memcpy(&v->cl[slot].peer, &peer, sizeof(peer));
 		v->cl[slot].peer_len = pl;
-		ctr_add_out(&o->st.clients, 1);
+		ctr_add(&o->st.clients, 1);
 		vcl_connected(o, v, &v->cl[slot], now);
 	}
 	/* clients that ask us to connect to them */
@@ -964,13 +949,13 @@ static void vcl_udp_flush(struct output *o, struct vrpn *v, struct vcl *c, size_
 		return;
 	if (sendto(v->ufd, v->dgram, *dlen, MSG_DONTWAIT, (struct sockaddr *)&c->udp_to, tl) < 0) {
 		if (errno == EAGAIN || errno == EWOULDBLOCK || errno == ENOBUFS) {
-			ctr_add_out(&o->st.dropped, 1);
+			ctr_add(&o->st.dropped, 1);
 		} else {
-			ctr_add_out(&o->st.errors, 1);
+			ctr_add(&o->st.errors, 1);
 			atomic_store_explicit(&o->st.last_errno, errno, memory_order_relaxed);
 		}
 	} else {
-		ctr_add_out(&o->st.sent, 1);
+		ctr_add(&o->st.sent, 1);
 	}
 	*dlen = 0;
 }
@@ -1035,7 +1020,7 @@ static void vrpn_send(struct output *o, const struct out_msg *msgs, int n)
 			} else if ((p = vcl_room(v, c, low))) {
 				memcpy(p, v->low, low);
 				c->len += low;
-				ctr_add_out(&o->st.sent, 1);
+				ctr_add(&o->st.sent, 1);
 			} else {
 				vcl_dropped(o, c, now);
 			}

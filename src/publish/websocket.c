@@ -20,9 +20,10 @@
  * use. The thread's counters go to the output whose snapshot it reads.
  */
 #include "publish/output.h"
+#include "base/clock.h"
 #include "publish/snapshot.h"
 
-#include "daemon/log.h"
+#include "base/log.h"
 
 #include <libwebsockets.h>
 
@@ -86,22 +87,6 @@ struct ws_session {
 static struct output *ws_owner(struct ws_srv *w)
 {
 	return (struct output *)w->view[atomic_load_explicit(&w->active, memory_order_acquire)].owner;
-}
-
-static uint64_t real_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_REALTIME, &ts);
-	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
-
-static uint64_t mono_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
 }
 
 /* ---- JSON ------------------------------------------------------------------------- */
@@ -259,7 +244,7 @@ static void ws_count(struct ws_srv *w, size_t field_off, uint64_t n)
 
 	pthread_mutex_lock(&w->mu);
 	o = ws_owner(w);
-	ctr_add_out((_Atomic uint64_t *)((char *)&o->st + field_off), n);
+	ctr_add((_Atomic uint64_t *)((char *)&o->st + field_off), n);
 	pthread_mutex_unlock(&w->mu);
 }
 

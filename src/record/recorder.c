@@ -10,9 +10,10 @@
  * and a copy of the latest SESSION record, so that every file stands alone.
  */
 #include "record/recorder.h"
+#include "base/clock.h"
 
 #include "daemon/gateway.h"
-#include "daemon/log.h"
+#include "base/log.h"
 #include "record/recfile.h"
 #include "trackers/replay.h"
 
@@ -78,22 +79,6 @@ struct recorder {
 	uint64_t seen_dropped, seen_errors, seen_skipped, seen_files;
 };
 
-static uint64_t mono_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
-
-static uint64_t real_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_REALTIME, &ts);
-	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
-
 /* ---- the ring ------------------------------------------------------------------------- */
 
 static size_t ring_used(const struct ring *q)
@@ -131,8 +116,8 @@ static void ring_copy_out(const struct ring *q, size_t from, uint8_t *dst, size_
 
 static void drop(struct recorder *r, size_t n)
 {
-	stat_add(&r->st.dropped_records, 1);
-	stat_add(&r->st.dropped_bytes, n);
+	ctr_add(&r->st.dropped_records, 1);
+	ctr_add(&r->st.dropped_bytes, n);
 }
 
 void recorder_sample(struct recorder *r, uint16_t source, uint16_t sensor, const struct sensor_slot *s)
@@ -205,7 +190,7 @@ static void set_path(struct recorder *r, const char *p)
 
 static void werror(struct recorder *r, int e)
 {
-	stat_add(&r->st.write_errors, 1);
+	ctr_add(&r->st.write_errors, 1);
 	atomic_store_explicit(&r->st.last_errno, e, memory_order_relaxed);
 }
 
@@ -244,18 +229,18 @@ static void flush_buf(struct recorder *r)
 	if (!r->wlen)
 		return;
 	if (r->fd < 0) {
-		stat_add(&r->st.skipped_records, r->wrecords);
+		ctr_add(&r->st.skipped_records, r->wrecords);
 	} else if ((rc = write_all(r->fd, r->wbuf, r->wlen))) {
 		werror(r, -rc);
-		stat_add(&r->st.skipped_records, r->wrecords);
+		ctr_add(&r->st.skipped_records, r->wrecords);
 		close_file(r);
 		r->next_retry_ns = r->last_flush_ns + RETRY_NS;
 	} else {
 		r->file_bytes += r->wlen;
 		r->file_records += r->wrecords;
-		stat_add(&r->st.bytes, r->wlen);
-		stat_add(&r->st.records, r->wrecords);
-		stat_add(&r->st.flushes, 1);
+		ctr_add(&r->st.bytes, r->wlen);
+		ctr_add(&r->st.records, r->wrecords);
+		ctr_add(&r->st.flushes, 1);
 		if (r->fsync && fdatasync(r->fd))
 			werror(r, errno);
 	}
@@ -312,8 +297,8 @@ static bool open_file(struct recorder *r)
 	r->file_bytes = sizeof(hdr) + r->session_len;
 	r->file_records = r->session_len ? 1 : 0;
 	r->file_opened_ns = mono_ns();
-	stat_add(&r->st.bytes, r->file_bytes);
-	stat_add(&r->st.files, 1);
+	ctr_add(&r->st.bytes, r->file_bytes);
+	ctr_add(&r->st.files, 1);
 	set_path(r, name);
 	return true;
 }
@@ -364,7 +349,7 @@ static bool want_rotation(const struct recorder *r, size_t next, uint64_t now)
 /* marks in the file what the loop could not queue since the last time */
 static void mark_gap(struct recorder *r, uint64_t now)
 {
-	uint64_t d = stat_get(&r->st.dropped_records), b = stat_get(&r->st.dropped_bytes);
+	uint64_t d = ctr_get(&r->st.dropped_records), b = ctr_get(&r->st.dropped_bytes);
 	uint8_t p[RECFILE_GAP_LEN];
 	struct recfile_gap g = { now, d - r->gap_records, b - r->gap_bytes };
 
@@ -675,24 +660,24 @@ void recorder_log(struct recorder *r)
 
 	if (!r)
 		return;
-	if ((v = stat_get(&r->st.files)) != r->seen_files) {
+	if ((v = ctr_get(&r->st.files)) != r->seen_files) {
 		recorder_current_file(r, path, sizeof(path));
 		if (path[0])
 			pr_info("recording to %s", path);
 		r->seen_files = v;
 	}
-	if ((v = stat_get(&r->st.dropped_records)) != r->seen_dropped) {
+	if ((v = ctr_get(&r->st.dropped_records)) != r->seen_dropped) {
 		pr_warning("recorder: %llu records lost to a full buffer (raise record_buffer, or the disk is slow), "
 			   "%llu in all",
 			   (unsigned long long)(v - r->seen_dropped), (unsigned long long)v);
 		r->seen_dropped = v;
 	}
-	if ((v = stat_get(&r->st.write_errors)) != r->seen_errors) {
+	if ((v = ctr_get(&r->st.write_errors)) != r->seen_errors) {
 		pr_err("recorder: %llu errors writing to %s: %s", (unsigned long long)(v - r->seen_errors), r->dir,
 		       strerror(atomic_load_explicit(&r->st.last_errno, memory_order_relaxed)));
 		r->seen_errors = v;
 	}
-	if ((v = stat_get(&r->st.skipped_records)) != r->seen_skipped) {
+	if ((v = ctr_get(&r->st.skipped_records)) != r->seen_skipped) {
 		pr_warning("recorder: %llu records not written (no file), %llu in all",
 			   (unsigned long long)(v - r->seen_skipped), (unsigned long long)v);
 		r->seen_skipped = v;

@@ -20,7 +20,7 @@
  */
 #include "trackers/tracker.h"
 
-#include "daemon/log.h"
+#include "base/log.h"
 #include "wire/can_port.h"
 #include "wire/cancodec.h"
 

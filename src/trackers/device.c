@@ -12,6 +12,7 @@
  * counted (the count jumps) and never mixed up.
  */
 #include "trackers/device.h"
+#include "base/clock.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -33,22 +34,6 @@ const struct device_codec *device_codec_find(const char *name)
 		if (!strcmp(all[i]->name, name))
 			return all[i];
 	return NULL;
-}
-
-uint64_t device_mono_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
-
-static uint64_t real_ns(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_REALTIME, &ts);
-	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
 }
 
 int device_init(struct device *d, struct tracker *t, const struct device_codec *codec, int n_sensors, char *err,
@@ -293,13 +278,13 @@ static void record_report(struct device *d, uint64_t mono, const uint8_t *buf, s
 int device_feed(struct device *d, const uint8_t *buf, size_t len)
 {
 	if (d->rec)
-		record_report(d, device_mono_ns(), buf, len);
+		record_report(d, mono_ns(), buf, len);
 	return device_feed_quiet(d, buf, len);
 }
 
 int device_feed_quiet(struct device *d, const uint8_t *buf, size_t len)
 {
-	struct feed_ctx f = { d, real_ns(), device_mono_ns() };
+	struct feed_ctx f = { d, real_ns(), mono_ns() };
 	int n = d->codec->feed(d->codec_st, buf, len, feed_emit, &f);
 
 	device_count(d);
@@ -333,13 +318,12 @@ bool device_sleep_ms(struct device *d, int ms)
 	return !device_stopping(d);
 }
 
-static bool sleep_until(struct device *d, uint64_t mono_ns)
+static bool sleep_until(struct device *d, uint64_t until_ns)
 {
-	struct timespec ts = { (time_t)(mono_ns / 1000000000ull), (long)(mono_ns % 1000000000ull) };
+	struct timespec ts = { (time_t)(until_ns / 1000000000ull), (long)(until_ns % 1000000000ull) };
 
 	pthread_mutex_lock(&d->mu);
-	while (!device_stopping(d) && device_mono_ns() < mono_ns &&
-	       pthread_cond_timedwait(&d->cv, &d->mu, &ts) != ETIMEDOUT)
+	while (!device_stopping(d) && mono_ns() < until_ns && pthread_cond_timedwait(&d->cv, &d->mu, &ts) != ETIMEDOUT)
 		;
 	pthread_mutex_unlock(&d->mu);
 	return !device_stopping(d);
@@ -381,7 +365,7 @@ void device_play(struct device *d, const struct capture *cap, double speed, bool
 {
 	device_set_link(d, DEVICE_UP);
 	do {
-		uint64_t t0 = device_mono_ns();
+		uint64_t t0 = mono_ns();
 		/*
 		 * An untimed capture is paced at the codec's period, which the
 		 * codec may learn from the records themselves (a Polhemus record

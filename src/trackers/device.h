@@ -26,6 +26,7 @@
 #ifndef AGW_DEVICE_H
 #define AGW_DEVICE_H
 
+#include "base/clock.h"
 #include "config/config.h"
 #include "trackers/capture.h"
 #include "trackers/tracker.h"
@@ -196,7 +197,5 @@ void device_drv_status(struct tracker *t, char *buf, size_t len);
 int device_drv_note(struct tracker *t, int *level, char *buf, size_t len);
 
 /* ---- helpers of the drivers --------------------------------------------------------- */
-
-uint64_t device_mono_ns(void);
 
 #endif /* AGW_DEVICE_H */

@@ -547,11 +547,11 @@ static int hydra_open_dev(struct hydra *h)
 /* reads until a motion report comes or ms pass; 1: motion report fed, 0: none, -1: the device is gone */
 static int hydra_await_motion(struct hydra *h, int ms)
 {
-	uint64_t end = device_mono_ns() + (uint64_t)ms * 1000000ull;
+	uint64_t end = mono_ns() + (uint64_t)ms * 1000000ull;
 	uint8_t buf[64];
 
 	while (!device_stopping(&h->dev)) {
-		uint64_t now = device_mono_ns();
+		uint64_t now = mono_ns();
 		int left = now >= end ? 0 : (int)((end - now) / 1000000ull), n;
 
 		if (now >= end)
@@ -614,13 +614,13 @@ static int hydra_handshake(struct hydra *h, bool first)
 /* reads motion reports until the device goes (-1), stalls or leaves motion mode (0) or the source stops (0) */
 static int hydra_stream(struct hydra *h)
 {
-	uint64_t last = device_mono_ns();
+	uint64_t last = mono_ns();
 	uint8_t buf[64];
 	int bad = 0;
 
 	while (!device_stopping(&h->dev)) {
 		int n = hid_read_timeout(h->data, buf, sizeof(buf), 100);
-		uint64_t now = device_mono_ns();
+		uint64_t now = mono_ns();
 
 		if (n < 0)
 			return -1;

@@ -6,7 +6,7 @@
  * libmodbus blocks and allocates, so it lives in a thread of its own
  * started at open(): it connects, reads the registers at poll_rate (to
  * absolute deadlines), turns them into poses and hands each sensor's pose
- * to the loop through a sequence lock (daemon/seqlock.h); the loop's poll()
+ * to the loop through a sequence lock (base/seqlock.h); the loop's poll()
  * takes what is new and never waits.
  *
  * The register map is configured: for each sensor a position (x, y, z) and
@@ -25,8 +25,8 @@
  */
 #include "trackers/tracker.h"
 
-#include "daemon/log.h"
-#include "daemon/seqlock.h"
+#include "base/log.h"
+#include "base/seqlock.h"
 #include "wire/regcodec.h"
 
 #include <modbus/modbus.h>

@@ -571,7 +571,7 @@ static int usb_open(struct polhemus *p)
 	return 0;
 fail:
 	if (rc == LIBUSB_ERROR_BUSY) {
-		uint64_t now = device_mono_ns();
+		uint64_t now = mono_ns();
 
 		if (!p->busy_since)
 			p->busy_since = now;
@@ -630,13 +630,13 @@ static int usb_setup(struct polhemus *p)
 static int usb_stream(struct polhemus *p)
 {
 	const struct polhemus_codec_st *cs = p->dev.codec_st;
-	uint64_t last = device_mono_ns();
+	uint64_t last = mono_ns();
 	unsigned char buf[4096];
 	int restarts = 0, pipes = 0, errors = 0;
 
 	while (!device_stopping(&p->dev)) {
 		int got = 0, rc = libusb_bulk_transfer(p->h, p->ep_in, buf, sizeof(buf), &got, 100);
-		uint64_t now = device_mono_ns();
+		uint64_t now = mono_ns();
 
 		/* a transfer that timed out may still have brought bytes */
 		if (got > 0 && device_feed(&p->dev, buf, (size_t)got) > 0) {
@@ -709,7 +709,7 @@ static int usb_stream(struct polhemus *p)
 		rc = usb_setup(p);
 		if (rc == LIBUSB_ERROR_NO_DEVICE)
 			return -1;
-		last = device_mono_ns();
+		last = mono_ns();
 	}
 	return 0;
 }
@@ -717,13 +717,13 @@ static int usb_stream(struct polhemus *p)
 /* waits for a hot-plug arrival or search_ms */
 static void usb_wait(struct polhemus *p)
 {
-	uint64_t end = device_mono_ns() + (uint64_t)polhemus_timing.search_ms * 1000000ull;
+	uint64_t end = mono_ns() + (uint64_t)polhemus_timing.search_ms * 1000000ull;
 
 	if (!p->hotplug) {
 		device_sleep_ms(&p->dev, polhemus_timing.search_ms);
 		return;
 	}
-	while (!device_stopping(&p->dev) && !atomic_load(&p->arrived) && device_mono_ns() < end) {
+	while (!device_stopping(&p->dev) && !atomic_load(&p->arrived) && mono_ns() < end) {
 		struct timeval tv = { 0, 50000 };
 
 		libusb_handle_events_timeout_completed(p->ctx, &tv, NULL);

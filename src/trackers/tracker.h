@@ -12,6 +12,7 @@
 #ifndef AGW_TRACKER_H
 #define AGW_TRACKER_H
 
+#include "base/counter.h"
 #include "config/config.h"
 #include "ik/dq.h"
 
@@ -117,17 +118,6 @@ void tracker_close(struct tracker *t);
 /* a sample in the tracker's frame, stored in world coordinates (through the sensor's mount, if any) */
 void tracker_put(struct tracker *t, int sensor, const struct dq *local, uint64_t t_ns, uint64_t arrival_ns);
 int tracker_sensor_lookup(const struct cfg_source *cfg, const char *name);
-
-static inline void ctr_add(_Atomic uint64_t *c, uint64_t n)
-{
-	/* one writer (the loop): a relaxed load and store, no locked instruction */
-	atomic_store_explicit(c, atomic_load_explicit(c, memory_order_relaxed) + n, memory_order_relaxed);
-}
-
-static inline uint64_t ctr_get(_Atomic uint64_t *c)
-{
-	return atomic_load_explicit(c, memory_order_relaxed);
-}
 
 extern const struct tracker_driver sim_driver;
 extern const struct tracker_driver replay_driver;

@@ -18,7 +18,7 @@
 
 uint64_t gwt_ms(void)
 {
-	return gw_mono_ns() / 1000000ull;
+	return mono_ns() / 1000000ull;
 }
 
 void gwt_sleep_ms(int ms)

@@ -2,7 +2,7 @@
 /*
  * log.c - see log.h.
  */
-#include "daemon/log.h"
+#include "base/log.h"
 
 #include <stdarg.h>
 #include <stdio.h>

@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: MIT
 /*
- * stats.c - the latency histogram.
+ * hist.c - the latency histogram.
  */
-#include "daemon/stats.h"
+#include "base/hist.h"
+
+#include "base/counter.h"
 
 static int bucket_of(uint64_t us)
 {
@@ -40,7 +42,7 @@ void hist_add(struct hist *h, uint64_t ns)
 	int b = bucket_of(ns / 1000);
 
 	atomic_store_explicit(&h->b[b], atomic_load_explicit(&h->b[b], memory_order_relaxed) + 1, memory_order_relaxed);
-	stat_add(&h->n, 1);
+	ctr_add(&h->n, 1);
 	if (ns > atomic_load_explicit(&h->max_ns, memory_order_relaxed))
 		atomic_store_explicit(&h->max_ns, ns, memory_order_relaxed);
 }
@@ -63,10 +65,10 @@ uint64_t hist_percentile(const struct hist *h, double p)
 		acc += c[i];
 		if (acc >= want) {
 			uint64_t top = bucket_top(i) * 1000;
-			uint64_t mx = stat_get(&h->max_ns);
+			uint64_t mx = ctr_get(&h->max_ns);
 
 			return top < mx || !mx ? top : mx;
 		}
 	}
-	return stat_get(&h->max_ns);
+	return ctr_get(&h->max_ns);
 }

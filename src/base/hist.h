@@ -1,15 +1,15 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * stats.h - counters and latency histograms written by the loop thread
- * (one writer, relaxed atomics, no locked instructions) and read by the
- * control thread at any time.
+ * hist.h - latency histograms written by the loop thread (one writer,
+ * relaxed atomics, no locked instructions) and read by the control thread
+ * at any time.
  *
  * Histogram buckets: 1 us wide below 128 us, then 16 per power of two up
  * to ~1 s; a percentile is the upper edge of its bucket (at most 1/16 = 6 %
  * above the true value past 128 us).
  */
-#ifndef AGW_STATS_H
-#define AGW_STATS_H
+#ifndef AGW_HIST_H
+#define AGW_HIST_H
 
 #include <stdatomic.h>
 #include <stdint.h>
@@ -29,14 +29,4 @@ void hist_add(struct hist *h, uint64_t ns);
 /* p in [0, 1]: the value in ns below which that fraction lies (0 if empty) */
 uint64_t hist_percentile(const struct hist *h, double p);
 
-static inline void stat_add(_Atomic uint64_t *c, uint64_t n)
-{
-	atomic_store_explicit(c, atomic_load_explicit(c, memory_order_relaxed) + n, memory_order_relaxed);
-}
-
-static inline uint64_t stat_get(const _Atomic uint64_t *c)
-{
-	return atomic_load_explicit((_Atomic uint64_t *)c, memory_order_relaxed);
-}
-
-#endif /* AGW_STATS_H */
+#endif /* AGW_HIST_H */
