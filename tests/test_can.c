@@ -33,6 +33,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "trackers/can_in.h"
 #include "avatargw/wire.h"
 #include "config/config.h"
 #include "base/counter.h"
@@ -980,10 +981,10 @@ static void test_in_config_checks(void **state)
 					  "orientation_id = 0x18FF0000\nextended_ids = yes\n",
 					  err, sizeof(err)),
 			 0);
-	assert_int_equal(c.source[0].ori_id, 0x18FF0000);
-	assert_int_equal(c.source[0].pos_id, 0x280);
-	assert_true(c.source[0].extended_ids);
-	assert_near(c.source[0].quat_scale, 32768, 0);
+	assert_int_equal(((const struct can_in_opts *)(c.source[0]).opt)->ori_id, 0x18FF0000);
+	assert_int_equal(((const struct can_in_opts *)(c.source[0]).opt)->pos_id, 0x280);
+	assert_true(((const struct can_in_opts *)(c.source[0]).opt)->extended_ids);
+	assert_near(((const struct can_in_opts *)(c.source[0]).opt)->quat_scale, 32768, 0);
 	config_free(&c);
 }
 

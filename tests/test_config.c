@@ -28,6 +28,19 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "trackers/sim.h"
+#include "trackers/replay.h"
+#include "trackers/polhemus.h"
+#include "trackers/modbus_in.h"
+#include "trackers/hydra.h"
+#include "trackers/can_in.h"
+#include "publish/websocket.h"
+#include "publish/vrpn.h"
+#include "publish/udp.h"
+#include "publish/stream.h"
+#include "publish/osc.h"
+#include "publish/modbus_server.h"
+#include "publish/can_out.h"
 #include "config/config.h"
 #include "record/recfile.h"
 #include "trackers/tracker.h"
@@ -465,12 +478,12 @@ static void test_values_replay_modes(void **state)
 						 "step = yes\ninterpolate = natural\nsample_rate = 120\n"
 						 "[source d]\ntype = replay\nfile = builtin:cmu_141_16.csv\n");
 
-	assert_true(c->source[0].step);
-	assert_int_equal(c->source[0].interpolate, 3);
-	assert_near(c->source[0].sample_rate, 120, 0);
-	assert_false(c->source[1].step);
-	assert_int_equal(c->source[1].interpolate, 0);
-	assert_near(c->source[1].sample_rate, 240, 0);
+	assert_true(((const struct replay_opts *)(c->source[0]).opt)->step);
+	assert_int_equal(((const struct replay_opts *)(c->source[0]).opt)->interpolate, 3);
+	assert_near(((const struct replay_opts *)(c->source[0]).opt)->sample_rate, 120, 0);
+	assert_false(((const struct replay_opts *)(c->source[1]).opt)->step);
+	assert_int_equal(((const struct replay_opts *)(c->source[1]).opt)->interpolate, 0);
+	assert_near(((const struct replay_opts *)(c->source[1]).opt)->sample_rate, 240, 0);
 }
 
 /* a recording as the replay file: its sensors are SOURCE.SENSOR; a damaged header is refused */
@@ -549,17 +562,17 @@ static void test_values_sim_source(void **state)
 
 	assert_int_equal(c->n_sources, 2);
 	assert_string_equal(s->name, "left");
-	assert_int_equal(s->driver, trackers_find("sim"));
+	assert_int_equal(s->driver, cfg_source_type_find("sim"));
 	assert_int_equal(s->where.line, 2); /* its first key */
 	assert_near(s->origin[0], 1.5, 0);
 	assert_near(s->origin[1], -2, 0);
 	assert_near(s->origin[2], 0.25, 0);
 	set_ctx("yaw 90 degrees");
 	assert_near(s->yaw, M_PI / 2, ANG_TOL);
-	assert_int_equal(s->people, 3);
-	assert_true(s->seed == 4294967295u);
-	assert_near(s->sample_rate, 120, 0);
-	assert_near(s->spacing, 0.75, 0);
+	assert_int_equal(((const struct sim_opts *)(s)->opt)->people, 3);
+	assert_true(((const struct sim_opts *)(s)->opt)->seed == 4294967295u);
+	assert_near(((const struct sim_opts *)(s)->opt)->sample_rate, 120, 0);
+	assert_near(((const struct sim_opts *)(s)->opt)->spacing, 0.75, 0);
 	set_ctx("yaw -45 degrees");
 	assert_near(c->source[1].yaw, -M_PI / 4, ANG_TOL);
 	assert_string_equal(c->source[1].name, "right");
@@ -588,12 +601,12 @@ static void test_values_hardware_sources(void **state)
 				"[avatar a]\nhead = p/head\nleft_hand = h/left\nright_hand = p/right_hand\n");
 	const struct cfg_source *h = &c->source[0], *p = &c->source[1], *q = &c->source[2];
 
-	assert_int_equal(h->driver, trackers_find("hydra"));
-	assert_string_equal(h->device, "/dev/hydra");
-	assert_int_equal(h->hid_interface, 2);
-	assert_int_equal(h->control_interface, 2);
-	assert_string_equal(h->record, "/tmp/h.cap");
-	assert_string_equal(h->capture, "");
+	assert_int_equal(h->driver, cfg_source_type_find("hydra"));
+	assert_string_equal(((const struct hydra_opts *)(h)->opt)->dev.device, "/dev/hydra");
+	assert_int_equal(((const struct hydra_opts *)(h)->opt)->hid_interface, 2);
+	assert_int_equal(((const struct hydra_opts *)(h)->opt)->control_interface, 2);
+	assert_string_equal(((const struct hydra_opts *)(h)->opt)->dev.record, "/tmp/h.cap");
+	assert_string_equal(((const struct hydra_opts *)(h)->opt)->dev.capture, "");
 	assert_int_equal(h->n_mounts, 2);
 	assert_string_equal(h->mount[0].sensor, "left");
 	assert_near(h->mount[0].p[1], 0.04, 0);
@@ -602,19 +615,19 @@ static void test_values_hardware_sources(void **state)
 	assert_string_equal(h->mount[1].sensor, "right");
 	assert_near(h->mount[1].q[0], 0, 0);
 	assert_near(h->mount[1].q[3], 1, 0);
-	assert_int_equal(p->model, CFG_PH_PATRIOT);
-	assert_string_equal(p->device, "1-4.2");
-	assert_near(p->hemisphere[2], -1, 0);
+	assert_int_equal(((const struct polhemus_opts *)(p)->opt)->model, CFG_PH_PATRIOT);
+	assert_string_equal(((const struct polhemus_opts *)(p)->opt)->dev.device, "1-4.2");
+	assert_near(((const struct polhemus_opts *)(p)->opt)->hemisphere[2], -1, 0);
 	/* station 2 skipped: two sensors */
-	assert_int_equal(trackers_table[p->driver]->sensor_count(p), 2);
-	assert_int_equal(tracker_sensor_lookup(p, "right_hand"), 1);
+	assert_int_equal(cfg_source_type(p->driver)->sensor_count(p), 2);
+	assert_int_equal(cfg_sensor_lookup(p, "right_hand"), 1);
 	assert_int_equal(c->avatar[0].sensor[2].sensor, 1);
 	/* defaults */
-	assert_string_equal(q->device, "auto");
-	assert_int_equal(q->model, CFG_PH_AUTO);
-	assert_string_equal(q->stations, "head left_hand right_hand");
-	assert_near(q->hemisphere[0], 1, 0);
-	assert_int_equal(c->source[0].hid_interface, 2);
+	assert_string_equal(((const struct polhemus_opts *)(q)->opt)->dev.device, "auto");
+	assert_int_equal(((const struct polhemus_opts *)(q)->opt)->model, CFG_PH_AUTO);
+	assert_string_equal(((const struct polhemus_opts *)(q)->opt)->stations, "head left_hand right_hand");
+	assert_near(((const struct polhemus_opts *)(q)->opt)->hemisphere[0], 1, 0);
+	assert_int_equal(((const struct hydra_opts *)(c->source[0]).opt)->hid_interface, 2);
 	assert_has(print_config(f), "mount_right = 0.01 0 0 0 0 0 1    ; e.conf:8\n");
 }
 
@@ -723,30 +736,30 @@ static void test_values_outputs(void **state)
 
 	assert_int_equal(c->n_outputs, 4);
 	assert_string_equal(o[0].name, "u");
-	assert_int_equal(o[0].type, CFG_OUT_UDP);
-	assert_string_equal(o[0].address, "10.0.0.1");
-	assert_int_equal(o[0].port, 9000);
+	assert_int_equal(o[0].type, cfg_output_type_find("udp"));
+	assert_string_equal(((const struct udp_opts *)(o[0]).opt)->address, "10.0.0.1");
+	assert_int_equal(((const struct udp_opts *)(o[0]).opt)->port, 9000);
 	assert_int_equal(o[0].decimate, 4);
 	assert_int_equal(o[0].n_avatars, 2);
 	assert_int_equal(o[0].avatar_ids[0], 1); /* in the order listed */
 	assert_int_equal(o[0].avatar_ids[1], 0);
 
-	assert_int_equal(o[1].type, CFG_OUT_MULTICAST);
-	assert_string_equal(o[1].address, "239.255.77.70");
-	assert_int_equal(o[1].port, 7700);
-	assert_string_equal(o[1].interface, "lo");
-	assert_int_equal(o[1].ttl, 8);
-	assert_false(o[1].mcast_loop);
+	assert_int_equal(o[1].type, cfg_output_type_find("multicast"));
+	assert_string_equal(((const struct udp_opts *)(o[1]).opt)->address, "239.255.77.70");
+	assert_int_equal(((const struct udp_opts *)(o[1]).opt)->port, 7700);
+	assert_string_equal(((const struct udp_opts *)(o[1]).opt)->interface, "lo");
+	assert_int_equal(((const struct udp_opts *)(o[1]).opt)->ttl, 8);
+	assert_false(((const struct udp_opts *)(o[1]).opt)->mcast_loop);
 	assert_int_equal(o[1].n_avatars, 0); /* all */
 
-	assert_int_equal(o[2].type, CFG_OUT_TCP);
-	assert_string_equal(o[2].address, "0.0.0.0");
-	assert_int_equal(o[2].port, 7771);
-	assert_int_equal(o[2].max_clients, 3);
-	assert_int_equal(o[2].client_buffer, 8192);
+	assert_int_equal(o[2].type, cfg_output_type_find("tcp"));
+	assert_string_equal(((const struct stream_opts *)(o[2]).opt)->address, "0.0.0.0");
+	assert_int_equal(((const struct stream_opts *)(o[2]).opt)->port, 7771);
+	assert_int_equal(((const struct stream_opts *)(o[2]).opt)->max_clients, 3);
+	assert_int_equal(((const struct stream_opts *)(o[2]).opt)->client_buffer, 8192);
 
-	assert_int_equal(o[3].type, CFG_OUT_UNIX);
-	assert_string_equal(o[3].path, "/tmp/agw.sock");
+	assert_int_equal(o[3].type, cfg_output_type_find("unix"));
+	assert_string_equal(((const struct stream_opts *)(o[3]).opt)->path, "/tmp/agw.sock");
 	assert_int_equal(o[3].n_avatars, 1);
 	assert_int_equal(o[3].avatar_ids[0], 1);
 }
@@ -782,15 +795,15 @@ static void test_defaults(void **state)
 		assert_near(r->origin[i], 0, 0);
 	}
 	assert_near(s->yaw, 0, 0);
-	assert_int_equal(s->people, 1);
-	assert_int_equal(s->seed, 1);
-	assert_near(s->sample_rate, 240, 0);
-	assert_near(s->spacing, 1, 0);
-	assert_int_equal(r->driver, trackers_find("replay"));
-	assert_string_equal(r->file, "builtin:cmu_141_16.csv");
-	assert_near(r->speed, 1, 0);
-	assert_true(r->loop);
-	assert_near(r->start, 0, 0);
+	assert_int_equal(((const struct sim_opts *)(s)->opt)->people, 1);
+	assert_int_equal(((const struct sim_opts *)(s)->opt)->seed, 1);
+	assert_near(((const struct sim_opts *)(s)->opt)->sample_rate, 240, 0);
+	assert_near(((const struct sim_opts *)(s)->opt)->spacing, 1, 0);
+	assert_int_equal(r->driver, cfg_source_type_find("replay"));
+	assert_string_equal(((const struct replay_opts *)(r)->opt)->file, "builtin:cmu_141_16.csv");
+	assert_near(((const struct replay_opts *)(r)->opt)->speed, 1, 0);
+	assert_true(((const struct replay_opts *)(r)->opt)->loop);
+	assert_near(((const struct replay_opts *)(r)->opt)->start, 0, 0);
 
 	assert_int_equal(a->id, 0);
 	assert_near(a->dims[0], 0.1732, 0);
@@ -814,17 +827,17 @@ static void test_defaults(void **state)
 		assert_null(c->output[i].avatar_ids);
 		assert_string_equal(c->output[i].avatar_list, "all");
 	}
-	assert_string_equal(c->output[0].address, "127.0.0.1");
-	assert_int_equal(c->output[0].port, 7770);
-	assert_int_equal(c->output[1].ttl, 1);
-	assert_true(c->output[1].mcast_loop);
-	assert_string_equal(c->output[1].interface, "");
-	assert_int_equal(c->output[1].port, 7770);
-	assert_string_equal(c->output[2].address, "127.0.0.1");
-	assert_int_equal(c->output[2].max_clients, 8);
-	assert_int_equal(c->output[2].client_buffer, 65536);
-	assert_string_equal(c->output[3].path, "/run/avatargw/stream");
-	assert_int_equal(c->output[3].max_clients, 8);
+	assert_string_equal(((const struct udp_opts *)(c->output[0]).opt)->address, "127.0.0.1");
+	assert_int_equal(((const struct udp_opts *)(c->output[0]).opt)->port, 7770);
+	assert_int_equal(((const struct udp_opts *)(c->output[1]).opt)->ttl, 1);
+	assert_true(((const struct udp_opts *)(c->output[1]).opt)->mcast_loop);
+	assert_string_equal(((const struct udp_opts *)(c->output[1]).opt)->interface, "");
+	assert_int_equal(((const struct udp_opts *)(c->output[1]).opt)->port, 7770);
+	assert_string_equal(((const struct stream_opts *)(c->output[2]).opt)->address, "127.0.0.1");
+	assert_int_equal(((const struct stream_opts *)(c->output[2]).opt)->max_clients, 8);
+	assert_int_equal(((const struct stream_opts *)(c->output[2]).opt)->client_buffer, 65536);
+	assert_string_equal(((const struct stream_opts *)(c->output[3]).opt)->path, "/run/avatargw/stream");
+	assert_int_equal(((const struct stream_opts *)(c->output[3]).opt)->max_clients, 8);
 }
 
 static void test_bool_spellings(void **state)
@@ -856,14 +869,14 @@ static void test_shipped_config(void **state)
 	if (config_load(&f->c, path, f->err, sizeof(f->err)))
 		fail_msg("%s", f->err);
 	assert_int_equal(c->n_sources, 1);
-	assert_int_equal(c->source[0].driver, trackers_find("sim"));
+	assert_int_equal(c->source[0].driver, cfg_source_type_find("sim"));
 	assert_int_equal(c->n_avatars, 1);
 	for (int r = 0; r < 3; r++)
 		assert_sensor(&c->avatar[0], r, 0, r); /* sim/p0.* */
 	assert_int_equal(c->n_outputs, 1);
-	assert_int_equal(c->output[0].type, CFG_OUT_UDP);
-	assert_string_equal(c->output[0].address, "127.0.0.1");
-	assert_int_equal(c->output[0].port, 7770);
+	assert_int_equal(c->output[0].type, cfg_output_type_find("udp"));
+	assert_string_equal(((const struct udp_opts *)(c->output[0]).opt)->address, "127.0.0.1");
+	assert_int_equal(((const struct udp_opts *)(c->output[0]).opt)->port, 7770);
 	assert_int_equal(c->output[0].n_avatars, 0);
 }
 
@@ -885,11 +898,11 @@ static void test_err_key_of_other_type(void **state)
 	expect_text_err(
 		*state, "[source clip]\ntype = replay\nfile = builtin:cmu_141_16.csv\npeople = 2\n",
 		"e.conf:4: [source clip] people: unknown key for type replay",
-		"(known: type, origin, yaw, sample_rate, file, speed, loop, start, step, interpolate, mount_SENSOR)",
+		"(known: type, origin, yaw, mount_SENSOR, sample_rate, file, speed, loop, start, step, interpolate)",
 		NULL);
 	expect_text_err(*state, "[output o]\ntype = udp\npath = /tmp/x\n",
 			"e.conf:3: [output o] path: unknown key for type udp",
-			"(known: type, address, port, gso, decimate, avatars)", NULL);
+			"(known: type, decimate, avatars, address, port, gso)", NULL);
 }
 
 static void test_err_unknown_section(void **state)
@@ -1104,48 +1117,48 @@ static void test_values_bus(void **state)
 	const struct cfg_source *r = &c->source[0], *i = &c->source[1];
 	const struct cfg_output *m = &c->output[0], *a = &c->output[1];
 
-	assert_int_equal(r->driver, trackers_find("modbus"));
-	assert_string_equal(r->address, "robot.local");
-	assert_int_equal(r->port, 5020);
-	assert_int_equal(r->unit_id, 255);
-	assert_int_equal(r->register_type, CFG_REGS_INPUT);
-	assert_int_equal(r->sensors, 2);
-	assert_int_equal(r->sensor_stride, 16);
-	assert_int_equal(r->pos_register, 400);
-	assert_int_equal(r->pos_format, CFG_REG_FLOAT32);
-	assert_near(r->pos_scale, 1, 0);
-	assert_int_equal(r->ori_register, 406);
-	assert_int_equal(r->ori_format, CFG_REG_INT32);
-	assert_near(r->ori_scale, 0.0001, 0);
-	assert_int_equal(r->orientation, CFG_ORI_QUAT_XYZW);
-	assert_int_equal(r->word_order, CFG_WORD_DCBA);
-	assert_near(r->poll_rate, 125, 0);
-	assert_near(r->timeout_ms, 50, 0);
-	assert_int_equal(i->driver, trackers_find("can"));
-	assert_string_equal(i->interface, "fd:3");
-	assert_int_equal(i->sensors, 3);
-	assert_int_equal(i->ori_id, 0x18FF0000);
-	assert_int_equal(i->pos_id, -1);
-	assert_near(i->quat_scale, 16384, 0);
-	assert_int_equal(i->quat_order, CFG_QUAT_XYZW);
-	assert_near(i->pos_scale, 0.0005, 0);
-	assert_true(i->extended_ids);
+	assert_int_equal(r->driver, cfg_source_type_find("modbus"));
+	assert_string_equal(((const struct modbus_in_opts *)(r)->opt)->address, "robot.local");
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->port, 5020);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->unit_id, 255);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->register_type, CFG_REGS_INPUT);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->sensors, 2);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->sensor_stride, 16);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->pos_register, 400);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->pos_format, CFG_REG_FLOAT32);
+	assert_near(((const struct modbus_in_opts *)(r)->opt)->pos_scale, 1, 0);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->ori_register, 406);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->ori_format, CFG_REG_INT32);
+	assert_near(((const struct modbus_in_opts *)(r)->opt)->ori_scale, 0.0001, 0);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->orientation, CFG_ORI_QUAT_XYZW);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->word_order, CFG_WORD_DCBA);
+	assert_near(((const struct modbus_in_opts *)(r)->opt)->poll_rate, 125, 0);
+	assert_near(((const struct modbus_in_opts *)(r)->opt)->timeout_ms, 50, 0);
+	assert_int_equal(i->driver, cfg_source_type_find("can"));
+	assert_string_equal(((const struct can_in_opts *)(i)->opt)->interface, "fd:3");
+	assert_int_equal(((const struct can_in_opts *)(i)->opt)->sensors, 3);
+	assert_int_equal(((const struct can_in_opts *)(i)->opt)->ori_id, 0x18FF0000);
+	assert_int_equal(((const struct can_in_opts *)(i)->opt)->pos_id, -1);
+	assert_near(((const struct can_in_opts *)(i)->opt)->quat_scale, 16384, 0);
+	assert_int_equal(((const struct can_in_opts *)(i)->opt)->quat_order, CFG_QUAT_XYZW);
+	assert_near(((const struct can_in_opts *)(i)->opt)->pos_scale, 0.0005, 0);
+	assert_true(((const struct can_in_opts *)(i)->opt)->extended_ids);
 	assert_sensor(&c->avatar[0], 2, 1, 2);
-	assert_int_equal(m->type, CFG_OUT_MODBUS);
-	assert_string_equal(m->address, "0.0.0.0");
-	assert_int_equal(m->port, 1502);
-	assert_int_equal(m->max_clients, 3);
-	assert_int_equal(m->reg_base, 1000);
-	assert_int_equal(m->reg_stride, 66);
-	assert_int_equal(m->word_order, CFG_WORD_CDAB);
-	assert_int_equal(m->writable_regs, 8);
-	assert_near(m->idle_timeout, 0, 0);
-	assert_int_equal(a->type, CFG_OUT_CAN);
-	assert_string_equal(a->interface, "can1");
-	assert_int_equal(a->base_id, 0x7F8);
-	assert_false(a->safe);
+	assert_int_equal(m->type, cfg_output_type_find("modbus"));
+	assert_string_equal(((const struct modbus_out_opts *)(m)->opt)->address, "0.0.0.0");
+	assert_int_equal(((const struct modbus_out_opts *)(m)->opt)->port, 1502);
+	assert_int_equal(((const struct modbus_out_opts *)(m)->opt)->max_clients, 3);
+	assert_int_equal(((const struct modbus_out_opts *)(m)->opt)->reg_base, 1000);
+	assert_int_equal(((const struct modbus_out_opts *)(m)->opt)->reg_stride, 66);
+	assert_int_equal(((const struct modbus_out_opts *)(m)->opt)->word_order, CFG_WORD_CDAB);
+	assert_int_equal(((const struct modbus_out_opts *)(m)->opt)->writable_regs, 8);
+	assert_near(((const struct modbus_out_opts *)(m)->opt)->idle_timeout, 0, 0);
+	assert_int_equal(a->type, cfg_output_type_find("can"));
+	assert_string_equal(((const struct can_out_opts *)(a)->opt)->interface, "can1");
+	assert_int_equal(((const struct can_out_opts *)(a)->opt)->base_id, 0x7F8);
+	assert_false(((const struct can_out_opts *)(a)->opt)->safe);
 	set_ctx("max_speed 45 deg/s");
-	assert_near(a->max_speed, 45 * DEG, ANG_TOL);
+	assert_near(((const struct can_out_opts *)(a)->opt)->max_speed, 45 * DEG, ANG_TOL);
 	assert_int_equal(a->decimate, 2);
 }
 
@@ -1161,39 +1174,39 @@ static void test_defaults_bus(void **state)
 	const struct cfg_source *r = &c->source[0], *i = &c->source[1];
 	const struct cfg_output *m = &c->output[0], *a = &c->output[1];
 
-	assert_int_equal(r->port, 502);
-	assert_int_equal(r->unit_id, 1);
-	assert_int_equal(r->register_type, CFG_REGS_HOLDING);
-	assert_int_equal(r->sensors, 1);
-	assert_int_equal(r->sensor_stride, 0);
-	assert_int_equal(r->pos_register, 0);
-	assert_int_equal(r->pos_format, CFG_REG_INT16);
-	assert_near(r->pos_scale, 0.001, 0);
-	assert_int_equal(r->ori_register, 3);
-	assert_int_equal(r->ori_format, CFG_REG_INT16);
-	assert_near(r->ori_scale, 0.001, 0);
-	assert_int_equal(r->orientation, CFG_ORI_ROTVEC);
-	assert_int_equal(r->word_order, CFG_WORD_ABCD);
-	assert_near(r->poll_rate, 50, 0);
-	assert_near(r->timeout_ms, 200, 0);
-	assert_int_equal(i->sensors, 1);
-	assert_int_equal(i->ori_id, 0x200);
-	assert_int_equal(i->pos_id, 0x280);
-	assert_near(i->quat_scale, 32768, 0);
-	assert_int_equal(i->quat_order, CFG_QUAT_WXYZ);
-	assert_false(i->extended_ids);
-	assert_string_equal(m->address, "127.0.0.1");
-	assert_int_equal(m->max_clients, 8);
-	assert_int_equal(m->reg_base, 0);
-	assert_int_equal(m->reg_stride, 100);
-	assert_int_equal(m->word_order, CFG_WORD_ABCD);
-	assert_int_equal(m->writable_regs, 0);
-	assert_near(m->idle_timeout, 60, 0);
-	assert_int_equal(a->base_id, 0x100);
-	assert_false(a->extended_ids);
-	assert_true(a->safe);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->port, 502);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->unit_id, 1);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->register_type, CFG_REGS_HOLDING);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->sensors, 1);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->sensor_stride, 0);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->pos_register, 0);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->pos_format, CFG_REG_INT16);
+	assert_near(((const struct modbus_in_opts *)(r)->opt)->pos_scale, 0.001, 0);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->ori_register, 3);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->ori_format, CFG_REG_INT16);
+	assert_near(((const struct modbus_in_opts *)(r)->opt)->ori_scale, 0.001, 0);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->orientation, CFG_ORI_ROTVEC);
+	assert_int_equal(((const struct modbus_in_opts *)(r)->opt)->word_order, CFG_WORD_ABCD);
+	assert_near(((const struct modbus_in_opts *)(r)->opt)->poll_rate, 50, 0);
+	assert_near(((const struct modbus_in_opts *)(r)->opt)->timeout_ms, 200, 0);
+	assert_int_equal(((const struct can_in_opts *)(i)->opt)->sensors, 1);
+	assert_int_equal(((const struct can_in_opts *)(i)->opt)->ori_id, 0x200);
+	assert_int_equal(((const struct can_in_opts *)(i)->opt)->pos_id, 0x280);
+	assert_near(((const struct can_in_opts *)(i)->opt)->quat_scale, 32768, 0);
+	assert_int_equal(((const struct can_in_opts *)(i)->opt)->quat_order, CFG_QUAT_WXYZ);
+	assert_false(((const struct can_in_opts *)(i)->opt)->extended_ids);
+	assert_string_equal(((const struct modbus_out_opts *)(m)->opt)->address, "127.0.0.1");
+	assert_int_equal(((const struct modbus_out_opts *)(m)->opt)->max_clients, 8);
+	assert_int_equal(((const struct modbus_out_opts *)(m)->opt)->reg_base, 0);
+	assert_int_equal(((const struct modbus_out_opts *)(m)->opt)->reg_stride, 100);
+	assert_int_equal(((const struct modbus_out_opts *)(m)->opt)->word_order, CFG_WORD_ABCD);
+	assert_int_equal(((const struct modbus_out_opts *)(m)->opt)->writable_regs, 0);
+	assert_near(((const struct modbus_out_opts *)(m)->opt)->idle_timeout, 60, 0);
+	assert_int_equal(((const struct can_out_opts *)(a)->opt)->base_id, 0x100);
+	assert_false(((const struct can_out_opts *)(a)->opt)->extended_ids);
+	assert_true(((const struct can_out_opts *)(a)->opt)->safe);
 	set_ctx("max_speed 90 deg/s");
-	assert_near(a->max_speed, 90 * DEG, ANG_TOL);
+	assert_near(((const struct can_out_opts *)(a)->opt)->max_speed, 90 * DEG, ANG_TOL);
 }
 
 static void test_err_bus(void **state)
@@ -1319,7 +1332,7 @@ static void test_dropins_later_wins(void **state)
 	assert_near(c->daemon.stale_ms, 60, 0);			/* 10-a over main */
 	assert_int_equal(c->daemon.log_level, CFG_LOG_WARNING); /* main only */
 	assert_int_equal(c->n_outputs, 1);			/* a drop-in adds a section */
-	assert_int_equal(c->output[0].port, 7000);
+	assert_int_equal(((const struct udp_opts *)(c->output[0]).opt)->port, 7000);
 
 	p = print_config(f);
 	snprintf(want, sizeof(want),
@@ -1365,13 +1378,13 @@ static void test_set_overrides(void **state)
 		fail_msg("%s", f->err);
 	assert_near(c->daemon.rate, 500, 0); /* over main and both drop-ins */
 	assert_near(c->daemon.stale_ms, 60, 0);
-	assert_int_equal(c->output[0].port, 7771);
-	assert_int_equal(c->source[0].people, 3);
+	assert_int_equal(((const struct udp_opts *)(c->output[0]).opt)->port, 7771);
+	assert_int_equal(((const struct sim_opts *)(c->source[0]).opt)->people, 3);
 	for (int r = 0; r < 3; r++)
 		assert_sensor(&c->avatar[0], r, 0, 6 + r);
 	assert_int_equal(c->n_outputs, 2);
 	assert_string_equal(c->output[1].name, "extra");
-	assert_int_equal(c->output[1].type, CFG_OUT_TCP);
+	assert_int_equal(c->output[1].type, cfg_output_type_find("tcp"));
 	p = print_config(f);
 	assert_has(p, "\nrate = 500    ; --set:2\n");
 	assert_has(p, "\nport = 7771    ; --set:2\n");
@@ -1421,20 +1434,21 @@ static void test_builtin_demo(void **state)
 	assert_int_equal(c->n_files, 1);
 	assert_string_equal(c->files[0], "builtin:demo.conf");
 	clip = source_index(c, "clip");
-	assert_int_equal(c->source[clip].driver, trackers_find("replay"));
-	assert_string_equal(c->source[clip].file, "builtin:cmu_141_16.csv"); /* not made relative */
+	assert_int_equal(c->source[clip].driver, cfg_source_type_find("replay"));
+	assert_string_equal(((const struct replay_opts *)(c->source[clip]).opt)->file,
+			    "builtin:cmu_141_16.csv"); /* not made relative */
 	assert_true(c->n_avatars >= 1);
 	/* make run shows the browser viewer: the demo has one, on this host only */
 	{
 		int v = -1;
 
 		for (int i = 0; i < c->n_outputs; i++)
-			if (c->output[i].type == CFG_OUT_WEBSOCKET)
+			if (c->output[i].type == cfg_output_type_find("websocket"))
 				v = i;
 		assert_true(v >= 0);
 		assert_string_equal(c->output[v].name, "viewer");
-		assert_string_equal(c->output[v].address, "127.0.0.1");
-		assert_int_equal(c->output[v].port, 7780);
+		assert_string_equal(((const struct websocket_opts *)(c->output[v]).opt)->address, "127.0.0.1");
+		assert_int_equal(((const struct websocket_opts *)(c->output[v]).opt)->port, 7780);
 	}
 	config_free(&f->c);
 	assert_int_equal(config_load_ex(&f->c, "builtin:nothing.conf", NULL, 0, f->err, sizeof(f->err)), -1);
@@ -1541,10 +1555,10 @@ static void test_relative_replay_path(void **state)
 	c = load_file_ok(f, "main.conf");
 	assert_int_equal(c->n_sources, 3);
 	snprintf(want, sizeof(want), "%s/clips/tiny.csv", f->dir);
-	assert_string_equal(c->source[source_index(c, "clip")].file, want);
-	assert_string_equal(c->source[source_index(c, "abs")].file, want);
+	assert_string_equal(((const struct replay_opts *)(c->source[source_index(c, "clip")]).opt)->file, want);
+	assert_string_equal(((const struct replay_opts *)(c->source[source_index(c, "abs")]).opt)->file, want);
 	snprintf(want, sizeof(want), "%s/conf.d/../clips/tiny.csv", f->dir);
-	assert_string_equal(c->source[source_index(c, "more")].file, want);
+	assert_string_equal(((const struct replay_opts *)(c->source[source_index(c, "more")]).opt)->file, want);
 }
 
 /* the copy of the demo clip, relative, also works: the real file is read and checked */
@@ -1560,8 +1574,8 @@ static void test_relative_path_real_clip(void **state)
 	free(clip);
 	put(f, "sub/main.conf", "[source clip]\ntype = replay\nfile = dir/clip.csv\n[avatar a]\nperson = clip\n");
 	c = load_file_ok(f, "sub/main.conf");
-	assert_true(strstr(c->source[0].file, "/sub/dir/clip.csv") != NULL);
-	assert_int_equal(c->source[0].file[0], '/');
+	assert_true(strstr(((const struct replay_opts *)(c->source[0]).opt)->file, "/sub/dir/clip.csv") != NULL);
+	assert_int_equal(((const struct replay_opts *)(c->source[0]).opt)->file[0], '/');
 }
 
 /* ---- the daemon ---------------------------------------------------------------------------------- */
@@ -1723,50 +1737,50 @@ static void test_values_renderer_outputs(void **state)
 	const struct cfg_output *o = c->output;
 
 	assert_int_equal(c->n_outputs, 7);
-	assert_int_equal(o[0].type, CFG_OUT_VRPN);
-	assert_string_equal(o[0].address, "0.0.0.0");
-	assert_int_equal(o[0].port, 3883);
-	assert_string_equal(o[0].device, "Avatar%d");
-	assert_true(o[0].udp);
-	assert_true(o[0].client_timeout == 5);
-	assert_int_equal(o[0].max_clients, 8);
-	assert_int_equal(o[0].client_buffer, 65536);
-	assert_string_equal(o[1].address, "::");
-	assert_int_equal(o[1].port, 3884);
-	assert_string_equal(o[1].device, "Body%d");
-	assert_false(o[1].udp);
-	assert_true(o[1].client_timeout == 0.5);
-	assert_int_equal(o[1].max_clients, 2);
-	assert_int_equal(o[1].client_buffer, 4096);
+	assert_int_equal(o[0].type, cfg_output_type_find("vrpn"));
+	assert_string_equal(((const struct vrpn_opts *)(o[0]).opt)->address, "0.0.0.0");
+	assert_int_equal(((const struct vrpn_opts *)(o[0]).opt)->port, 3883);
+	assert_string_equal(((const struct vrpn_opts *)(o[0]).opt)->device, "Avatar%d");
+	assert_true(((const struct vrpn_opts *)(o[0]).opt)->udp);
+	assert_true(((const struct vrpn_opts *)(o[0]).opt)->client_timeout == 5);
+	assert_int_equal(((const struct vrpn_opts *)(o[0]).opt)->max_clients, 8);
+	assert_int_equal(((const struct vrpn_opts *)(o[0]).opt)->client_buffer, 65536);
+	assert_string_equal(((const struct vrpn_opts *)(o[1]).opt)->address, "::");
+	assert_int_equal(((const struct vrpn_opts *)(o[1]).opt)->port, 3884);
+	assert_string_equal(((const struct vrpn_opts *)(o[1]).opt)->device, "Body%d");
+	assert_false(((const struct vrpn_opts *)(o[1]).opt)->udp);
+	assert_true(((const struct vrpn_opts *)(o[1]).opt)->client_timeout == 0.5);
+	assert_int_equal(((const struct vrpn_opts *)(o[1]).opt)->max_clients, 2);
+	assert_int_equal(((const struct vrpn_opts *)(o[1]).opt)->client_buffer, 4096);
 
-	assert_int_equal(o[2].type, CFG_OUT_VMC);
-	assert_string_equal(o[2].address, "127.0.0.1");
-	assert_int_equal(o[2].port, 39539);
-	assert_true(o[2].rate == 60);
-	assert_true(o[2].torso == 0.5);
+	assert_int_equal(o[2].type, cfg_output_type_find("vmc"));
+	assert_string_equal(((const struct osc_opts *)(o[2]).opt)->address, "127.0.0.1");
+	assert_int_equal(((const struct osc_opts *)(o[2]).opt)->port, 39539);
+	assert_true(((const struct osc_opts *)(o[2]).opt)->rate == 60);
+	assert_true(((const struct osc_opts *)(o[2]).opt)->torso == 0.5);
 	assert_int_equal(o[2].n_avatars, 1);
 	assert_int_equal(o[2].avatar_ids[0], 1);
-	assert_string_equal(o[3].address, "10.0.0.2");
-	assert_int_equal(o[3].port, 39540);
-	assert_true(o[3].rate == 120);
-	assert_true(o[3].torso == 0.45);
+	assert_string_equal(((const struct osc_opts *)(o[3]).opt)->address, "10.0.0.2");
+	assert_int_equal(((const struct osc_opts *)(o[3]).opt)->port, 39540);
+	assert_true(((const struct osc_opts *)(o[3]).opt)->rate == 120);
+	assert_true(((const struct osc_opts *)(o[3]).opt)->torso == 0.45);
 
-	assert_int_equal(o[4].type, CFG_OUT_VRCHAT);
-	assert_int_equal(o[4].port, 9000);
-	assert_false(o[4].head);
-	assert_true(o[4].rate == 240);
+	assert_int_equal(o[4].type, cfg_output_type_find("vrchat"));
+	assert_int_equal(((const struct osc_opts *)(o[4]).opt)->port, 9000);
+	assert_false(((const struct osc_opts *)(o[4]).opt)->head);
+	assert_true(((const struct osc_opts *)(o[4]).opt)->rate == 240);
 
-	assert_int_equal(o[5].type, CFG_OUT_WEBSOCKET);
-	assert_string_equal(o[5].address, "127.0.0.1");
-	assert_int_equal(o[5].port, 7780);
-	assert_true(o[5].rate == 30);
-	assert_string_equal(o[5].www, "auto");
-	assert_string_equal(o[5].three, "/usr/share/javascript/three");
-	assert_string_equal(o[6].address, "0.0.0.0");
-	assert_int_equal(o[6].port, 8080);
-	assert_true(o[6].rate == 60);
-	assert_string_equal(o[6].www, "/srv/www");
-	assert_string_equal(o[6].three, "/opt/three");
+	assert_int_equal(o[5].type, cfg_output_type_find("websocket"));
+	assert_string_equal(((const struct websocket_opts *)(o[5]).opt)->address, "127.0.0.1");
+	assert_int_equal(((const struct websocket_opts *)(o[5]).opt)->port, 7780);
+	assert_true(((const struct websocket_opts *)(o[5]).opt)->rate == 30);
+	assert_string_equal(((const struct websocket_opts *)(o[5]).opt)->www, "auto");
+	assert_string_equal(((const struct websocket_opts *)(o[5]).opt)->three, "/usr/share/javascript/three");
+	assert_string_equal(((const struct websocket_opts *)(o[6]).opt)->address, "0.0.0.0");
+	assert_int_equal(((const struct websocket_opts *)(o[6]).opt)->port, 8080);
+	assert_true(((const struct websocket_opts *)(o[6]).opt)->rate == 60);
+	assert_string_equal(((const struct websocket_opts *)(o[6]).opt)->www, "/srv/www");
+	assert_string_equal(((const struct websocket_opts *)(o[6]).opt)->three, "/opt/three");
 }
 
 static void test_err_renderer_outputs(void **state)
@@ -1776,8 +1790,8 @@ static void test_err_renderer_outputs(void **state)
 			"e.conf:3: [output o] device: unknown key for type tcp", NULL);
 	expect_text_err(*state, "[output o]\ntype = vrpn\nrate = 30\n",
 			"e.conf:3: [output o] rate: unknown key for type vrpn",
-			"(known: type, address, port, max_clients, client_buffer, device, udp, client_timeout, "
-			"decimate, avatars)",
+			"(known: type, decimate, avatars, address, port, max_clients, client_buffer, device, udp, "
+			"client_timeout)",
 			NULL);
 	expect_text_err(*state, "[output o]\ntype = websocket\nclient_buffer = 4096\n",
 			"e.conf:3: [output o] client_buffer: unknown key for type websocket", NULL);

@@ -103,6 +103,7 @@ static void collect(void *ctx, int sensor, const struct device_sample *s)
 
 struct codec {
 	struct cfg_source cfg;
+	struct polhemus_opts opt;
 	void *st;
 	struct device_counts *c;
 };
@@ -112,8 +113,10 @@ static void codec_open(struct codec *k, int model, const char *sensors)
 	char err[128];
 
 	memset(&k->cfg, 0, sizeof(k->cfg));
-	k->cfg.model = model;
-	snprintf(k->cfg.stations, sizeof(k->cfg.stations), "%s", sensors);
+	memset(&k->opt, 0, sizeof(k->opt));
+	k->cfg.opt = &k->opt;
+	k->opt.model = model;
+	snprintf(k->opt.stations, sizeof(k->opt.stations), "%s", sensors);
 	k->st = calloc(1, polhemus_codec.size);
 	assert_int_equal(polhemus_codec.init(k->st, &k->cfg, err, sizeof(err)), 0);
 	polhemus_codec.reset(k->st);

@@ -8,6 +8,7 @@
  */
 #include "avatargw/wire.h"
 #include "publish/output.h"
+#include "publish/udp.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -58,6 +59,7 @@ struct fix {
 	int rx;
 	int port;
 	struct cfg_output cfg;
+	struct udp_opts opt;
 	struct output out;
 	uint16_t ids[N_AV];
 	uint8_t buf[N_AV + 2][WIRE_MAX_MSG];
@@ -81,11 +83,12 @@ static int setup(void **state)
 	assert_int_equal(getsockname(f.rx, (struct sockaddr *)&a, &al), 0);
 	f.port = ntohs(a.sin_port);
 	snprintf(f.cfg.name, sizeof(f.cfg.name), "u");
-	f.cfg.type = CFG_OUT_UDP;
-	snprintf(f.cfg.address, sizeof(f.cfg.address), "127.0.0.1");
-	f.cfg.port = f.port;
+	f.cfg.type = cfg_output_type_find("udp");
+	f.cfg.opt = &f.opt;
+	snprintf(f.opt.address, sizeof(f.opt.address), "127.0.0.1");
+	f.opt.port = f.port;
 	f.cfg.decimate = 1;
-	f.cfg.gso = true;
+	f.opt.gso = true;
 	for (int i = 0; i < N_AV; i++)
 		f.ids[i] = (uint16_t)i;
 	/* N_AV FRAME-sized messages, with two longer ones (DESCRIBE-like) inside */
@@ -160,7 +163,7 @@ static void test_gso_off_by_config(void **state)
 {
 	struct fix *f = *state;
 
-	f->cfg.gso = false;
+	f->opt.gso = false;
 	open_out(f);
 	f->out.ops->send(&f->out, f->msgs, f->n);
 	assert_int_equal(drain(f, f->n), f->n);

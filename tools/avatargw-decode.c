@@ -49,7 +49,7 @@ static void decode_emit(void *ctx, int sensor, const struct device_sample *s)
 	char name[CFG_NAME_MAX * 2];
 	struct vec3 p;
 
-	c->drv->sensor_name(c->cfg, sensor, name, sizeof(name));
+	c->drv->type.sensor_name(c->cfg, sensor, name, sizeof(name));
 	dq_translation(&s->pose, &p);
 	printf("%.6f,%u,%s,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.9f,%u,%.6f,%.6f,%.6f,%.6f\n", c->t, c->line, name, p.x, p.y,
 	       p.z, s->pose.r.w, s->pose.r.x, s->pose.r.y, s->pose.r.z, s->buttons, s->analog[0], s->analog[1],

@@ -2,13 +2,10 @@
 # SPDX-License-Identifier: MIT
 # Writes the key reference of avatargw.conf(5) as roff, from two sources:
 #
-#   - `avatargw --keys` (the built daemon): name, default, unit, the source
-#     or output types that take the key, and the meaning;
-#   - the keys[] table of src/config/config.c: the kind of value, the range
-#     and the allowed words, which --keys does not print.
-#
-# Both describe the same table, so a key present in one and not the other
-# means the binary is older than the source: rebuild it.
+#   `avatargw --keys` (the built daemon): name, default, unit, the source
+#   or output types that take the key, the meaning, then the kind of value,
+#   the range and the allowed words. The keys live in typed tables: config.c's
+#   for every section, each driver's and output's own for its type.
 #
 # usage: tools/man-keys.sh [-b BINARY] [--update]
 #   -b BINARY  the daemon to ask (default: $BUILD/avatargw, BUILD defaulting to build)
@@ -34,8 +31,6 @@ while [ $# -gt 0 ]; do
 	*) echo "man-keys.sh: unknown argument $1" >&2; exit 2 ;;
 	esac
 done
-src=$root/src/config/config.c
-hdr=$root/src/config/config.h
 page=$root/docs/man/avatargw.conf.5
 
 if [ ! -x "$bin" ]; then
@@ -48,49 +43,20 @@ trap 'rm -rf "$tmp"' EXIT
 
 "$bin" --keys >"$tmp/keys.tsv"
 
-# The table in the source: one line per key, "SECT<TAB>name<TAB>KIND<TAB>min<TAB>max<TAB>words",
-# where words are the allowed values of an enumerated key.
-awk -v hdr="$hdr" '
-function trim(s) { sub(/^[ \t]+/, "", s); sub(/[ \t]+$/, "", s); return s }
-function num(s,   v) {
-	s = trim(s)
-	if (s in defs) s = defs[s]
-	if (s !~ /^-?[0-9.]+([eE][-+]?[0-9]+)?$/) return s
-	return sprintf("%.10g", s + 0)
-}
+# the table's kind, range and words: the columns after the meaning (section, name, kind, lo, hi, words)
+awk -F '\t' '
 BEGIN {
-	while ((getline l < hdr) > 0)
-		if (l ~ /^#define [A-Z_]+ +-?[0-9]/) { split(l, f, /[ \t]+/); defs[f[2]] = f[3] }
+	k["int"] = "K_INT"; k["u32"] = "K_U32"; k["number"] = "K_DOUBLE"; k["degrees"] = "K_DEG"; k["bool"] = "K_BOOL"
+	k["enum"] = "K_ENUM"; k["string"] = "K_STR"; k["path"] = "K_PATH"; k["vec3"] = "K_VEC3"; k["range"] = "K_RANGE"
+	k["sensor"] = "K_SENSOR"; k["person"] = "K_PERSON"; k["avatars"] = "K_LIST"; k["mount"] = "K_MOUNT"
+	k["names"] = "K_NAMES"
 }
-/^static const char \*const e_[a-z_]+\[\] = \{/ {
-	name = $0; sub(/^static const char \*const /, "", name); sub(/\[.*/, "", name)
-	body = $0
-	while (body !~ /NULL/ && (getline l) > 0) body = body " " l
-	sub(/^[^{]*\{/, "", body); sub(/NULL.*/, "", body)
-	gsub(/[" \t]/, "", body); sub(/,$/, "", body); gsub(/,/, " ", body)
-	words[name] = body
-	next
-}
-/^static const struct key_def keys\[\] = \{/ { intable = 1; next }
-intable && /^\};/ { intable = 0; flush(); next }
-intable {
-	if ($0 ~ /^[ \t]*\{ S_[A-Z]+,/) { flush(); entry = $0 } else entry = entry " " $0
-	next
-}
-function flush(   f, n, e) {
-	if (entry == "") return
-	n = split(entry, f, ",")
-	e = ""
-	if (match(entry, /, e_[a-z_]+,/)) e = substr(entry, RSTART + 2, RLENGTH - 3)
-	f[1] = trim(f[1]); sub(/^\{ S_/, "", f[1])
-	f[2] = trim(f[2]); gsub(/"/, "", f[2])
-	printf "%s\t%s\t%s\t%s\t%s\t%s\n", f[1], f[2], trim(f[3]), num(f[6]), num(f[7]), (e in words) ? words[e] : ""
-	entry = ""
-}
-' "$src" >"$tmp/table.tsv"
+/^\[/ { S = $0; gsub(/[][]/, "", S); split(S, w, " "); S = toupper(w[1]); next }
+NF >= 9 { printf "%s\t%s\t%s\t%s\t%s\t%s\n", S, $1, k[$6], $7, $8, $9 }
+' "$tmp/keys.tsv" >"$tmp/table.tsv"
 
 if [ ! -s "$tmp/table.tsv" ]; then
-	echo "man-keys.sh: found no keys[] table in $src" >&2
+	echo "man-keys.sh: $bin --keys printed no kinds (an older daemon? rebuild it)" >&2
 	exit 2
 fi
 

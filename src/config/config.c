@@ -13,7 +13,6 @@
 #include "config/config.h"
 
 #include "config/builtin.h"
-#include "trackers/tracker.h"
 
 #include <ini.h>
 
@@ -35,320 +34,384 @@ const char *const cfg_sensor_roles[3] = { "head", "left_hand", "right_hand" };
 enum sect { S_DAEMON, S_SOURCE, S_AVATAR, S_OUTPUT, S_COUNT };
 static const char *const sect_names[S_COUNT] = { "daemon", "source", "avatar", "output" };
 
-enum kind {
-	K_INT,
-	K_U32,
-	K_DOUBLE,
-	K_DEG, /* degrees in the file, radians in memory */
-	K_BOOL,
-	K_ENUM,
-	K_STR,
-	K_PATH,
-	K_VEC3,
-	K_RANGE,  /* two numbers in degrees: lo hi */
-	K_SENSOR, /* SOURCE/SENSOR */
-	K_PERSON, /* SOURCE[/PREFIX]: head, left_hand, right_hand at once */
-	K_LIST,	  /* avatar names, or all */
-	K_MOUNT,  /* mount_SENSOR: x y z [qw qx qy qz], one key per sensor */
-	K_NAMES,  /* sensor names separated by spaces, "-" for none */
-};
-
 static const char *const e_mode[] = { "deadline", "events", NULL };
 static const char *const e_log[] = { "err", "warning", "info", "debug", NULL };
 static const char *const e_solver[] = { "dq", "matrix", NULL };
-static const char *const e_out[] = { "udp",  "multicast", "tcp",    "unix",	 "modbus", "can",
-				     "vrpn", "vmc",	  "vrchat", "websocket", NULL };
-static const char *const e_word[] = { "abcd", "cdab", "badc", "dcba", NULL };
-static const char *const e_regtype[] = { "holding", "input", NULL };
-static const char *const e_regfmt[] = { "int16", "uint16", "int32", "uint32", "float32", NULL };
-static const char *const e_ori[] = { "rotvec", "quat_wxyz", "quat_xyzw", "rpy", "none", NULL };
-static const char *const e_quat[] = { "wxyz", "xyzw", NULL };
-static const char *const e_interp[] = { "none", "linear", "catmull-rom", "natural", NULL };
-static const char *const e_model[] = { "auto", "liberty", "liberty_hs", "patriot", "patriot_hs", NULL };
+const char *const cfg_word_orders[] = { "abcd", "cdab", "badc", "dcba", NULL };
 
-struct key_def {
-	int sect;
-	const char *name;
-	int kind;
-	size_t off, off2;
-	double min, max;
-	const char *def; /* NULL: required (or, for sensors, given by person) */
-	const char *unit;
-	const char *const *enums;
-	const char *only; /* source: drivers, output: types that take the key; NULL = all */
-	const char *doc;
+/*
+ * The keys every section of a kind has; a source's and an output's type
+ * adds its own (struct cfg_type). "type" is read first: it decides which
+ * keys exist.
+ */
+static const struct cfg_key daemon_keys[] = {
+	{ .name = "rate",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_daemon, rate),
+	  .min = 1,
+	  .max = 4000,
+	  .def = "240",
+	  .unit = "Hz",
+	  .doc = "avatars solved and published per second (deadline mode)" },
+	{ .name = "mode",
+	  .kind = CFG_ENUM,
+	  CFG_AT(struct cfg_daemon, mode),
+	  .def = "deadline",
+	  .enums = e_mode,
+	  .doc = "deadline: a cycle at every period, to absolute deadlines; events: a cycle when a source has new "
+		 "samples" },
+	{ .name = "stale_ms",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_daemon, stale_ms),
+	  .min = 1,
+	  .max = 60000,
+	  .def = "100",
+	  .unit = "ms",
+	  .doc = "a sensor without a new sample for this long is STALE" },
+	{ .name = "realtime_priority",
+	  .kind = CFG_INT,
+	  CFG_AT(struct cfg_daemon, realtime_priority),
+	  .min = 0,
+	  .max = 99,
+	  .def = "0",
+	  .doc = "SCHED_FIFO priority of the loop thread, 0 = normal scheduling" },
+	{ .name = "cpu",
+	  .kind = CFG_INT,
+	  CFG_AT(struct cfg_daemon, cpu),
+	  .min = -1,
+	  .max = 1023,
+	  .def = "-1",
+	  .doc = "pin the loop thread to this CPU, -1 = no pinning" },
+	{ .name = "busy_wait",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct cfg_daemon, busy_wait),
+	  .def = "no",
+	  .doc = "the loop spins to each deadline instead of sleeping: a whole CPU for the lowest latency "
+		 "(deadline mode)" },
+	{ .name = "lock_memory",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct cfg_daemon, lock_memory),
+	  .def = "yes",
+	  .doc = "mlockall() at start-up so that the loop never page-faults" },
+	{ .name = "control_socket",
+	  .kind = CFG_PATH,
+	  CFG_AT(struct cfg_daemon, control_socket),
+	  .def = "auto",
+	  .doc = "Unix socket of avatargw-ctl; auto = $RUNTIME_DIRECTORY/control, else "
+		 "$XDG_RUNTIME_DIR/avatargw.control, else /tmp/avatargw-UID.control; empty = none" },
+	{ .name = "describe_interval",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_daemon, describe_interval),
+	  .min = 0.1,
+	  .max = 3600,
+	  .def = "1",
+	  .unit = "s",
+	  .doc = "period of the DESCRIBE messages (also sent when an avatar's description changes)" },
+	{ .name = "log_level",
+	  .kind = CFG_ENUM,
+	  CFG_AT(struct cfg_daemon, log_level),
+	  .def = "info",
+	  .enums = e_log,
+	  .doc = "least important messages logged" },
+	{ .name = "record_dir",
+	  .kind = CFG_PATH,
+	  CFG_AT(struct cfg_daemon, record_dir),
+	  .def = "",
+	  .doc = "record every sensor sample into files in this directory (created if missing); empty = no "
+		 "recording" },
+	{ .name = "record_messages",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct cfg_daemon, record_messages),
+	  .def = "no",
+	  .doc = "also record every published message (FRAME and DESCRIBE)" },
+	{ .name = "record_flush",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_daemon, record_flush),
+	  .min = 0,
+	  .max = 3600,
+	  .def = "1",
+	  .unit = "s",
+	  .doc = "write what was recorded at least this often: a crash or kill -9 loses at most this much" },
+	{ .name = "record_flush_records",
+	  .kind = CFG_INT,
+	  CFG_AT(struct cfg_daemon, record_flush_records),
+	  .min = 0,
+	  .max = 100000,
+	  .def = "0",
+	  .doc = "also write after this many records, 0 = by time only" },
+	{ .name = "record_fsync",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct cfg_daemon, record_fsync),
+	  .def = "no",
+	  .doc = "fdatasync after every write, so that a power loss loses no more than record_flush either" },
+	{ .name = "record_rotate_size",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_daemon, record_rotate_size),
+	  .min = 0,
+	  .max = 100000,
+	  .def = "0",
+	  .unit = "MiB",
+	  .doc = "start a new file when this one would grow past this size, 0 = never" },
+	{ .name = "record_rotate_time",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_daemon, record_rotate_time),
+	  .min = 0,
+	  .max = 604800,
+	  .def = "0",
+	  .unit = "s",
+	  .doc = "start a new file when this one is this old, 0 = never" },
+	{ .name = "record_buffer",
+	  .kind = CFG_INT,
+	  CFG_AT(struct cfg_daemon, record_buffer),
+	  .min = 64,
+	  .max = 262144,
+	  .def = "1024",
+	  .unit = "KiB",
+	  .doc = "buffer between the loop and the writer thread; a record that does not fit is dropped and "
+		 "counted" },
+	{ .name = "record_keyframe_rate",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_daemon, record_keyframe_rate),
+	  .min = 0,
+	  .max = 10000,
+	  .def = "0",
+	  .unit = "Hz",
+	  .doc = "keep at most this many samples per second of each sensor (the paper's low-rate storage), 0 = "
+		 "every sample" },
 };
 
-#define D(f) offsetof(struct cfg_daemon, f)
-#define SRC(f) offsetof(struct cfg_source, f)
-#define AV(f) offsetof(struct cfg_avatar, f)
-#define OUT(f) offsetof(struct cfg_output, f)
-
-static const struct key_def keys[] = {
-	{ S_DAEMON, "rate", K_DOUBLE, D(rate), 0, 1, 4000, "240", "Hz", NULL, NULL,
-	  "avatars solved and published per second (deadline mode)" },
-	{ S_DAEMON, "mode", K_ENUM, D(mode), 0, 0, 0, "deadline", NULL, e_mode, NULL,
-	  "deadline: a cycle at every period, to absolute deadlines; events: a cycle when a source has new samples" },
-	{ S_DAEMON, "stale_ms", K_DOUBLE, D(stale_ms), 0, 1, 60000, "100", "ms", NULL, NULL,
-	  "a sensor without a new sample for this long is STALE" },
-	{ S_DAEMON, "realtime_priority", K_INT, D(realtime_priority), 0, 0, 99, "0", NULL, NULL, NULL,
-	  "SCHED_FIFO priority of the loop thread, 0 = normal scheduling" },
-	{ S_DAEMON, "cpu", K_INT, D(cpu), 0, -1, 1023, "-1", NULL, NULL, NULL,
-	  "pin the loop thread to this CPU, -1 = no pinning" },
-	{ S_DAEMON, "busy_wait", K_BOOL, D(busy_wait), 0, 0, 0, "no", NULL, NULL, NULL,
-	  "the loop spins to each deadline instead of sleeping: a whole CPU for the lowest latency (deadline mode)" },
-	{ S_DAEMON, "lock_memory", K_BOOL, D(lock_memory), 0, 0, 0, "yes", NULL, NULL, NULL,
-	  "mlockall() at start-up so that the loop never page-faults" },
-	{ S_DAEMON, "control_socket", K_PATH, D(control_socket), 0, 0, 0, "auto", NULL, NULL, NULL,
-	  "Unix socket of avatargw-ctl; auto = $RUNTIME_DIRECTORY/control, else $XDG_RUNTIME_DIR/avatargw.control, "
-	  "else /tmp/avatargw-UID.control; empty = none" },
-	{ S_DAEMON, "describe_interval", K_DOUBLE, D(describe_interval), 0, 0.1, 3600, "1", "s", NULL, NULL,
-	  "period of the DESCRIBE messages (also sent when an avatar's description changes)" },
-	{ S_DAEMON, "log_level", K_ENUM, D(log_level), 0, 0, 0, "info", NULL, e_log, NULL,
-	  "least important messages logged" },
-	{ S_DAEMON, "record_dir", K_PATH, D(record_dir), 0, 0, 0, "", NULL, NULL, NULL,
-	  "record every sensor sample into files in this directory (created if missing); empty = no recording" },
-	{ S_DAEMON, "record_messages", K_BOOL, D(record_messages), 0, 0, 0, "no", NULL, NULL, NULL,
-	  "also record every published message (FRAME and DESCRIBE)" },
-	{ S_DAEMON, "record_flush", K_DOUBLE, D(record_flush), 0, 0, 3600, "1", "s", NULL, NULL,
-	  "write what was recorded at least this often: a crash or kill -9 loses at most this much" },
-	{ S_DAEMON, "record_flush_records", K_INT, D(record_flush_records), 0, 0, 100000, "0", NULL, NULL, NULL,
-	  "also write after this many records, 0 = by time only" },
-	{ S_DAEMON, "record_fsync", K_BOOL, D(record_fsync), 0, 0, 0, "no", NULL, NULL, NULL,
-	  "fdatasync after every write, so that a power loss loses no more than record_flush either" },
-	{ S_DAEMON, "record_rotate_size", K_DOUBLE, D(record_rotate_size), 0, 0, 100000, "0", "MiB", NULL, NULL,
-	  "start a new file when this one would grow past this size, 0 = never" },
-	{ S_DAEMON, "record_rotate_time", K_DOUBLE, D(record_rotate_time), 0, 0, 604800, "0", "s", NULL, NULL,
-	  "start a new file when this one is this old, 0 = never" },
-	{ S_DAEMON, "record_buffer", K_INT, D(record_buffer), 0, 64, 262144, "1024", "KiB", NULL, NULL,
-	  "buffer between the loop and the writer thread; a record that does not fit is dropped and counted" },
-	{ S_DAEMON, "record_keyframe_rate", K_DOUBLE, D(record_keyframe_rate), 0, 0, 10000, "0", "Hz", NULL, NULL,
-	  "keep at most this many samples per second of each sensor (the paper's low-rate storage), 0 = every sample" },
-
-	{ S_SOURCE, "type", K_STR, 0, 0, 0, 0, NULL, NULL, NULL, NULL,
-	  "the driver: sim, replay, hydra (Razer Hydra), polhemus (Liberty, Liberty HS, Patriot), modbus or can" },
-	{ S_SOURCE, "origin", K_VEC3, SRC(origin), 0, -1e4, 1e4, "0 0 0", "m", NULL, NULL,
-	  "position of the tracker's frame in the world (x y z)" },
-	{ S_SOURCE, "yaw", K_DEG, SRC(yaw), 0, -360, 360, "0", "deg", NULL, NULL,
-	  "rotation of the tracker's frame about the world's z axis" },
-	{ S_SOURCE, "people", K_INT, SRC(people), 0, 1, CFG_MAX_AVATARS, "1", NULL, NULL, "sim",
-	  "simulated people; their sensors are pN.head, pN.left_hand, pN.right_hand" },
-	{ S_SOURCE, "seed", K_U32, SRC(seed), 0, 0, 4294967295.0, "1", NULL, NULL, "sim",
-	  "seed of the motion (same seed, same motion)" },
-	{ S_SOURCE, "sample_rate", K_DOUBLE, SRC(sample_rate), 0, 1, 4000, "240", "Hz", NULL, "sim replay",
-	  "sensor samples per second (replay: made between keyframes when interpolate is set)" },
-	{ S_SOURCE, "spacing", K_DOUBLE, SRC(spacing), 0, 0, 100, "1", "m", NULL, "sim",
-	  "distance between simulated people along x" },
-	{ S_SOURCE, "file", K_PATH, SRC(file), 0, 0, 0, NULL, NULL, NULL, "replay",
-	  "a recording of avatargw (record_dir) or a sensor CSV (columns t, head_x..head_qz, lhand_*, rhand_*), "
-	  "relative to this file's directory; builtin:NAME for a clip compiled into the daemon" },
-	{ S_SOURCE, "speed", K_DOUBLE, SRC(speed), 0, 0.01, 100, "1", NULL, NULL, "replay hydra polhemus",
-	  "playback speed of the recording or capture, 1 = real time" },
-	{ S_SOURCE, "loop", K_BOOL, SRC(loop), 0, 0, 0, "yes", NULL, NULL, "replay hydra polhemus",
-	  "start the recording or capture again at its end; otherwise the source ENDS and its sensors go STALE" },
-	{ S_SOURCE, "start", K_DOUBLE, SRC(start), 0, 0, 1e6, "0", "s", NULL, "replay",
-	  "begin this far into the recording" },
-	{ S_SOURCE, "address", K_STR, SRC(address), 0, 0, 0, NULL, NULL, NULL, "modbus",
-	  "host name or address of the Modbus TCP device (required)" },
-	{ S_SOURCE, "port", K_INT, SRC(port), 0, 1, 65535, "502", NULL, NULL, "modbus",
-	  "TCP port of the Modbus device" },
-	{ S_SOURCE, "unit_id", K_INT, SRC(unit_id), 0, 0, 255, "1", NULL, NULL, "modbus",
-	  "Modbus unit identifier of the requests" },
-	{ S_SOURCE, "register_type", K_ENUM, SRC(register_type), 0, 0, 0, "holding", NULL, e_regtype, "modbus",
-	  "holding (function 3) or input (function 4) registers" },
-	{ S_SOURCE, "sensors", K_INT, SRC(sensors), 0, 1, 16, "1", NULL, NULL, "modbus can",
-	  "poses the device reports; they are sensors pose0, pose1, ..." },
-	{ S_SOURCE, "sensor_stride", K_INT, SRC(sensor_stride), 0, 0, 65535, "0", NULL, NULL, "modbus",
-	  "registers from one sensor's position (and orientation) to the next's; needed when sensors > 1" },
-	{ S_SOURCE, "position_register", K_INT, SRC(pos_register), 0, 0, 65535, "0", NULL, NULL, "modbus",
-	  "first register of the position x, y, z (0-based protocol address)" },
-	{ S_SOURCE, "position_format", K_ENUM, SRC(pos_format), 0, 0, 0, "int16", NULL, e_regfmt, "modbus",
-	  "type of each position value (32-bit types take two registers)" },
-	{ S_SOURCE, "position_scale", K_DOUBLE, SRC(pos_scale), 0, 1e-9, 1e3, "0.001", "m", NULL, "modbus can",
-	  "metres per count of a position value (0.0001 for 0.1 mm)" },
-	{ S_SOURCE, "orientation_register", K_INT, SRC(ori_register), 0, 0, 65535, "3", NULL, NULL, "modbus",
-	  "first register of the orientation values (0-based protocol address)" },
-	{ S_SOURCE, "orientation_format", K_ENUM, SRC(ori_format), 0, 0, 0, "int16", NULL, e_regfmt, "modbus",
-	  "type of each orientation value" },
-	{ S_SOURCE, "orientation_scale", K_DOUBLE, SRC(ori_scale), 0, 1e-12, 1e3, "0.001", NULL, NULL, "modbus",
-	  "radians per count (rotvec, rpy) or quaternion units per count (quat_*)" },
-	{ S_SOURCE, "orientation", K_ENUM, SRC(orientation), 0, 0, 0, "rotvec", NULL, e_ori, "modbus",
-	  "rotvec (rx ry rz, axis times angle), quat_wxyz, quat_xyzw, rpy (roll pitch yaw about fixed x, y, z) or "
-	  "none" },
-	{ S_SOURCE, "word_order", K_ENUM, SRC(word_order), 0, 0, 0, "abcd", NULL, e_word, "modbus",
-	  "byte order of 32-bit values over two registers, A = most significant byte" },
-	{ S_SOURCE, "poll_rate", K_DOUBLE, SRC(poll_rate), 0, 0.1, 1000, "50", "Hz", NULL, "modbus",
-	  "requests per second" },
-	{ S_SOURCE, "timeout_ms", K_DOUBLE, SRC(timeout_ms), 0, 1, 60000, "200", "ms", NULL, "modbus",
-	  "a response (or a connection) taking longer fails; the connection is then made again" },
-	{ S_SOURCE, "interface", K_STR, SRC(interface), 0, 0, 0, NULL, NULL, NULL, "can",
-	  "SocketCAN interface (can0), or fd:N for an inherited descriptor (required)" },
-	{ S_SOURCE, "orientation_id", K_INT, SRC(ori_id), 0, 0, 536870911, "0x200", NULL, NULL, "can",
-	  "CAN identifier of sensor 0's orientation frame; sensor k uses orientation_id + k" },
-	{ S_SOURCE, "position_id", K_INT, SRC(pos_id), 0, -1, 536870911, "0x280", NULL, NULL, "can",
-	  "CAN identifier of sensor 0's position frame; sensor k uses position_id + k; -1: orientation only" },
-	{ S_SOURCE, "quaternion_scale", K_DOUBLE, SRC(quat_scale), 0, 1, 1e9, "32768", NULL, NULL, "can",
-	  "the count that stands for 1.0 in a quaternion component (16384 for a BNO055)" },
-	{ S_SOURCE, "quaternion_order", K_ENUM, SRC(quat_order), 0, 0, 0, "wxyz", NULL, e_quat, "can",
-	  "order of the four components in the orientation frame" },
-	{ S_SOURCE, "extended_ids", K_BOOL, SRC(extended_ids), 0, 0, 0, "no", NULL, NULL, "can",
-	  "29-bit CAN identifiers instead of 11-bit" },
-	{ S_SOURCE, "step", K_BOOL, SRC(step), 0, 0, 0, "no", NULL, NULL, "replay",
-	  "stepped: play the first instant, then one more per 'avatargw-ctl step' (speed is ignored)" },
-	{ S_SOURCE, "interpolate", K_ENUM, SRC(interpolate), 0, 0, 0, "none", NULL, e_interp, "replay",
-	  "treat the samples as keyframes and rebuild sample_rate samples per second between them: "
-	  "linear (and slerp), catmull-rom or natural (cubic splines, and squad)" },
-	{ S_SOURCE, "device", K_STR, SRC(device), 0, 0, 0, "auto", NULL, NULL, "hydra polhemus",
-	  "which device: auto (the first found); hydra: a hidraw node of its motion interface (/dev/hidraw3, "
-	  "or a udev symlink) or its USB port; polhemus: its USB port; a USB port is BUS-PORT[.PORT...] as "
-	  "avatargw --list-devices shows it" },
-	{ S_SOURCE, "capture", K_PATH, SRC(capture), 0, 0, 0, "", NULL, NULL, "hydra polhemus",
-	  "play this capture of raw reports (hex, one report per line) instead of reading the device; "
-	  "relative to this file's directory; empty = the device" },
-	{ S_SOURCE, "record", K_PATH, SRC(record), 0, 0, 0, "", NULL, NULL, "hydra polhemus",
-	  "write every raw report read from the device to this capture file, with timestamps (for a bug report "
-	  "or a test; avatargw-decode reads it); relative to this file's directory; empty = none" },
-	{ S_SOURCE, "interface", K_INT, SRC(hid_interface), 0, 0, 255, "0", NULL, NULL, "hydra",
-	  "USB interface number of the 52-byte motion reports" },
-	{ S_SOURCE, "control_interface", K_INT, SRC(control_interface), 0, 0, 255, "1", NULL, NULL, "hydra",
-	  "USB interface number that takes the feature report switching between gamepad and motion mode" },
-	{ S_SOURCE, "model", K_ENUM, SRC(model), 0, 0, 0, "auto", NULL, e_model, "polhemus",
-	  "which Polhemus product to open: auto (any of them) or one; it sets the expected record header and rate" },
-	{ S_SOURCE, "sensors", K_NAMES, SRC(stations), 0, 1, CFG_MAX_STATIONS, "head left_hand right_hand", NULL, NULL,
-	  "polhemus", "sensor names of stations 1, 2, 3, ... in order (- skips a station)" },
-	{ S_SOURCE, "hemisphere", K_VEC3, SRC(hemisphere), 0, -1, 1, "1 0 0", NULL, NULL, "polhemus",
-	  "the hemisphere the sensors stay in, a vector in the Polhemus source's frame (its H command)" },
-	{ S_SOURCE, "mount_SENSOR", K_MOUNT, 0, 0, -10, 10, "0 0 0", "m", NULL, NULL,
-	  "SENSOR's tracked point in the sensor's own frame: x y z, optionally followed by a rotation "
-	  "qw qx qy qz (a head sensor on glasses is not the head's centre); one key per sensor" },
-
-	{ S_AVATAR, "id", K_INT, AV(id), 0, 0, 65535, "auto", NULL, NULL, NULL,
-	  "avatar id on the wire (auto: one more than the previous avatar's)" },
-	{ S_AVATAR, "count", K_INT, 0, 0, 1, CFG_MAX_AVATARS, "1", NULL, NULL, NULL,
-	  "this many avatars from consecutive people (person = SOURCE/p0 -> p0, p1, ...), ids counting up" },
-	{ S_AVATAR, "person", K_PERSON, 0, 0, 0, 0, "", NULL, NULL, NULL,
-	  "SOURCE or SOURCE/PREFIX: head, left_hand and right_hand are PREFIX.head, ... of that source" },
-	{ S_AVATAR, "head", K_SENSOR, 0, 0, 0, 0, NULL, NULL, NULL, NULL, "head sensor, SOURCE/SENSOR" },
-	{ S_AVATAR, "left_hand", K_SENSOR, 1, 0, 0, 0, NULL, NULL, NULL, NULL, "left hand sensor, SOURCE/SENSOR" },
-	{ S_AVATAR, "right_hand", K_SENSOR, 2, 0, 0, 0, NULL, NULL, NULL, NULL, "right hand sensor, SOURCE/SENSOR" },
-	{ S_AVATAR, "shoulder", K_DOUBLE, AV(dims[0]), 0, 0.01, 1, "0.1732", "m", NULL, NULL,
-	  "chest centre to shoulder joint (the paper's Shoulder)" },
-	{ S_AVATAR, "upper_arm", K_DOUBLE, AV(dims[1]), 0, 0.05, 1, "0.2886", "m", NULL, NULL, "shoulder to elbow" },
-	{ S_AVATAR, "forearm", K_DOUBLE, AV(dims[2]), 0, 0.05, 1, "0.1955", "m", NULL, NULL, "elbow to wrist" },
-	{ S_AVATAR, "hand", K_DOUBLE, AV(dims[3]), 0, 0, 0.5, "0", "m", NULL, NULL,
-	  "wrist to the hand sensor, along the hand" },
-	{ S_AVATAR, "head_offset", K_VEC3, AV(head_offset), 0, -1, 1, "0.008 -0.0386 0.0967", "m", NULL, NULL,
-	  "head sensor from the chest centre, in the chest frame (x right, y forward, z up; the paper: 0 0 Neck)" },
-	{ S_AVATAR, "j1", K_RANGE, AV(lo[0]), AV(hi[0]), -180, 180, "-30 30", "deg", NULL, NULL,
-	  "limits of J1, shoulder girdle / chest yaw" },
-	{ S_AVATAR, "j2", K_RANGE, AV(lo[1]), AV(hi[1]), -180, 180, "-120 10", "deg", NULL, NULL,
-	  "limits of J2, shoulder abduction (-) / adduction (+)" },
-	{ S_AVATAR, "j3", K_RANGE, AV(lo[2]), AV(hi[2]), -180, 180, "-60 120", "deg", NULL, NULL,
-	  "limits of J3, shoulder extension (-) / flexion (+)" },
-	{ S_AVATAR, "j4", K_RANGE, AV(lo[3]), AV(hi[3]), -180, 180, "-90 90", "deg", NULL, NULL,
-	  "limits of J4, humeral rotation" },
-	{ S_AVATAR, "j5", K_RANGE, AV(lo[4]), AV(hi[4]), -180, 180, "-90 60", "deg", NULL, NULL,
-	  "limits of J5, elbow (anatomical flexion = 90 deg + J5)" },
-	{ S_AVATAR, "j6", K_RANGE, AV(lo[5]), AV(hi[5]), -180, 180, "-90 90", "deg", NULL, NULL,
-	  "limits of J6, forearm pronation / supination" },
-	{ S_AVATAR, "j7", K_RANGE, AV(lo[6]), AV(hi[6]), -180, 180, "-30 30", "deg", NULL, NULL,
-	  "limits of J7, wrist deviation (about the hand's x axis, across the palm)" },
-	{ S_AVATAR, "j8", K_RANGE, AV(lo[7]), AV(hi[7]), -180, 180, "-80 80", "deg", NULL, NULL,
-	  "limits of J8, wrist flexion (+) / extension (-) (about the hand's z axis, the thumb's)" },
-	{ S_AVATAR, "solver", K_ENUM, AV(solver), 0, 0, 0, "dq", NULL, e_solver, NULL,
-	  "kinematics of the IK: dual quaternions or 4x4 matrices" },
-	{ S_AVATAR, "ik_max_iterations", K_INT, AV(max_iter), 0, 1, 200, "20", NULL, NULL, NULL,
-	  "Newton iterations at most per arm and frame" },
-	{ S_AVATAR, "ik_tolerance", K_DOUBLE, AV(tol_mm), 0, 1e-4, 10, "0.01", "mm", NULL, NULL,
-	  "position error at which an arm counts as reached" },
-	{ S_AVATAR, "ik_tolerance_rot", K_DOUBLE, AV(tol_rot_deg), 0, 1e-5, 10, "0.01", "deg", NULL, NULL,
-	  "hand orientation error at which an arm counts as reached" },
-	{ S_AVATAR, "ik_max_evals", K_INT, AV(max_evals), 0, 16, 100000, "800", NULL, NULL, NULL,
-	  "closed-form search: postures evaluated at most (bounds the worst-case time)" },
-	{ S_AVATAR, "ik_warm_iterations", K_INT, AV(warm_iter), 0, 0, 100, "6", NULL, NULL, NULL,
-	  "Newton iterations tried from the previous frame before the closed-form search" },
-
-	{ S_OUTPUT, "type", K_ENUM, OUT(type), 0, 0, 0, NULL, NULL, e_out, NULL,
-	  "udp (unicast), multicast, tcp or unix (streams: u32 length + message), modbus (a Modbus TCP server), "
-	  "can (SocketCAN frames); vrpn (a VRPN server), vmc or vrchat (OSC), websocket (JSON frames and the browser "
-	  "viewer)" },
-	{ S_OUTPUT, "address", K_STR, OUT(address), 0, 0, 0, "127.0.0.1", NULL, NULL, "udp multicast tcp modbus",
-	  "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: listen address" },
-	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "7770", NULL, NULL, "udp multicast tcp modbus",
-	  "UDP destination port or TCP listening port (modbus: required)" },
-	{ S_OUTPUT, "interface", K_STR, OUT(interface), 0, 0, 0, "", NULL, NULL, "multicast can",
-	  "multicast: network interface (empty: the kernel's choice); can: CAN interface or fd:N (required)" },
-	{ S_OUTPUT, "address", K_STR, OUT(address), 0, 0, 0, "0.0.0.0", NULL, NULL, "vrpn",
-	  "listen address for TCP connections and UDP connection requests (0.0.0.0: every IPv4 interface, ::: every "
-	  "interface)" },
-	{ S_OUTPUT, "address", K_STR, OUT(address), 0, 0, 0, "127.0.0.1", NULL, NULL, "vmc vrchat websocket",
-	  "vmc, vrchat: destination host; websocket: listen address (any other address shows the viewer to the "
-	  "network)" },
-	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "3883", NULL, NULL, "vrpn",
-	  "TCP and UDP port of the VRPN server (clients name it as NAME@host:port when it is not 3883)" },
-	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "39539", NULL, NULL, "vmc",
-	  "UDP destination port of the VMC marionette" },
-	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "9000", NULL, NULL, "vrchat",
-	  "UDP port VRChat listens on for OSC" },
-	{ S_OUTPUT, "port", K_INT, OUT(port), 0, 1, 65535, "7780", NULL, NULL, "websocket",
-	  "TCP port of the viewer page (HTTP) and its WebSocket" },
-	{ S_OUTPUT, "ttl", K_INT, OUT(ttl), 0, 0, 255, "1", NULL, NULL, "multicast", "multicast hop limit" },
-	{ S_OUTPUT, "loopback", K_BOOL, OUT(mcast_loop), 0, 0, 0, "yes", NULL, NULL, "multicast",
-	  "deliver multicast to listeners on this host too" },
-	{ S_OUTPUT, "gso", K_BOOL, OUT(gso), 0, 0, 0, "yes", NULL, NULL, "udp multicast",
-	  "send runs of equal-length messages as one buffer the kernel cuts into datagrams (UDP_SEGMENT); off by "
-	  "itself where refused" },
-	{ S_OUTPUT, "path", K_PATH, OUT(path), 0, 0, 0, "/run/avatargw/stream", NULL, NULL, "unix",
-	  "Unix socket path to listen on" },
-	{ S_OUTPUT, "max_clients", K_INT, OUT(max_clients), 0, 1, 256, "8", NULL, NULL,
-	  "tcp unix modbus vrpn websocket",
-	  "stream subscribers (Modbus, VRPN, WebSocket clients) at most; more are refused" },
-	{ S_OUTPUT, "client_buffer", K_INT, OUT(client_buffer), 0, 4096, 16777216, "65536", "bytes", NULL,
-	  "tcp unix vrpn", "per-subscriber buffer; messages that do not fit are dropped and counted" },
-	{ S_OUTPUT, "device", K_STR, OUT(device), 0, 0, 0, "Avatar%d", NULL, NULL, "vrpn",
-	  "VRPN device name of each avatar, %d = its id: clients open Avatar0@host (tracker, analog and button)" },
-	{ S_OUTPUT, "udp", K_BOOL, OUT(udp), 0, 0, 0, "yes", NULL, NULL, "vrpn",
-	  "tracker and analog reports over UDP to clients that offer a UDP port (VRPN's low-latency class); no: all "
-	  "over TCP" },
-	{ S_OUTPUT, "client_timeout", K_DOUBLE, OUT(client_timeout), 0, 0.1, 3600, "5", "s", NULL, "vrpn",
-	  "a client that has not finished its handshake, or whose buffer stays full, this long is dropped" },
-	{ S_OUTPUT, "rate", K_DOUBLE, OUT(rate), 0, 1, 240, "60", "Hz", NULL, "vmc vrchat",
-	  "OSC bundles per second (the newest frame each time)" },
-	{ S_OUTPUT, "rate", K_DOUBLE, OUT(rate), 0, 1, 60, "30", "Hz", NULL, "websocket",
-	  "JSON frames per second to each browser (the newest frame of each avatar each time)" },
-	{ S_OUTPUT, "torso", K_DOUBLE, OUT(torso), 0, 0.1, 1.5, "0.5", "m", NULL, "vmc",
-	  "shoulder line to hips: places the Hips bone below the tracked chest" },
-	{ S_OUTPUT, "head", K_BOOL, OUT(head), 0, 0, 0, "yes", NULL, NULL, "vrchat",
-	  "also send the head pose (/tracking/trackers/head/*), which VRChat uses to align our space with its own" },
-	{ S_OUTPUT, "www", K_PATH, OUT(www), 0, 0, 0, "auto", NULL, NULL, "websocket",
-	  "directory of the viewer page; auto = $AVATARGW_WWW, else ../share/avatargw/www or ../www beside the "
-	  "program" },
-	{ S_OUTPUT, "three", K_PATH, OUT(three), 0, 0, 0, "/usr/share/javascript/three", NULL, NULL, "websocket",
-	  "directory of three.js (Debian's libjs-three), served as /three/" },
-	{ S_OUTPUT, "decimate", K_INT, OUT(decimate), 0, 1, 1000, "1", NULL, NULL, NULL, "publish every n-th frame" },
-	{ S_OUTPUT, "register_base", K_INT, OUT(reg_base), 0, 0, 65535, "0", NULL, NULL, "modbus",
-	  "input register (0-based) where the first avatar's block starts (docs/MODBUS.md)" },
-	{ S_OUTPUT, "register_stride", K_INT, OUT(reg_stride), 0, 66, 65536, "100", NULL, NULL, "modbus",
-	  "registers from one avatar's block to the next's (a block uses 66)" },
-	{ S_OUTPUT, "word_order", K_ENUM, OUT(word_order), 0, 0, 0, "abcd", NULL, e_word, "modbus",
-	  "byte order of 32-bit values over two registers, A = most significant byte" },
-	{ S_OUTPUT, "writable_registers", K_INT, OUT(writable_regs), 0, 0, 10000, "0", NULL, NULL, "modbus",
-	  "holding registers clients may write and read back (the daemon acts on none); 0: writes refused" },
-	{ S_OUTPUT, "idle_timeout", K_DOUBLE, OUT(idle_timeout), 0, 0, 86400, "60", "s", NULL, "modbus",
-	  "a client that sends no request for this long is disconnected; 0: never" },
-	{ S_OUTPUT, "base_id", K_INT, OUT(base_id), 0, 0, 536870911, "0x100", NULL, NULL, "can",
-	  "CAN identifier of the first avatar's status frame; its joint frames follow (docs/CAN.md)" },
-	{ S_OUTPUT, "extended_ids", K_BOOL, OUT(extended_ids), 0, 0, 0, "no", NULL, NULL, "can",
-	  "29-bit CAN identifiers instead of 11-bit" },
-	{ S_OUTPUT, "safe", K_BOOL, OUT(safe), 0, 0, 0, "yes", NULL, NULL, "can",
-	  "clamp to the joint limits, limit the speed, send nothing stale, held, unreached or unknown" },
-	{ S_OUTPUT, "max_speed", K_DEG, OUT(max_speed), 0, 1, 3600, "90", "deg/s", NULL, "can",
-	  "safe mode: fastest change of any joint's command" },
-	{ S_OUTPUT, "avatars", K_LIST, OUT(avatar_list), 0, 0, 0, "all", NULL, NULL, NULL,
-	  "avatar names to publish (space separated), or all" },
+static const struct cfg_key source_keys[] = {
+	{ .name = "type", .kind = CFG_STR, .doc = "the driver (below, each with its own keys)" },
+	{ .name = "origin",
+	  .kind = CFG_VEC3,
+	  CFG_AT(struct cfg_source, origin),
+	  .min = -1e4,
+	  .max = 1e4,
+	  .def = "0 0 0",
+	  .unit = "m",
+	  .doc = "position of the tracker's frame in the world (x y z)" },
+	{ .name = "yaw",
+	  .kind = CFG_DEG,
+	  CFG_AT(struct cfg_source, yaw),
+	  .min = -360,
+	  .max = 360,
+	  .def = "0",
+	  .unit = "deg",
+	  .doc = "rotation of the tracker's frame about the world's z axis" },
+	{ .name = "mount_SENSOR",
+	  .kind = CFG_MOUNT,
+	  .min = -10,
+	  .max = 10,
+	  .def = "0 0 0",
+	  .unit = "m",
+	  .doc = "SENSOR's tracked point in the sensor's own frame: x y z, optionally followed by a rotation qw "
+		 "qx qy qz (a head sensor on glasses is not the head's centre); one key per sensor" },
 };
 
-#define N_KEYS (sizeof(keys) / sizeof(keys[0]))
+static const struct cfg_key avatar_keys[] = {
+	{ .name = "id",
+	  .kind = CFG_INT,
+	  CFG_AT(struct cfg_avatar, id),
+	  .min = 0,
+	  .max = 65535,
+	  .def = "auto",
+	  .doc = "avatar id on the wire (auto: one more than the previous avatar's)" },
+	{ .name = "count",
+	  .kind = CFG_INT,
+	  .min = 1,
+	  .max = CFG_MAX_AVATARS,
+	  .def = "1",
+	  .doc = "this many avatars from consecutive people (person = SOURCE/p0 -> p0, p1, ...), ids counting up" },
+	{ .name = "person",
+	  .kind = CFG_PERSON,
+	  .def = "",
+	  .doc = "SOURCE or SOURCE/PREFIX: head, left_hand and right_hand are PREFIX.head, ... of that source" },
+	{ .name = "head", .kind = CFG_SENSOR, .doc = "head sensor, SOURCE/SENSOR" },
+	{ .name = "left_hand", .kind = CFG_SENSOR, .off = 1, .doc = "left hand sensor, SOURCE/SENSOR" },
+	{ .name = "right_hand", .kind = CFG_SENSOR, .off = 2, .doc = "right hand sensor, SOURCE/SENSOR" },
+	{ .name = "shoulder",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_avatar, dims[0]),
+	  .min = 0.01,
+	  .max = 1,
+	  .def = "0.1732",
+	  .unit = "m",
+	  .doc = "chest centre to shoulder joint (the paper's Shoulder)" },
+	{ .name = "upper_arm",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_avatar, dims[1]),
+	  .min = 0.05,
+	  .max = 1,
+	  .def = "0.2886",
+	  .unit = "m",
+	  .doc = "shoulder to elbow" },
+	{ .name = "forearm",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_avatar, dims[2]),
+	  .min = 0.05,
+	  .max = 1,
+	  .def = "0.1955",
+	  .unit = "m",
+	  .doc = "elbow to wrist" },
+	{ .name = "hand",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_avatar, dims[3]),
+	  .min = 0,
+	  .max = 0.5,
+	  .def = "0",
+	  .unit = "m",
+	  .doc = "wrist to the hand sensor, along the hand" },
+	{ .name = "head_offset",
+	  .kind = CFG_VEC3,
+	  CFG_AT(struct cfg_avatar, head_offset),
+	  .min = -1,
+	  .max = 1,
+	  .def = "0.008 -0.0386 0.0967",
+	  .unit = "m",
+	  .doc = "head sensor from the chest centre, in the chest frame (x right, y forward, z up; the paper: 0 0 "
+		 "Neck)" },
+	{ .name = "j1",
+	  .kind = CFG_RANGE,
+	  .off = offsetof(struct cfg_avatar, lo[0]),
+	  .off2 = offsetof(struct cfg_avatar, hi[0]),
+	  .min = -180,
+	  .max = 180,
+	  .def = "-30 30",
+	  .unit = "deg",
+	  .doc = "limits of J1, shoulder girdle / chest yaw" },
+	{ .name = "j2",
+	  .kind = CFG_RANGE,
+	  .off = offsetof(struct cfg_avatar, lo[1]),
+	  .off2 = offsetof(struct cfg_avatar, hi[1]),
+	  .min = -180,
+	  .max = 180,
+	  .def = "-120 10",
+	  .unit = "deg",
+	  .doc = "limits of J2, shoulder abduction (-) / adduction (+)" },
+	{ .name = "j3",
+	  .kind = CFG_RANGE,
+	  .off = offsetof(struct cfg_avatar, lo[2]),
+	  .off2 = offsetof(struct cfg_avatar, hi[2]),
+	  .min = -180,
+	  .max = 180,
+	  .def = "-60 120",
+	  .unit = "deg",
+	  .doc = "limits of J3, shoulder extension (-) / flexion (+)" },
+	{ .name = "j4",
+	  .kind = CFG_RANGE,
+	  .off = offsetof(struct cfg_avatar, lo[3]),
+	  .off2 = offsetof(struct cfg_avatar, hi[3]),
+	  .min = -180,
+	  .max = 180,
+	  .def = "-90 90",
+	  .unit = "deg",
+	  .doc = "limits of J4, humeral rotation" },
+	{ .name = "j5",
+	  .kind = CFG_RANGE,
+	  .off = offsetof(struct cfg_avatar, lo[4]),
+	  .off2 = offsetof(struct cfg_avatar, hi[4]),
+	  .min = -180,
+	  .max = 180,
+	  .def = "-90 60",
+	  .unit = "deg",
+	  .doc = "limits of J5, elbow (anatomical flexion = 90 deg + J5)" },
+	{ .name = "j6",
+	  .kind = CFG_RANGE,
+	  .off = offsetof(struct cfg_avatar, lo[5]),
+	  .off2 = offsetof(struct cfg_avatar, hi[5]),
+	  .min = -180,
+	  .max = 180,
+	  .def = "-90 90",
+	  .unit = "deg",
+	  .doc = "limits of J6, forearm pronation / supination" },
+	{ .name = "j7",
+	  .kind = CFG_RANGE,
+	  .off = offsetof(struct cfg_avatar, lo[6]),
+	  .off2 = offsetof(struct cfg_avatar, hi[6]),
+	  .min = -180,
+	  .max = 180,
+	  .def = "-30 30",
+	  .unit = "deg",
+	  .doc = "limits of J7, wrist deviation (about the hand's x axis, across the palm)" },
+	{ .name = "j8",
+	  .kind = CFG_RANGE,
+	  .off = offsetof(struct cfg_avatar, lo[7]),
+	  .off2 = offsetof(struct cfg_avatar, hi[7]),
+	  .min = -180,
+	  .max = 180,
+	  .def = "-80 80",
+	  .unit = "deg",
+	  .doc = "limits of J8, wrist flexion (+) / extension (-) (about the hand's z axis, the thumb's)" },
+	{ .name = "solver",
+	  .kind = CFG_ENUM,
+	  CFG_AT(struct cfg_avatar, solver),
+	  .def = "dq",
+	  .enums = e_solver,
+	  .doc = "kinematics of the IK: dual quaternions or 4x4 matrices" },
+	{ .name = "ik_max_iterations",
+	  .kind = CFG_INT,
+	  CFG_AT(struct cfg_avatar, max_iter),
+	  .min = 1,
+	  .max = 200,
+	  .def = "20",
+	  .doc = "Newton iterations at most per arm and frame" },
+	{ .name = "ik_tolerance",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_avatar, tol_mm),
+	  .min = 1e-4,
+	  .max = 10,
+	  .def = "0.01",
+	  .unit = "mm",
+	  .doc = "position error at which an arm counts as reached" },
+	{ .name = "ik_tolerance_rot",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_avatar, tol_rot_deg),
+	  .min = 1e-5,
+	  .max = 10,
+	  .def = "0.01",
+	  .unit = "deg",
+	  .doc = "hand orientation error at which an arm counts as reached" },
+	{ .name = "ik_max_evals",
+	  .kind = CFG_INT,
+	  CFG_AT(struct cfg_avatar, max_evals),
+	  .min = 16,
+	  .max = 100000,
+	  .def = "800",
+	  .doc = "closed-form search: postures evaluated at most (bounds the worst-case time)" },
+	{ .name = "ik_warm_iterations",
+	  .kind = CFG_INT,
+	  CFG_AT(struct cfg_avatar, warm_iter),
+	  .min = 0,
+	  .max = 100,
+	  .def = "6",
+	  .doc = "Newton iterations tried from the previous frame before the closed-form search" },
+};
+
+static const struct cfg_key output_keys[] = {
+	{ .name = "type", .kind = CFG_STR, .doc = "the output type (below, each with its own keys)" },
+	{ .name = "decimate",
+	  .kind = CFG_INT,
+	  CFG_AT(struct cfg_output, decimate),
+	  .min = 1,
+	  .max = 1000,
+	  .def = "1",
+	  .doc = "publish every n-th frame" },
+	{ .name = "avatars",
+	  .kind = CFG_LIST,
+	  CFG_AT(struct cfg_output, avatar_list),
+	  .def = "all",
+	  .doc = "avatar names to publish (space separated), or all" },
+};
+
+static const struct {
+	const struct cfg_key *keys;
+	int n;
+} common[S_COUNT] = {
+	[S_DAEMON] = { daemon_keys, CFG_N(daemon_keys) },
+	[S_SOURCE] = { source_keys, CFG_N(source_keys) },
+	[S_AVATAR] = { avatar_keys, CFG_N(avatar_keys) },
+	[S_OUTPUT] = { output_keys, CFG_N(output_keys) },
+};
 
 /* ---- errors ----------------------------------------------------------------------- */
 
@@ -604,33 +667,108 @@ static int read_dropins(struct parse *p, const char *main_path)
 
 /* ---- pass 2: values ------------------------------------------------------------------ */
 
-/* "a, b or c" (last: " or ") or "a, b, c" (last: ", "): the names of a table, for messages */
-static void name_list(char *buf, size_t len, const char *(*name)(int i), int n, const char *last)
+/* the entry of a key in a section, or NULL */
+static const struct cfg_entry *entry_of(const struct config *c, const char *section, const char *key)
+{
+	for (size_t i = 0; i < c->n_entries; i++)
+		if (!strcmp(c->entries[i].section, section) && !strcmp(c->entries[i].key, key))
+			return &c->entries[i];
+	return NULL;
+}
+
+/* "a, b or c" (last: " or ") or "a, b, c" (last: ", "): the names of a type table, for messages */
+static void name_list(char *buf, size_t len, const struct cfg_type *(*type)(int i), const char *last)
 {
 	size_t at = 0;
-
-	buf[0] = '\0';
-	for (int i = 0; i < n && at < len; i++)
-		at += (size_t)snprintf(buf + at, len - at, "%s%s", i == 0 ? "" : i == n - 1 ? last : ", ", name(i));
-}
-
-static const char *driver_name(int i)
-{
-	return trackers_table[i]->name;
-}
-
-static const char *output_name(int i)
-{
-	return e_out[i];
-}
-
-static int output_count(void)
-{
 	int n = 0;
 
-	while (e_out[n])
+	while (type(n))
 		n++;
-	return n;
+	buf[0] = '\0';
+	for (int i = 0; i < n && at < len; i++)
+		at += (size_t)snprintf(buf + at, len - at, "%s%s",
+				       i == 0	    ? ""
+				       : i == n - 1 ? last
+						    : ", ",
+				       type(i)->name);
+}
+
+static int type_find(const struct cfg_type *(*type)(int i), const char *name)
+{
+	for (int i = 0; type(i); i++)
+		if (!strcmp(type(i)->name, name))
+			return i;
+	return -1;
+}
+
+int cfg_source_type_find(const char *name)
+{
+	return type_find(cfg_source_type, name);
+}
+
+int cfg_output_type_find(const char *name)
+{
+	return type_find(cfg_output_type, name);
+}
+
+bool cfg_output_is(const struct cfg_output *o, const char *type)
+{
+	const struct cfg_type *t = cfg_output_type(o->type);
+
+	return t && !strcmp(t->name, type);
+}
+
+int cfg_sensor_lookup(const struct cfg_source *s, const char *name)
+{
+	const struct cfg_type *d = cfg_source_type(s->driver);
+	int n = d->sensor_count(s);
+	char buf[CFG_NAME_MAX * 2];
+
+	for (int i = 0; i < n; i++) {
+		d->sensor_name(s, i, buf, sizeof(buf));
+		if (!strcmp(buf, name))
+			return i;
+	}
+	return -1;
+}
+
+/*
+ * The type named by a section's type entry: its index, or -1 after an error
+ * (unknown, or known but left out of this build). *opt: its options, zeroed.
+ */
+static int section_type(struct parse *p, const char *full, const struct cfg_entry *t,
+			const struct cfg_type *(*type)(int i), void **opt)
+{
+	int i = type_find(type, t->value);
+	char names[256];
+
+	if (i < 0) {
+		name_list(names, sizeof(names), type, ", ");
+		return type == cfg_source_type
+			       ? failf(p, t->where, "[%s] type: unknown driver '%s' (known: %s)", full, t->value, names)
+			       : failf(p, t->where, "[%s] type: '%s' is not one of: %s", full, t->value, names);
+	}
+	if (!type(i)->built)
+		return failf(p, t->where, "[%s] type: %s is not built into this daemon (%s was missing at build time)",
+			     full, t->value, type(i)->doc);
+	*opt = calloc(1, type(i)->opt_size + 1);
+	if (!*opt)
+		return failf(p, t->where, "out of memory");
+	return i;
+}
+
+/* the type's own check, the blame on the key it names (else on the type's line) */
+static int type_check(struct parse *p, const char *full, const struct cfg_type *type, const void *section,
+		      const struct cfg_entry *t)
+{
+	const char *key = NULL;
+	const struct cfg_entry *e;
+	char why[256];
+
+	if (!type->check || !type->check(p->c, section, &key, why, sizeof(why)))
+		return 0;
+	e = key ? entry_of(p->c, full, key) : NULL;
+	return failf(p, e ? e->where : t->where, "[%s] %s", full, why);
 }
 
 static bool valid_name(const char *s)
@@ -681,43 +819,43 @@ static bool parse_nums(const char *s, double *v, int n)
 struct section_ctx {
 	struct parse *p;
 	int sect;
-	const char *name; /* the section's name after its kind */
-	const char *full; /* as written */
-	void *obj;
-	const char *type; /* source driver or output type name (keys with only) */
+	const char *name;	     /* the section's name after its kind */
+	const char *full;	     /* as written */
+	void *obj;		     /* the section's struct: the common keys' values */
+	const struct cfg_type *type; /* a source's or output's type: its keys' values go to opt */
+	void *opt;
 	struct cfg_where first;
 };
 
-static bool word_in(const char *word, const char *list)
+/* the i-th key of a section's kind and type (common keys first), and the struct its value goes to */
+static const struct cfg_key *key_at(const struct section_ctx *s, int i, void **obj)
 {
-	size_t n = strlen(word);
-
-	for (const char *s = list; (s = strstr(s, word)); s += n)
-		if ((s == list || s[-1] == ' ') && (s[n] == ' ' || s[n] == '\0'))
-			return true;
-	return false;
+	if (i < common[s->sect].n) {
+		if (obj)
+			*obj = s->obj;
+		return &common[s->sect].keys[i];
+	}
+	i -= common[s->sect].n;
+	if (!s->type || i >= s->type->n_keys)
+		return NULL;
+	if (obj)
+		*obj = s->opt;
+	return &s->type->keys[i];
 }
 
-/* a key may have one entry per set of types (a port with another default...): the one for type */
-static const struct key_def *find_key(int sect, const char *name, const char *type)
+/* the key called name in the section (mount_SENSOR: the key's name ends in a sensor's name), or NULL */
+static const struct cfg_key *find_key(const struct section_ctx *s, const char *name, void **obj)
 {
-	const struct key_def *any = NULL;
+	const struct cfg_key *k;
 
-	for (size_t i = 0; i < N_KEYS; i++) {
-		if (keys[i].sect != sect)
-			continue;
-		/* mount_SENSOR: the key's name ends in a sensor's name */
-		if (strcmp(keys[i].name, name) && !(keys[i].kind == K_MOUNT && !strncmp(name, "mount_", 6) && name[6]))
-			continue;
-		if (!keys[i].only || (type && word_in(type, keys[i].only)))
-			return &keys[i];
-		any = any ? any : &keys[i];
-	}
-	return any;
+	for (int i = 0; (k = key_at(s, i, obj)); i++)
+		if (k->kind == CFG_MOUNT ? !strncmp(name, "mount_", 6) && name[6] : !strcmp(k->name, name))
+			return k;
+	return NULL;
 }
 
 /* mount_SENSOR = x y z [qw qx qy qz] */
-static int set_mount(struct section_ctx *s, const struct key_def *k, const char *key, const char *value,
+static int set_mount(struct section_ctx *s, const struct cfg_key *k, const char *key, const char *value,
 		     struct cfg_where w)
 {
 	struct cfg_source *src = s->obj;
@@ -759,12 +897,12 @@ static int check_mounts(struct parse *p, const char *full, const struct cfg_sour
 {
 	for (int i = 0; i < src->n_mounts; i++) {
 		const struct cfg_mount *m = &src->mount[i];
-		const struct tracker_driver *d = trackers_table[src->driver];
+		const struct cfg_type *d = cfg_source_type(src->driver);
 		int cnt = d->sensor_count(src);
 		char names[256], nm[CFG_NAME_MAX * 2];
 		size_t n = 0;
 
-		if (tracker_sensor_lookup(src, m->sensor) >= 0)
+		if (cfg_sensor_lookup(src, m->sensor) >= 0)
 			continue;
 		names[0] = '\0';
 		for (int j = 0; j < cnt && j < 6 && n < sizeof(names); j++) {
@@ -777,42 +915,42 @@ static int check_mounts(struct parse *p, const char *full, const struct cfg_sour
 	return 0;
 }
 
-static void list_keys(int sect, const char *type, char *buf, size_t len)
+static void list_keys(const struct section_ctx *s, char *buf, size_t len)
 {
+	const struct cfg_key *k;
 	size_t n = 0;
 
 	buf[0] = '\0';
-	for (size_t i = 0; i < N_KEYS && n < len; i++)
-		if (keys[i].sect == sect && (!keys[i].only || (type && word_in(type, keys[i].only))))
-			n += (size_t)snprintf(buf + n, len - n, "%s%s", n ? ", " : "", keys[i].name);
+	for (int i = 0; (k = key_at(s, i, NULL)) && n < len; i++)
+		n += (size_t)snprintf(buf + n, len - n, "%s%s", n ? ", " : "", k->name);
 }
 
-static int set_value(struct section_ctx *s, const struct key_def *k, const char *value, struct cfg_where w)
+static int set_value(struct section_ctx *s, const struct cfg_key *k, void *into, const char *value, struct cfg_where w)
 {
 	struct parse *p = s->p;
-	char *obj = s->obj;
+	char *obj = into;
 	double v[3];
 
 	switch (k->kind) {
-	case K_INT:
-	case K_U32:
-	case K_DOUBLE:
-	case K_DEG:
+	case CFG_INT:
+	case CFG_U32:
+	case CFG_DOUBLE:
+	case CFG_DEG:
 		if (!parse_num(value, v))
 			return failf(p, w, "[%s] %s: '%s' is not a number", s->full, k->name, value);
 		if (v[0] < k->min || v[0] > k->max)
 			return failf(p, w, "[%s] %s: %s is out of range [%g, %g]%s%s", s->full, k->name, value, k->min,
 				     k->max, k->unit ? " " : "", k->unit ? k->unit : "");
-		if ((k->kind == K_INT || k->kind == K_U32) && v[0] != floor(v[0]))
+		if ((k->kind == CFG_INT || k->kind == CFG_U32) && v[0] != floor(v[0]))
 			return failf(p, w, "[%s] %s: '%s' is not a whole number", s->full, k->name, value);
-		if (k->kind == K_INT)
+		if (k->kind == CFG_INT)
 			*(int *)(obj + k->off) = (int)v[0];
-		else if (k->kind == K_U32)
+		else if (k->kind == CFG_U32)
 			*(uint32_t *)(obj + k->off) = (uint32_t)v[0];
 		else
-			*(double *)(obj + k->off) = k->kind == K_DEG ? v[0] * DEG : v[0];
+			*(double *)(obj + k->off) = k->kind == CFG_DEG ? v[0] * DEG : v[0];
 		return 0;
-	case K_BOOL:
+	case CFG_BOOL:
 		if (!strcasecmp(value, "yes") || !strcasecmp(value, "true") || !strcasecmp(value, "on") ||
 		    !strcmp(value, "1"))
 			*(bool *)(obj + k->off) = true;
@@ -822,7 +960,7 @@ static int set_value(struct section_ctx *s, const struct key_def *k, const char 
 		else
 			return failf(p, w, "[%s] %s: '%s' is not yes or no", s->full, k->name, value);
 		return 0;
-	case K_ENUM:
+	case CFG_ENUM:
 		for (int i = 0; k->enums[i]; i++)
 			if (!strcmp(value, k->enums[i])) {
 				*(int *)(obj + k->off) = i;
@@ -837,15 +975,15 @@ static int set_value(struct section_ctx *s, const struct key_def *k, const char 
 				n += (size_t)snprintf(opts + n, sizeof(opts) - n, "%s%s", i ? ", " : "", k->enums[i]);
 			return failf(p, w, "[%s] %s: '%s' is not one of: %s", s->full, k->name, value, opts);
 		}
-	case K_STR:
-	case K_PATH:
-	case K_LIST: {
-		size_t cap = k->kind == K_STR && !strcmp(k->name, "interface") ? CFG_NAME_MAX : CFG_PATH_MAX;
+	case CFG_STR:
+	case CFG_PATH:
+	case CFG_LIST: {
+		size_t cap = k->size ? k->size : CFG_PATH_MAX;
 		char *dst = obj + k->off;
 
 		if (strlen(value) >= cap)
 			return failf(p, w, "[%s] %s: longer than %zu characters", s->full, k->name, cap - 1);
-		if (k->kind == K_PATH && value[0] && value[0] != '/' && strncmp(value, "builtin:", 8) &&
+		if (k->kind == CFG_PATH && value[0] && value[0] != '/' && strncmp(value, "builtin:", 8) &&
 		    strcmp(value, "auto") && w.file >= 0) {
 			/* relative to the directory of the file that says it */
 			const char *f = p->c->files[w.file];
@@ -865,7 +1003,7 @@ static int set_value(struct section_ctx *s, const struct key_def *k, const char 
 		snprintf(dst, cap, "%s", value);
 		return 0;
 	}
-	case K_VEC3:
+	case CFG_VEC3:
 		if (!parse_nums(value, v, 3))
 			return failf(p, w, "[%s] %s: '%s' is not three numbers (x y z)", s->full, k->name, value);
 		for (int i = 0; i < 3; i++) {
@@ -875,7 +1013,7 @@ static int set_value(struct section_ctx *s, const struct key_def *k, const char 
 			((double *)(obj + k->off))[i] = v[i];
 		}
 		return 0;
-	case K_NAMES: {
+	case CFG_NAMES: {
 		char buf[CFG_PATH_MAX], *save, *tok, *seen[CFG_MAX_STATIONS];
 		int n = 0, named = 0;
 
@@ -903,7 +1041,7 @@ static int set_value(struct section_ctx *s, const struct key_def *k, const char 
 		snprintf(obj + k->off, CFG_PATH_MAX, "%s", value);
 		return 0;
 	}
-	case K_RANGE:
+	case CFG_RANGE:
 		if (!parse_nums(value, v, 2))
 			return failf(p, w, "[%s] %s: '%s' is not two numbers (lo hi, degrees)", s->full, k->name,
 				     value);
@@ -914,60 +1052,59 @@ static int set_value(struct section_ctx *s, const struct key_def *k, const char 
 		*(double *)(obj + k->off2) = v[1] * DEG;
 		return 0;
 	default:
-		return 0; /* K_SENSOR, K_PERSON: resolved by the avatar code */
+		return 0; /* CFG_SENSOR, CFG_PERSON: resolved by the avatar code */
 	}
 }
 
-/* the entry of a key in a section, or NULL */
-static const struct cfg_entry *entry_of(const struct config *c, const char *section, const char *key)
+/* keys the section code reads itself (type, id, count, the sensors), not through set_value */
+static bool special_key(const struct section_ctx *s, const struct cfg_key *k)
 {
-	for (size_t i = 0; i < c->n_entries; i++)
-		if (!strcmp(c->entries[i].section, section) && !strcmp(c->entries[i].key, key))
-			return &c->entries[i];
-	return NULL;
+	return k->kind == CFG_SENSOR || k->kind == CFG_PERSON || !strcmp(k->name, "type") ||
+	       (s->sect == S_AVATAR && (!strcmp(k->name, "id") || !strcmp(k->name, "count")));
 }
 
-/* defaults, then the section's entries; keys of other types are errors */
+/* defaults, the required keys, then the section's entries (keys of other types are errors) */
 static int apply_section(struct section_ctx *s)
 {
 	struct parse *p = s->p;
 	const struct config *c = p->c;
+	const struct cfg_key *k;
 	char known[512];
+	void *into;
 
-	for (size_t i = 0; i < N_KEYS; i++) {
-		const struct key_def *k = &keys[i];
-
-		if (k->sect != s->sect || !k->def || (k->only && !word_in(s->type, k->only)))
+	for (int i = 0; (k = key_at(s, i, &into)); i++) {
+		if (!k->def || special_key(s, k) || k->kind == CFG_MOUNT)
 			continue;
-		if (k->kind == K_SENSOR || k->kind == K_PERSON || k->kind == K_MOUNT || !strcmp(k->name, "count") ||
-		    (s->sect == S_SOURCE && !strcmp(k->name, "type")))
-			continue;
-		if (s->sect == S_AVATAR && !strcmp(k->name, "id"))
-			continue;
-		if (set_value(s, k, k->def, (struct cfg_where){ -1, 0 }))
+		if (set_value(s, k, into, k->def, (struct cfg_where){ -1, 0 }))
 			return -1;
+	}
+	for (int i = 0; (k = key_at(s, i, NULL)); i++) {
+		const struct cfg_entry *t = entry_of(c, s->full, "type");
+
+		if (k->def || special_key(s, k) || entry_of(c, s->full, k->name))
+			continue;
+		return failf(p, t ? t->where : s->first, "[%s] %s: missing (%s)", s->full, k->name,
+			     k->missing ? k->missing : k->doc);
 	}
 	for (size_t i = 0; i < c->n_entries; i++) {
 		const struct cfg_entry *e = &c->entries[i];
-		const struct key_def *k;
 
 		if (strcmp(e->section, s->full))
 			continue;
-		k = find_key(s->sect, e->key, s->type);
-		if (!k || (k->only && !word_in(s->type, k->only))) {
-			list_keys(s->sect, s->type, known, sizeof(known));
-			return failf(p, e->where, "[%s] %s: unknown key%s%s%s (known: %s)", s->full, e->key,
-				     s->type ? " for type " : "", s->type ? s->type : "", "", known);
+		k = find_key(s, e->key, &into);
+		if (!k) {
+			list_keys(s, known, sizeof(known));
+			return failf(p, e->where, "[%s] %s: unknown key%s%s (known: %s)", s->full, e->key,
+				     s->type ? " for type " : "", s->type ? s->type->name : "", known);
 		}
-		if (k->kind == K_SENSOR || k->kind == K_PERSON || (s->sect == S_AVATAR && !strcmp(k->name, "id")) ||
-		    !strcmp(k->name, "count") || (s->sect == S_SOURCE && !strcmp(k->name, "type")))
+		if (special_key(s, k))
 			continue;
-		if (k->kind == K_MOUNT) {
+		if (k->kind == CFG_MOUNT) {
 			if (set_mount(s, k, e->key, e->value, e->where))
 				return -1;
 			continue;
 		}
-		if (set_value(s, k, e->value, e->where))
+		if (set_value(s, k, into, e->value, e->where))
 			return -1;
 	}
 	return 0;
@@ -1012,12 +1149,12 @@ static int resolve_sensor(struct parse *p, const char *full, const char *key, co
 		if (!slash || !slash[1])
 			return failf(p, w, "[%s] %s: '%s' names no sensor (SOURCE/SENSOR)", full, key, ref);
 		out->source = i;
-		out->sensor = tracker_sensor_lookup(src, slash + 1);
+		out->sensor = cfg_sensor_lookup(src, slash + 1);
 		out->where = w;
 		if (out->sensor < 0) {
 			char names[256], nm[CFG_NAME_MAX * 2];
 			size_t n = 0;
-			const struct tracker_driver *d = trackers_table[src->driver];
+			const struct cfg_type *d = cfg_source_type(src->driver);
 			int cnt = d->sensor_count(src);
 
 			names[0] = '\0';
@@ -1181,48 +1318,6 @@ static int resolve_output_avatars(struct parse *p, const char *full, struct cfg_
 	return 0;
 }
 
-/* the identifiers (can) or registers (modbus) of all the output's avatars must exist */
-static int check_bus_output(struct parse *p, const char *full, const struct cfg_output *o)
-{
-	const struct config *c = p->c;
-	const struct cfg_entry *t = entry_of(c, full, "type");
-	long n = o->n_avatars ? o->n_avatars : c->n_avatars, last;
-
-	if (!n)
-		return 0;
-	if (o->type == CFG_OUT_CAN) {
-		long max = o->extended_ids ? 0x1FFFFFFFL : 0x7FFL;
-
-		last = o->base_id + 8 * (n - 1) + 4; /* 8 identifiers per avatar, 5 used (docs/CAN.md) */
-		if (last > max)
-			return failf(p, t->where,
-				     "[%s] base_id: %ld avatars need identifiers up to 0x%lX, above 0x%lX%s", full, n,
-				     last, max, o->extended_ids ? "" : " (extended_ids = yes gives 29 bits)");
-	}
-	if (o->type == CFG_OUT_MODBUS) {
-		last = o->reg_base + (long)o->reg_stride * (n - 1) + 66 -
-		       1; /* a block is 66 registers (docs/MODBUS.md) */
-		if (last > 65535)
-			return failf(p, t->where,
-				     "[%s] register_base, register_stride: %ld avatars need registers up "
-				     "to %ld, above 65535",
-				     full, n, last);
-	}
-	return 0;
-}
-
-/* VMC and VRChat speak for one body: their output names exactly one avatar */
-static int one_avatar(struct parse *p, const char *full, const struct cfg_output *o, const struct cfg_entry *t)
-{
-	const struct cfg_entry *e = entry_of(p->c, full, "avatars");
-	int n = o->n_avatars ? o->n_avatars : p->c->n_avatars;
-
-	if ((o->type != CFG_OUT_VMC && o->type != CFG_OUT_VRCHAT) || n == 1)
-		return 0;
-	return failf(p, e ? e->where : t->where,
-		     "[%s] avatars: a %s output carries one avatar, not %d (avatars = NAME)", full, e_out[o->type], n);
-}
-
 static int build(struct parse *p)
 {
 	struct config *c = p->c;
@@ -1235,7 +1330,7 @@ static int build(struct parse *p)
 		return failf(p, (struct cfg_where){ -2, 0 }, "out of memory");
 	/* the daemon section always exists */
 	{
-		struct section_ctx s = { p, S_DAEMON, "", "daemon", &c->daemon, NULL, { -1, 0 } };
+		struct section_ctx s = { p, S_DAEMON, "", "daemon", &c->daemon, NULL, NULL, { -1, 0 } };
 
 		if (apply_section(&s))
 			return -1;
@@ -1287,50 +1382,33 @@ static int build(struct parse *p)
 					return failf(p, e->where, "[%s]: more than %d sources", e->section,
 						     CFG_MAX_SOURCES);
 				if (!t) {
-					char names[160];
+					char names[256];
 
-					name_list(names, sizeof(names), driver_name, trackers_count, " or ");
+					name_list(names, sizeof(names), cfg_source_type, " or ");
 					return failf(p, e->where, "[%s] type: missing (%s)", e->section, names);
 				}
 				src = &c->source[c->n_sources];
 				memset(src, 0, sizeof(*src));
 				snprintf(src->name, sizeof(src->name), "%s", name);
 				src->where = e->where;
-				src->driver = trackers_find(t->value);
-				if (src->driver < 0) {
-					char names[160];
-
-					name_list(names, sizeof(names), driver_name, trackers_count, ", ");
-					return failf(p, t->where, "[%s] type: unknown driver '%s' (known: %s)",
-						     e->section, t->value, names);
-				}
 				for (int j = 0; j < c->n_sources; j++)
 					if (!strcmp(c->source[j].name, name))
 						return failf(p, e->where, "[%s]: source name used twice", e->section);
-				s = (struct section_ctx){ p, S_SOURCE, name, e->section, src, t->value, e->where };
-				if (apply_section(&s) || check_mounts(p, e->section, src))
+				src->driver = section_type(p, e->section, t, cfg_source_type, &src->opt);
+				if (src->driver < 0)
 					return -1;
-				if (trackers_table[src->driver] == &replay_driver && !src->file[0])
-					return failf(p, t->where, "[%s] file: missing (the recording to replay)",
-						     e->section);
-				if (trackers_table[src->driver]->check) {
-					char why[256];
-
-					if (trackers_table[src->driver]->check(src, why, sizeof(why))) {
-						const struct cfg_entry *fe = entry_of(c, e->section, "file");
-
-						if (!fe)
-							fe = entry_of(c, e->section, "capture");
-
-						return failf(p, fe ? fe->where : t->where, "[%s] %s", e->section, why);
-					}
-				}
-				c->n_sources++;
+				c->n_sources++; /* counted now: config_free frees its options */
+				s = (struct section_ctx){ p,	      S_SOURCE, name,
+							  e->section, src,	cfg_source_type(src->driver),
+							  src->opt,   e->where };
+				if (apply_section(&s) || check_mounts(p, e->section, src) ||
+				    type_check(p, e->section, s.type, src, t))
+					return -1;
 			} else if (kind == S_AVATAR) {
 				struct section_ctx s;
 
 				memset(&tmpl, 0, sizeof(tmpl));
-				s = (struct section_ctx){ p, S_AVATAR, name, e->section, &tmpl, NULL, e->where };
+				s = (struct section_ctx){ p, S_AVATAR, name, e->section, &tmpl, NULL, NULL, e->where };
 				if (apply_section(&s) || build_avatars(p, e->section, name, &tmpl, &next_id))
 					return -1;
 			} else if (kind == S_OUTPUT) {
@@ -1342,9 +1420,9 @@ static int build(struct parse *p)
 					return failf(p, e->where, "[%s]: more than %d outputs", e->section,
 						     CFG_MAX_OUTPUTS);
 				if (!t) {
-					char names[160];
+					char names[256];
 
-					name_list(names, sizeof(names), output_name, output_count(), " or ");
+					name_list(names, sizeof(names), cfg_output_type, " or ");
 					return failf(p, e->where, "[%s] type: missing (%s)", e->section, names);
 				}
 				o = &c->output[c->n_outputs];
@@ -1354,33 +1432,16 @@ static int build(struct parse *p)
 				for (int j = 0; j < c->n_outputs; j++)
 					if (!strcmp(c->output[j].name, name))
 						return failf(p, e->where, "[%s]: output name used twice", e->section);
-				/* the type first: it decides which keys exist */
-				s = (struct section_ctx){ p, S_OUTPUT, name, e->section, o, NULL, e->where };
-				if (set_value(&s, find_key(S_OUTPUT, "type", NULL), t->value, t->where))
+				o->type = section_type(p, e->section, t, cfg_output_type, &o->opt);
+				if (o->type < 0)
 					return -1;
-				s.type = e_out[o->type];
-				if (o->type == CFG_OUT_MULTICAST) {
-					/* a multicast output without an address has no sensible default */
-					if (!entry_of(c, e->section, "address"))
-						return failf(p, t->where, "[%s] address: missing (a multicast group)",
-							     e->section);
-				}
-				if (o->type == CFG_OUT_MODBUS && !entry_of(c, e->section, "port"))
-					return failf(p, t->where,
-						     "[%s] port: missing (Modbus TCP's own port 502 needs "
-						     "CAP_NET_BIND_SERVICE; 1502 is usual otherwise)",
-						     e->section);
-				if (o->type == CFG_OUT_CAN && !entry_of(c, e->section, "interface"))
-					return failf(p, t->where,
-						     "[%s] interface: missing (a CAN interface such as can0)",
-						     e->section);
+				c->n_outputs++; /* counted now: config_free frees its options and avatar list */
+				s = (struct section_ctx){ p,	      S_OUTPUT, name,
+							  e->section, o,	cfg_output_type(o->type),
+							  o->opt,     e->where };
 				if (apply_section(&s) || resolve_output_avatars(p, e->section, o) ||
-				    check_bus_output(p, e->section, o) || one_avatar(p, e->section, o, t)) {
-					free(o->avatar_ids); /* not counted in n_outputs: config_free would miss it */
-					o->avatar_ids = NULL;
+				    type_check(p, e->section, s.type, o, t))
 					return -1;
-				}
-				c->n_outputs++;
 			}
 		}
 	}
@@ -1464,8 +1525,12 @@ int config_load_text(struct config *c, const char *name, const char *text, char 
 
 void config_free(struct config *c)
 {
-	for (int i = 0; i < c->n_outputs; i++)
+	for (int i = 0; i < c->n_sources; i++)
+		free(c->source[i].opt);
+	for (int i = 0; i < c->n_outputs; i++) {
 		free(c->output[i].avatar_ids);
+		free(c->output[i].opt);
+	}
 	for (size_t i = 0; i < c->n_entries; i++) {
 		free(c->entries[i].section);
 		free(c->entries[i].key);
@@ -1480,42 +1545,42 @@ void config_free(struct config *c)
 
 /* ---- printing ------------------------------------------------------------------------ */
 
-static void print_value(FILE *out, const struct key_def *k, const void *obj)
+static void print_value(FILE *out, const struct cfg_key *k, const void *obj)
 {
 	const char *o = obj;
 
 	switch (k->kind) {
-	case K_INT:
+	case CFG_INT:
 		fprintf(out, "%d", *(const int *)(o + k->off));
 		break;
-	case K_U32:
+	case CFG_U32:
 		fprintf(out, "%u", *(const uint32_t *)(o + k->off));
 		break;
-	case K_DOUBLE:
+	case CFG_DOUBLE:
 		fprintf(out, "%.10g", *(const double *)(o + k->off));
 		break;
-	case K_DEG:
+	case CFG_DEG:
 		fprintf(out, "%.10g", *(const double *)(o + k->off) / DEG);
 		break;
-	case K_BOOL:
+	case CFG_BOOL:
 		fputs(*(const bool *)(o + k->off) ? "yes" : "no", out);
 		break;
-	case K_ENUM:
+	case CFG_ENUM:
 		fputs(k->enums[*(const int *)(o + k->off)], out);
 		break;
-	case K_STR:
-	case K_PATH:
-	case K_LIST:
-	case K_NAMES:
+	case CFG_STR:
+	case CFG_PATH:
+	case CFG_LIST:
+	case CFG_NAMES:
 		fputs(o + k->off, out);
 		break;
-	case K_VEC3: {
+	case CFG_VEC3: {
 		const double *v = (const double *)(o + k->off);
 
 		fprintf(out, "%.10g %.10g %.10g", v[0], v[1], v[2]);
 		break;
 	}
-	case K_RANGE:
+	case CFG_RANGE:
 		fprintf(out, "%.10g %.10g", *(const double *)(o + k->off) / DEG, *(const double *)(o + k->off2) / DEG);
 		break;
 	default:
@@ -1536,22 +1601,21 @@ static void print_origin(FILE *out, const struct config *c, const char *section,
 
 /* full: the section printed; from: the section its entries are in (a counted avatar's) */
 static void print_section(FILE *out, const struct config *c, int sect, const char *full, const char *from,
-			  const char *type, const void *obj)
+			  const struct cfg_type *type, void *obj, void *opt)
 {
+	struct section_ctx s = { NULL, sect, "", full, obj, type, opt, { -1, 0 } };
+	const struct cfg_key *k;
+	void *into;
+
 	fprintf(out, "\n[%s]\n", full);
-	if (sect == S_SOURCE) {
-		fprintf(out, "type = %s", type);
+	if (type) {
+		fprintf(out, "type = %s", type->name);
 		print_origin(out, c, from, "type");
 	}
-	for (size_t i = 0; i < N_KEYS; i++) {
-		const struct key_def *k = &keys[i];
-
-		if (k->sect != sect || (k->only && !word_in(type, k->only)))
+	for (int i = 0; (k = key_at(&s, i, &into)); i++) {
+		if (special_key(&s, k))
 			continue;
-		if (k->kind == K_SENSOR || k->kind == K_PERSON || !strcmp(k->name, "count") || !strcmp(k->name, "id") ||
-		    (sect == S_SOURCE && !strcmp(k->name, "type")))
-			continue;
-		if (k->kind == K_MOUNT) {
+		if (k->kind == CFG_MOUNT) {
 			const struct cfg_source *src = obj;
 			char w[CFG_PATH_MAX + 16];
 
@@ -1565,7 +1629,7 @@ static void print_section(FILE *out, const struct config *c, int sect, const cha
 			continue;
 		}
 		fprintf(out, "%s = ", k->name);
-		print_value(out, k, obj);
+		print_value(out, k, into);
 		print_origin(out, c, from, k->name);
 	}
 }
@@ -1578,28 +1642,26 @@ void config_print(const struct config *c, FILE *out)
 	for (int i = 0; i < c->n_files; i++)
 		fprintf(out, " %s", c->files[i]);
 	fputc('\n', out);
-	print_section(out, c, S_DAEMON, "daemon", "daemon", NULL, &c->daemon);
+	print_section(out, c, S_DAEMON, "daemon", "daemon", NULL, (void *)&c->daemon, NULL);
 	for (int i = 0; i < c->n_sources; i++) {
 		const struct cfg_source *s = &c->source[i];
-		const char *type = trackers_table[s->driver]->name;
 
 		snprintf(full, sizeof(full), "source %s", s->name);
-		print_section(out, c, S_SOURCE, full, full, type, s);
+		print_section(out, c, S_SOURCE, full, full, cfg_source_type(s->driver), (void *)s, s->opt);
 	}
 	for (int i = 0; i < c->n_avatars; i++) {
 		const struct cfg_avatar *a = &c->avatar[i];
-
 		char from[CFG_NAME_MAX + 16];
 
 		snprintf(full, sizeof(full), "avatar %s", a->name);
 		snprintf(from, sizeof(from), "avatar %s", a->section);
-		print_section(out, c, S_AVATAR, full, from, NULL, a);
+		print_section(out, c, S_AVATAR, full, from, NULL, (void *)a, NULL);
 		fprintf(out, "id = %u\n", a->id);
 		for (int r = 0; r < 3; r++) {
 			const struct cfg_source *s = &c->source[a->sensor[r].source];
 			char nm[CFG_NAME_MAX * 2], w[CFG_PATH_MAX + 16];
 
-			trackers_table[s->driver]->sensor_name(s, a->sensor[r].sensor, nm, sizeof(nm));
+			cfg_source_type(s->driver)->sensor_name(s, a->sensor[r].sensor, nm, sizeof(nm));
 			fprintf(out, "%s = %s/%s    ; %s\n", cfg_sensor_roles[r], s->name, nm,
 				config_where(c, a->sensor[r].where, w, sizeof(w)));
 		}
@@ -1608,21 +1670,82 @@ void config_print(const struct config *c, FILE *out)
 		const struct cfg_output *o = &c->output[i];
 
 		snprintf(full, sizeof(full), "output %s", o->name);
-		print_section(out, c, S_OUTPUT, full, full, e_out[o->type], o);
+		print_section(out, c, S_OUTPUT, full, full, cfg_output_type(o->type), (void *)o, o->opt);
 	}
+}
+
+static const char *kind_names[] = {
+	[CFG_INT] = "int",	[CFG_U32] = "u32",     [CFG_DOUBLE] = "number", [CFG_DEG] = "degrees",
+	[CFG_BOOL] = "bool",	[CFG_ENUM] = "enum",   [CFG_STR] = "string",	[CFG_PATH] = "path",
+	[CFG_VEC3] = "vec3",	[CFG_RANGE] = "range", [CFG_SENSOR] = "sensor", [CFG_PERSON] = "person",
+	[CFG_LIST] = "avatars", [CFG_MOUNT] = "mount", [CFG_NAMES] = "names",
+};
+
+static bool same_str(const char *a, const char *b)
+{
+	return a == b || (a && b && !strcmp(a, b));
+}
+
+/* two types' keys that print as one line of --keys */
+static bool same_key(const struct cfg_key *a, const struct cfg_key *b)
+{
+	return !strcmp(a->name, b->name) && a->kind == b->kind && a->min == b->min && a->max == b->max &&
+	       same_str(a->def, b->def) && same_str(a->unit, b->unit) && same_str(a->doc, b->doc) &&
+	       a->enums == b->enums;
+}
+
+/* name, default, unit, types, doc, then kind, min, max and the enum's words */
+static void print_key(FILE *out, const struct cfg_key *k, const char *types, const char *doc)
+{
+	fprintf(out, "%s\t%s\t%s\t%s\t%s\t%s\t%.10g\t%.10g\t", k->name, k->def ? k->def : "(required)",
+		k->unit ? k->unit : "-", types, doc ? doc : k->doc, kind_names[k->kind], k->min, k->max);
+	for (int i = 0; k->enums && k->enums[i]; i++)
+		fprintf(out, "%s%s", i ? " " : "", k->enums[i]);
+	fputc('\n', out);
+}
+
+/* a section kind's reference: its common keys, then each key of its types once, with the types that take it */
+static void print_kind(FILE *out, int sect, const struct cfg_type *(*type)(int i))
+{
+	char doc[2048], types[512];
+	size_t n = 0;
+
+	fprintf(out, "[%s%s]\n", sect_names[sect], sect == S_DAEMON ? "" : " NAME");
+	doc[0] = '\0';
+	for (int t = 0; type && type(t); t++)
+		n += (size_t)snprintf(doc + n, n < sizeof(doc) ? sizeof(doc) - n : 0, "%s%s (%s%s)", t ? ", " : "",
+				      type(t)->name, type(t)->doc,
+				      type(t)->built ? "" : "; not built into this daemon");
+	for (int i = 0; i < common[sect].n; i++) {
+		const struct cfg_key *k = &common[sect].keys[i];
+
+		print_key(out, k, "all", type && !strcmp(k->name, "type") ? doc : NULL);
+	}
+	for (int t = 0; type && type(t); t++)
+		for (int i = 0; i < type(t)->n_keys; i++) {
+			const struct cfg_key *k = &type(t)->keys[i];
+			bool printed = false;
+
+			for (int u = 0; u < t && !printed; u++)
+				for (int j = 0; j < type(u)->n_keys && !printed; j++)
+					printed = same_key(k, &type(u)->keys[j]);
+			if (printed)
+				continue;
+			n = 0;
+			types[0] = '\0';
+			for (int u = t; type(u); u++)
+				for (int j = 0; j < type(u)->n_keys; j++)
+					if (same_key(k, &type(u)->keys[j]) && n < sizeof(types))
+						n += (size_t)snprintf(types + n, sizeof(types) - n, "%s%s",
+								      n ? " " : "", type(u)->name);
+			print_key(out, k, types, NULL);
+		}
 }
 
 void config_print_reference(FILE *out)
 {
-	for (int s = 0; s < S_COUNT; s++) {
-		fprintf(out, "[%s%s]\n", sect_names[s], s == S_DAEMON ? "" : " NAME");
-		for (size_t i = 0; i < N_KEYS; i++) {
-			const struct key_def *k = &keys[i];
-
-			if (k->sect != s)
-				continue;
-			fprintf(out, "%s\t%s\t%s\t%s\t%s\n", k->name, k->def ? k->def : "(required)",
-				k->unit ? k->unit : "-", k->only ? k->only : "all", k->doc);
-		}
-	}
+	print_kind(out, S_DAEMON, NULL);
+	print_kind(out, S_SOURCE, cfg_source_type);
+	print_kind(out, S_AVATAR, NULL);
+	print_kind(out, S_OUTPUT, cfg_output_type);
 }

@@ -68,71 +68,94 @@ struct cfg_mount {
 	struct cfg_where where;
 };
 
-enum cfg_polhemus_model { CFG_PH_AUTO, CFG_PH_LIBERTY, CFG_PH_LIBERTY_HS, CFG_PH_PATRIOT, CFG_PH_PATRIOT_HS };
+/*
+ * A key of a section, in a typed table: the daemon's, avatars' and what
+ * every source and output has are config.c's; each tracker driver and
+ * output type declares its own (struct cfg_type), whose values land in its
+ * options struct (cfg_source.opt, cfg_output.opt). One table gives the
+ * parser, the defaults, the errors, --check-config's printout and --keys
+ * (from which the man page and the reference file are checked).
+ */
+enum cfg_kind {
+	CFG_INT,
+	CFG_U32,
+	CFG_DOUBLE,
+	CFG_DEG, /* degrees in the file, radians in memory */
+	CFG_BOOL,
+	CFG_ENUM, /* one of enums[], stored as its index (int) */
+	CFG_STR,
+	CFG_PATH, /* relative to the directory of the file that says it */
+	CFG_VEC3,
+	CFG_RANGE,  /* two numbers in degrees: lo hi (off, off2) */
+	CFG_SENSOR, /* SOURCE/SENSOR */
+	CFG_PERSON, /* SOURCE[/PREFIX]: head, left_hand, right_hand at once */
+	CFG_LIST,   /* avatar names, or all */
+	CFG_MOUNT,  /* mount_SENSOR: x y z [qw qx qy qz], one key per sensor */
+	CFG_NAMES,  /* sensor names separated by spaces, "-" for none; max = how many */
+};
+
+struct cfg_key {
+	const char *name;
+	enum cfg_kind kind;
+	size_t off, off2; /* where the value goes in the section's struct (off2: a range's hi) */
+	size_t size;	  /* strings: the buffer's size */
+	double min, max;
+	const char *def;	  /* NULL: required */
+	const char *unit;	  /* or NULL */
+	const char *const *enums; /* CFG_ENUM: the words, NULL-terminated */
+	const char *doc;
+	const char *missing; /* required keys: what to say when it is not given (or NULL) */
+};
+
+/* a key's place in an options struct: .off and .size of field f of struct type t */
+#define CFG_AT(t, f) .off = offsetof(t, f), .size = sizeof(((t *)0)->f)
+#define CFG_N(a) ((int)(sizeof(a) / sizeof((a)[0])))
+
+struct config;
+struct cfg_source;
+
+/*
+ * A source driver or an output type, as the configuration sees it: its
+ * `type =` word, its keys and its options struct, and the checks no single
+ * key can make. The tables of them are the drivers' and outputs' own
+ * (trackers.c, outputs.c): cfg_source_type() and cfg_output_type() give
+ * the i-th, NULL past the end.
+ */
+struct cfg_type {
+	const char *name;
+	const char *doc; /* one line: what it is */
+	const struct cfg_key *keys;
+	int n_keys;
+	size_t opt_size; /* its options struct, allocated and filled by the configuration */
+	bool built;	 /* false: known, but its library was missing at build time */
+	/*
+	 * After every key: what depends on several keys, on a file's content or
+	 * on the avatars (section: the struct cfg_source or cfg_output). 0, or
+	 * -1 with why set and *key the key to blame (else the type's line).
+	 */
+	int (*check)(const struct config *c, const void *section, const char **key, char *why, size_t len);
+	/* sources: the sensors one of this type has, from its configuration alone */
+	int (*sensor_count)(const struct cfg_source *s);
+	void (*sensor_name)(const struct cfg_source *s, int i, char *buf, size_t len);
+};
+
+const struct cfg_type *cfg_source_type(int i);
+const struct cfg_type *cfg_output_type(int i);
 
 struct cfg_source {
 	char name[CFG_NAME_MAX];
-	int driver;		/* index into trackers_table */
+	int driver;		/* index of its type: cfg_source_type(driver) */
 	struct cfg_where where; /* its first line */
-	/* every tracker */
-	double origin[3]; /* world position of the tracker's frame, m */
-	double yaw;	  /* rotation of the tracker's frame about world z, rad */
-	/* sim */
-	int people;
-	uint32_t seed;
-	double sample_rate; /* Hz */
-	double spacing;	    /* m between simulated people */
-	/* replay */
-	char file[CFG_PATH_MAX];
-	double speed;
-	bool loop;
-	double start; /* s into the file */
-	/* modbus (a Modbus TCP device polled for poses) */
-	char address[CFG_PATH_MAX]; /* host of the device */
-	int port;
-	int unit_id;
-	int register_type; /* enum cfg_reg_type */
-	int sensors;	   /* modbus, can: poses read */
-	int sensor_stride; /* registers from one sensor's block to the next */
-	int pos_register;
-	int pos_format;	  /* enum cfg_reg_format */
-	double pos_scale; /* modbus, can: m per count */
-	int ori_register;
-	int ori_format;
-	double ori_scale; /* rad (or unit quaternion) per count */
-	int orientation;  /* enum cfg_orientation */
-	int word_order;	  /* enum cfg_word_order: 32-bit values */
-	double poll_rate; /* Hz */
-	double timeout_ms;
-	/* can (SocketCAN frames) */
-	char interface[CFG_NAME_MAX]; /* "can0", or "fd:N" for an inherited descriptor */
-	int ori_id;		      /* sensor k's orientation frame: ori_id + k */
-	int pos_id;		      /* sensor k's position frame: pos_id + k; -1: none */
-	double quat_scale;	      /* the count that stands for 1.0 */
-	int quat_order;		      /* enum cfg_quat_order */
-	bool extended_ids;	      /* 29-bit identifiers */
-	bool step;		      /* advance on avatargw-ctl step only */
-	int interpolate;	      /* 0 none, else 1 + enum kf_interp */
-	/* hydra, polhemus */
-	char device[CFG_PATH_MAX];   /* auto, or which one: hidraw node (hydra), USB port (polhemus) */
-	char capture[CFG_PATH_MAX];  /* a capture of raw reports to play instead of the device; "" = none */
-	char record[CFG_PATH_MAX];   /* write the raw reports read from the device to this capture; "" = none */
-	int hid_interface;	     /* hydra: USB interface of the motion reports */
-	int control_interface;	     /* hydra: USB interface that takes the mode feature report */
-	int model;		     /* polhemus: enum cfg_polhemus_model */
-	char stations[CFG_PATH_MAX]; /* polhemus: sensor names of stations 1, 2, ...; "-" = unused */
-	double hemisphere[3];	     /* polhemus: the H command's vector, Polhemus frame */
-	/* every tracker */
+	double origin[3];	/* world position of the tracker's frame, m */
+	double yaw;		/* rotation of the tracker's frame about world z, rad */
 	int n_mounts;
 	struct cfg_mount mount[CFG_MAX_MOUNTS];
+	void *opt; /* the driver's options (its cfg_type's keys) */
 };
 
 /* how 32-bit values lie in two 16-bit registers (A = most significant byte) */
 enum cfg_word_order { CFG_WORD_ABCD, CFG_WORD_CDAB, CFG_WORD_BADC, CFG_WORD_DCBA };
-enum cfg_reg_type { CFG_REGS_HOLDING, CFG_REGS_INPUT };
-enum cfg_reg_format { CFG_REG_INT16, CFG_REG_UINT16, CFG_REG_INT32, CFG_REG_UINT32, CFG_REG_FLOAT32 };
-enum cfg_orientation { CFG_ORI_ROTVEC, CFG_ORI_QUAT_WXYZ, CFG_ORI_QUAT_XYZW, CFG_ORI_RPY, CFG_ORI_NONE };
-enum cfg_quat_order { CFG_QUAT_WXYZ, CFG_QUAT_XYZW };
+extern const char *const cfg_word_orders[]; /* the words of enum cfg_word_order */
 
 /* a sensor reference: a source and one of its sensors */
 struct cfg_sensor_ref {
@@ -159,56 +182,16 @@ struct cfg_avatar {
 	int warm_iter;
 };
 
-enum cfg_output_type {
-	CFG_OUT_UDP,
-	CFG_OUT_MULTICAST,
-	CFG_OUT_TCP,
-	CFG_OUT_UNIX,
-	CFG_OUT_MODBUS,	   /* Modbus TCP server (docs/MODBUS.md) */
-	CFG_OUT_CAN,	   /* joint angles as CAN frames (docs/CAN.md) */
-	CFG_OUT_VRPN,	   /* VRPN server (docs/VRPN.md) */
-	CFG_OUT_VMC,	   /* OSC, VMC protocol performer (docs/OSC.md) */
-	CFG_OUT_VRCHAT,	   /* OSC, VRChat trackers */
-	CFG_OUT_WEBSOCKET, /* JSON frames and the browser viewer (docs/VIEWER.md) */
-};
-
 struct cfg_output {
 	char name[CFG_NAME_MAX];
-	int type;
+	int type; /* index of its type: cfg_output_type(type) */
 	struct cfg_where where;
-	char address[CFG_PATH_MAX]; /* udp/multicast: destination; tcp: listen address */
-	int port;
-	char interface[CFG_NAME_MAX]; /* multicast: network interface; can: CAN interface or fd:N */
-	int ttl;
-	bool mcast_loop;
-	bool gso;
-	char path[CFG_PATH_MAX]; /* unix */
-	int max_clients;
-	int client_buffer; /* bytes per stream client */
-	int decimate;	   /* publish every n-th frame */
-	/* modbus */
-	int reg_base;	     /* input register of the first avatar's block */
-	int reg_stride;	     /* registers from one avatar's block to the next */
-	int word_order;	     /* enum cfg_word_order */
-	int writable_regs;   /* holding registers clients may write, 0: writes refused */
-	double idle_timeout; /* s, 0: never */
-	/* can */
-	int base_id; /* first CAN identifier */
-	bool extended_ids;
-	bool safe;		   /* clamp, limit the speed, send nothing stale */
-	double max_speed;	   /* rad/s per joint (safe mode) */
-	char device[CFG_PATH_MAX]; /* vrpn: device name pattern, %d = avatar id */
-	bool udp;		   /* vrpn: low-latency reports over UDP when a client offers a port */
-	double client_timeout;	   /* vrpn: s a client may stall or take over its handshake */
-	double rate;		   /* vmc, vrchat, websocket: messages per second */
-	double torso;		   /* vmc: shoulder line to hips, m */
-	bool head;		   /* vrchat: send the head for alignment */
-	char www[CFG_PATH_MAX];	   /* websocket: the viewer page's directory, or auto */
-	char three[CFG_PATH_MAX];  /* websocket: libjs-three's directory */
+	int decimate; /* publish every n-th frame */
 	/* which avatars: all when n_avatars == 0 */
 	int n_avatars;
 	uint16_t *avatar_ids; /* resolved ids */
 	char avatar_list[CFG_PATH_MAX];
+	void *opt; /* the output type's options (its cfg_type's keys) */
 };
 
 /* one key=value as read, kept to print the effective configuration */
@@ -257,6 +240,20 @@ void config_print(const struct config *c, FILE *out);
 void config_print_reference(FILE *out);
 
 const char *config_where(const struct config *c, struct cfg_where w, char *buf, size_t len);
+
+/* the avatars an output carries */
+static inline int cfg_output_avatars(const struct config *c, const struct cfg_output *o)
+{
+	return o->n_avatars ? o->n_avatars : c->n_avatars;
+}
+
+/* the output is of this type (its type's name) */
+bool cfg_output_is(const struct cfg_output *o, const char *type);
+/* a source's sensor by name, or -1 */
+int cfg_sensor_lookup(const struct cfg_source *s, const char *name);
+/* the index of a type by name, or -1 (also for a type that is known but not built in) */
+int cfg_source_type_find(const char *name);
+int cfg_output_type_find(const char *name);
 
 /* the sensor roles of an avatar */
 extern const char *const cfg_sensor_roles[3];

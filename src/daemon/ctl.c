@@ -21,9 +21,6 @@
 
 static const char *const tracker_states[] = { "OK", "STALE", "FAULTY", "ENDED" };
 static const char *const sensor_states[] = { "OK", "STALE", "FAULTY" };
-static const char *const out_types[] = { "udp", "multicast", "tcp", "unix",   "modbus",
-					 "can", "vrpn",	     "vmc", "vrchat", "websocket" };
-
 void ctl_resolve_path(const char *configured, char *out, size_t len)
 {
 	const char *d;
@@ -185,7 +182,7 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 				"%s{\"name\":\"%s\",\"driver\":\"%s\",\"state\":\"%s\",\"sensors\":%d,"
 				"\"samples\":%llu,\"rate_hz\":%.2f,\"malformed\":%llu,\"faults\":%llu,\"lost\":%llu,"
 				"\"reconnects\":%llu",
-				i ? "," : "", t->name, t->drv->name,
+				i ? "," : "", t->name, t->drv->type.name,
 				tracker_states[atomic_load_explicit(&t->st.state, memory_order_relaxed) & 3],
 				t->n_sensors, (unsigned long long)ctr_get(&t->st.samples),
 				r && i < r->n_trackers ? r->trk_rate[i] : 0.0,
@@ -235,9 +232,9 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 				"%s{\"name\":\"%s\",\"type\":\"%s\",\"sent\":%llu,\"dropped\":%llu,\"errors\":%llu,"
 				"\"clients\":%llu,\"accepted\":%llu,\"refused\":%llu,\"closed\":%llu,\"gso_off\":%llu,"
 				"\"malformed\":%llu",
-				i ? "," : "", o->name, out_types[o->cfg->type],
-				(unsigned long long)ctr_get(&o->st.sent), (unsigned long long)ctr_get(&o->st.dropped),
-				(unsigned long long)ctr_get(&o->st.errors), (unsigned long long)ctr_get(&o->st.clients),
+				i ? "," : "", o->name, o->ops->type.name, (unsigned long long)ctr_get(&o->st.sent),
+				(unsigned long long)ctr_get(&o->st.dropped), (unsigned long long)ctr_get(&o->st.errors),
+				(unsigned long long)ctr_get(&o->st.clients),
 				(unsigned long long)ctr_get(&o->st.accepted),
 				(unsigned long long)ctr_get(&o->st.refused), (unsigned long long)ctr_get(&o->st.closed),
 				(unsigned long long)ctr_get(&o->st.gso_off),
@@ -285,7 +282,7 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 	for (int i = 0; i < g->n_trackers; i++) {
 		struct tracker *t = &g->trk[i];
 
-		fprintf(out, "%-16s %-8s %-7s %8.1f %10llu %9llu %7llu %7llu %6llu\n", t->name, t->drv->name,
+		fprintf(out, "%-16s %-8s %-7s %8.1f %10llu %9llu %7llu %7llu %6llu\n", t->name, t->drv->type.name,
 			tracker_states[atomic_load_explicit(&t->st.state, memory_order_relaxed) & 3],
 			r && i < r->n_trackers ? r->trk_rate[i] : 0.0, (unsigned long long)ctr_get(&t->st.samples),
 			(unsigned long long)ctr_get(&t->st.malformed), (unsigned long long)ctr_get(&t->st.faults),
@@ -317,7 +314,7 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 	for (int i = 0; i < g->n_outputs; i++) {
 		struct output *o = &g->out[i];
 
-		fprintf(out, "%-16s %-9s %10llu %9llu %7llu %8llu\n", o->name, out_types[o->cfg->type],
+		fprintf(out, "%-16s %-9s %10llu %9llu %7llu %8llu\n", o->name, o->ops->type.name,
 			(unsigned long long)ctr_get(&o->st.sent), (unsigned long long)ctr_get(&o->st.dropped),
 			(unsigned long long)ctr_get(&o->st.errors), (unsigned long long)ctr_get(&o->st.clients));
 	}

@@ -423,7 +423,7 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		 * DESCRIBE now, not a second later. Not for a Modbus client: an HMI
 		 * that connects for every poll would flood every other output.
 		 */
-		if (ctr_get(&g->out[o].st.accepted) != acc && g->out[o].cfg->type != CFG_OUT_MODBUS)
+		if (ctr_get(&g->out[o].st.accepted) != acc && !g->out[o].ops->quiet_accept)
 			describe_soon(g, now->mono_ns);
 	}
 	sent_ns = mono_ns();

@@ -13,6 +13,7 @@
 #include "config/config.h"
 #include "daemon/ctl.h"
 #include "daemon/gateway.h"
+#include "trackers/replay.h"
 #include "base/log.h"
 #include "daemon/loop.h"
 #include "daemon/notify.h"
@@ -351,7 +352,8 @@ int main(int argc, char **argv)
 		/* the configuration was valid: what failed is the system (a port in use...), worth a retry */
 		return 1;
 	}
-	recorder_log_replay_damage(&gws[cur]);
+	for (int i = 0; i < gws[cur].n_trackers; i++)
+		replay_log_damage(&gws[cur].trk[i]);
 	if (recorder_apply(&rec, &gws[cur], err, sizeof(err)))
 		pr_err("%s: the daemon runs without recording", err);
 	if (gws[cur].cfg.daemon.lock_memory && lock_memory())
@@ -421,7 +423,8 @@ int main(int argc, char **argv)
 					pr_err("reload failed, the running configuration stays: %s", err);
 					info.reload_failures++;
 				} else {
-					recorder_log_replay_damage(&gws[nxt]);
+					for (int i = 0; i < gws[nxt].n_trackers; i++)
+						replay_log_damage(&gws[nxt].trk[i]);
 					if (recorder_apply(&rec, &gws[nxt], err, sizeof(err)))
 						pr_err("%s: the daemon runs without recording", err);
 					loop_resume(loop, &gws[nxt]);

@@ -23,6 +23,7 @@
  * line and the output stays disabled: the daemon carries on without it.
  */
 #include "publish/output.h"
+#include "publish/can_out.h"
 #include "base/clock.h"
 
 #include "avatargw/wire.h"
@@ -37,6 +38,61 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+
+static const struct cfg_key can_keys[] = {
+	{ .name = "interface",
+	  .kind = CFG_STR,
+	  CFG_AT(struct can_out_opts, interface),
+	  .missing = "a CAN interface such as can0",
+	  .doc = "multicast: network interface (empty: the kernel's choice); can: CAN interface or fd:N "
+		 "(required)" },
+	{ .name = "base_id",
+	  .kind = CFG_INT,
+	  CFG_AT(struct can_out_opts, base_id),
+	  .min = 0,
+	  .max = 536870911,
+	  .def = "0x100",
+	  .doc = "CAN identifier of the first avatar's status frame; its joint frames follow (docs/CAN.md)" },
+	{ .name = "extended_ids",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct can_out_opts, extended_ids),
+	  .def = "no",
+	  .doc = "29-bit CAN identifiers instead of 11-bit" },
+	{ .name = "safe",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct can_out_opts, safe),
+	  .def = "yes",
+	  .doc = "clamp to the joint limits, limit the speed, send nothing stale, held, unreached or unknown" },
+	{ .name = "max_speed",
+	  .kind = CFG_DEG,
+	  CFG_AT(struct can_out_opts, max_speed),
+	  .min = 1,
+	  .max = 3600,
+	  .def = "90",
+	  .unit = "deg/s",
+	  .doc = "safe mode: fastest change of any joint's command" },
+};
+
+/* the identifiers of every avatar the output carries exist (8 per avatar, 5 used: docs/CAN.md) */
+static int can_out_check(const struct config *c, const void *section, const char **key, char *why, size_t len)
+{
+	const struct cfg_output *o = section;
+	const struct can_out_opts *opt = o->opt;
+	long n = cfg_output_avatars(c, o), max = opt->extended_ids ? 0x1FFFFFFFL : 0x7FFL;
+	long last = opt->base_id + 8 * (n - 1) + 4;
+
+	if (!n || last <= max)
+		return 0;
+	*key = "type";
+	snprintf(why, len, "base_id: %ld avatars need identifiers up to 0x%lX, above 0x%lX%s", n, last, max,
+		 opt->extended_ids ? "" : " (extended_ids = yes gives 29 bits)");
+	return -1;
+}
+
+static const struct can_out_opts *opts_of(const struct cfg_output *c)
+{
+	return c->opt;
+}
 
 struct can_avatar {
 	double lo[WIRE_JOINTS], hi[WIRE_JOINTS]; /* rad, from the DESCRIBE */
@@ -83,8 +139,8 @@ static int can_out_open(struct output *o, char *err, size_t errlen)
 	if (!c)
 		return -ENOMEM;
 	c->port.fd = -1;
-	snprintf(c->iface, sizeof(c->iface), "%s", cfg->interface);
-	c->id0 = (canid_t)cfg->base_id | (cfg->extended_ids ? CAN_EFF_FLAG : 0);
+	snprintf(c->iface, sizeof(c->iface), "%s", opts_of(cfg)->interface);
+	c->id0 = (canid_t)opts_of(cfg)->base_id | (opts_of(cfg)->extended_ids ? CAN_EFF_FLAG : 0);
 	c->slot = calloc((size_t)o->n_avatars + 1, sizeof(*c->slot));
 	c->av = calloc((size_t)o->n_avatars + 1, sizeof(*c->av));
 	if (!c->slot || !c->av) {
@@ -94,7 +150,7 @@ static int can_out_open(struct output *o, char *err, size_t errlen)
 	}
 	for (int i = 0; i < o->n_avatars; i++)
 		c->slot[i] = o->wants[i] ? c->n++ : -1;
-	rc = can_port_open(&c->port, cfg->interface, false, why, sizeof(why));
+	rc = can_port_open(&c->port, opts_of(cfg)->interface, false, why, sizeof(why));
 	if (rc) {
 		/* not a reason to stop the daemon: this output stays quiet, the others run */
 		c->disabled = true;
@@ -137,7 +193,7 @@ static bool make_command(struct can_out *c, struct output *o, struct can_avatar 
 		finite &= isfinite(q[j]) != 0;
 	}
 	*flags = (uint8_t)(wf->h.flags & 0x0f) | (finite ? CANCODEC_F_VALID : 0);
-	if (!o->cfg->safe)
+	if (!opts_of(o->cfg)->safe)
 		return true;
 	*flags |= CANCODEC_F_SAFE;
 	if (!finite || (wf->h.flags & (WIRE_F_STALE | WIRE_F_HELD | WIRE_F_UNREACHED)) || !a->have_limits) {
@@ -146,7 +202,8 @@ static bool make_command(struct can_out *c, struct output *o, struct can_avatar 
 			ctr_add(&c->no_limits, 1);
 		return false;
 	}
-	step = a->have_cmd ? o->cfg->max_speed * fmin((double)(now - a->last_ns) * 1e-9, a->period_s) : INFINITY;
+	step = a->have_cmd ? opts_of(o->cfg)->max_speed * fmin((double)(now - a->last_ns) * 1e-9, a->period_s)
+			   : INFINITY;
 	for (int j = 0; j < WIRE_JOINTS; j++) {
 		double t = fmin(fmax(q[j], a->lo[j]), a->hi[j]);
 
@@ -263,8 +320,8 @@ static bool can_out_adopt(struct output *o, struct output *old)
 	struct can_out *c = old->priv;
 	int n = 0;
 
-	if (!c || c->disabled || strcmp(c->iface, o->cfg->interface) ||
-	    c->id0 != ((canid_t)o->cfg->base_id | (o->cfg->extended_ids ? CAN_EFF_FLAG : 0)) ||
+	if (!c || c->disabled || strcmp(c->iface, opts_of(o->cfg)->interface) ||
+	    c->id0 != ((canid_t)opts_of(o->cfg)->base_id | (opts_of(o->cfg)->extended_ids ? CAN_EFF_FLAG : 0)) ||
 	    old->n_avatars != o->n_avatars)
 		return false;
 	for (int i = 0; i < o->n_avatars; i++) {
@@ -291,7 +348,7 @@ static void can_out_report(struct output *o, FILE *out, bool json)
 		for (const char *s = c->why; *s; s++)
 			fprintf(out, *s == '"' || *s == '\\' ? "\\%c" : "%c", *s);
 		fprintf(out, "\",\"safe\":%s,\"commands\":%llu,\"withheld\":%llu,\"no_limits\":%llu,\"limited\":%llu}",
-			o->cfg->safe ? "true" : "false",
+			opts_of(o->cfg)->safe ? "true" : "false",
 			(unsigned long long)atomic_load_explicit(&c->commands, memory_order_relaxed),
 			(unsigned long long)atomic_load_explicit(&c->withheld, memory_order_relaxed),
 			(unsigned long long)atomic_load_explicit(&c->no_limits, memory_order_relaxed),
@@ -303,13 +360,22 @@ static void can_out_report(struct output *o, FILE *out, bool json)
 		return;
 	}
 	fprintf(out, "  %s: CAN %s, safe mode %s: %llu commands, %llu withheld, %llu limited\n", o->name, c->iface,
-		o->cfg->safe ? "on" : "off",
+		opts_of(o->cfg)->safe ? "on" : "off",
 		(unsigned long long)atomic_load_explicit(&c->commands, memory_order_relaxed),
 		(unsigned long long)atomic_load_explicit(&c->withheld, memory_order_relaxed),
 		(unsigned long long)atomic_load_explicit(&c->limited, memory_order_relaxed));
 }
 
 const struct output_ops can_output_ops = {
+	.type = {
+		.name = "can",
+		.doc = "joint angles as SocketCAN frames",
+		.keys = can_keys,
+		.check = can_out_check,
+		.n_keys = CFG_N(can_keys),
+		.opt_size = sizeof(struct can_out_opts),
+		.built = true,
+	},
 	.open = can_out_open,
 	.close = can_out_close,
 	.send = can_out_send,

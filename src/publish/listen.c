@@ -11,16 +11,17 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-int out_listen_tcp(const struct cfg_output *cfg, const char *what, bool reuseport, char *err, size_t errlen)
+int out_listen_tcp(const char *name, const char *address, int port_no, const char *what, bool reuseport, char *err,
+		   size_t errlen)
 {
 	struct addrinfo hints = { .ai_socktype = SOCK_STREAM, .ai_flags = AI_NUMERICSERV | AI_PASSIVE }, *ai;
 	char port[8];
 	int fd, one = 1, rc;
 
-	snprintf(port, sizeof(port), "%d", cfg->port);
-	rc = getaddrinfo(cfg->address[0] ? cfg->address : NULL, port, &hints, &ai);
+	snprintf(port, sizeof(port), "%d", port_no);
+	rc = getaddrinfo(address[0] ? address : NULL, port, &hints, &ai);
 	if (rc) {
-		snprintf(err, errlen, "[output %s] address: %s: %s", cfg->name, cfg->address, gai_strerror(rc));
+		snprintf(err, errlen, "[output %s] address: %s: %s", name, address, gai_strerror(rc));
 		return -EINVAL;
 	}
 	fd = socket(ai->ai_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
@@ -28,9 +29,9 @@ int out_listen_tcp(const struct cfg_output *cfg, const char *what, bool reusepor
 	    (reuseport && setsockopt(fd, SOL_SOCKET, SO_REUSEPORT, &one, sizeof(one))) ||
 	    bind(fd, ai->ai_addr, ai->ai_addrlen) || listen(fd, 16)) {
 		rc = -errno;
-		snprintf(err, errlen, "[output %s]: %s on %s port %d: %s%s", cfg->name, what, cfg->address, cfg->port,
+		snprintf(err, errlen, "[output %s]: %s on %s port %d: %s%s", name, what, address, port_no,
 			 strerror(errno),
-			 errno == EACCES && cfg->port < 1024 ? " (ports below 1024 need CAP_NET_BIND_SERVICE)" : "");
+			 errno == EACCES && port_no < 1024 ? " (ports below 1024 need CAP_NET_BIND_SERVICE)" : "");
 		if (fd >= 0)
 			close(fd);
 		freeaddrinfo(ai);

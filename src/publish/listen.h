@@ -20,7 +20,8 @@
  * "Modbus server"). Returns the descriptor, or a negative errno with err
  * saying which output, where and why.
  */
-int out_listen_tcp(const struct cfg_output *cfg, const char *what, bool reuseport, char *err, size_t errlen);
+int out_listen_tcp(const char *name, const char *address, int port_no, const char *what, bool reuseport, char *err,
+		   size_t errlen);
 
 /*
  * Sends what the socket takes now of the len bytes at buf + *off, without

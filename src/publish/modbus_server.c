@@ -29,6 +29,7 @@
  * silent client holds a slot for a bounded time and never holds the thread.
  */
 #include "publish/output.h"
+#include "publish/modbus_server.h"
 #include "base/clock.h"
 #include "publish/listen.h"
 
@@ -52,6 +53,84 @@
 #include <sys/socket.h>
 #include <time.h>
 #include <unistd.h>
+
+static const struct cfg_key modbus_keys[] = {
+	{ .name = "address",
+	  .kind = CFG_STR,
+	  CFG_AT(struct modbus_out_opts, address),
+	  .def = "127.0.0.1",
+	  .doc = "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: "
+		 "listen address" },
+	{ .name = "port",
+	  .kind = CFG_INT,
+	  CFG_AT(struct modbus_out_opts, port),
+	  .min = 1,
+	  .max = 65535,
+	  .missing = "Modbus TCP's own port 502 needs CAP_NET_BIND_SERVICE; 1502 is usual otherwise",
+	  .doc = "UDP destination port or TCP listening port (modbus: required)" },
+	{ .name = "max_clients",
+	  .kind = CFG_INT,
+	  CFG_AT(struct modbus_out_opts, max_clients),
+	  .min = 1,
+	  .max = 256,
+	  .def = "8",
+	  .doc = "stream subscribers (Modbus, VRPN, WebSocket clients) at most; more are refused" },
+	{ .name = "register_base",
+	  .kind = CFG_INT,
+	  CFG_AT(struct modbus_out_opts, reg_base),
+	  .min = 0,
+	  .max = 65535,
+	  .def = "0",
+	  .doc = "input register (0-based) where the first avatar's block starts (docs/MODBUS.md)" },
+	{ .name = "register_stride",
+	  .kind = CFG_INT,
+	  CFG_AT(struct modbus_out_opts, reg_stride),
+	  .min = 66,
+	  .max = 65536,
+	  .def = "100",
+	  .doc = "registers from one avatar's block to the next's (a block uses 66)" },
+	{ .name = "word_order",
+	  .kind = CFG_ENUM,
+	  CFG_AT(struct modbus_out_opts, word_order),
+	  .def = "abcd",
+	  .enums = cfg_word_orders,
+	  .doc = "byte order of 32-bit values over two registers, A = most significant byte" },
+	{ .name = "writable_registers",
+	  .kind = CFG_INT,
+	  CFG_AT(struct modbus_out_opts, writable_regs),
+	  .min = 0,
+	  .max = 10000,
+	  .def = "0",
+	  .doc = "holding registers clients may write and read back (the daemon acts on none); 0: writes refused" },
+	{ .name = "idle_timeout",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct modbus_out_opts, idle_timeout),
+	  .min = 0,
+	  .max = 86400,
+	  .def = "60",
+	  .unit = "s",
+	  .doc = "a client that sends no request for this long is disconnected; 0: never" },
+};
+
+/* the registers of every avatar the output carries exist (a block is 66 registers: docs/MODBUS.md) */
+static int modbus_server_check(const struct config *c, const void *section, const char **key, char *why, size_t len)
+{
+	const struct cfg_output *o = section;
+	const struct modbus_out_opts *opt = o->opt;
+	long n = cfg_output_avatars(c, o), last = opt->reg_base + (long)opt->reg_stride * (n - 1) + 66 - 1;
+
+	if (!n || last <= 65535)
+		return 0;
+	*key = "type";
+	snprintf(why, len, "register_base, register_stride: %ld avatars need registers up to %ld, above 65535", n,
+		 last);
+	return -1;
+}
+
+static const struct modbus_out_opts *opts_of(const struct cfg_output *c)
+{
+	return c->opt;
+}
 
 #define MB_ADU_MAX 260		    /* MBAP header (7) + PDU (253) */
 #define MB_PARTIAL_NS 1000000000ull /* half a request may wait this long */
@@ -399,12 +478,12 @@ static void *mb_thread(void *arg)
 
 static void describe_addr(const struct cfg_output *cfg, char *buf, size_t len)
 {
-	snprintf(buf, len, "%s:%d", cfg->address, cfg->port);
+	snprintf(buf, len, "%s:%d", opts_of(cfg)->address, opts_of(cfg)->port);
 }
 
 static int listen_on(const struct cfg_output *cfg, char *err, size_t errlen)
 {
-	return out_listen_tcp(cfg, "Modbus server", true, err, errlen);
+	return out_listen_tcp(cfg->name, opts_of(cfg)->address, opts_of(cfg)->port, "Modbus server", true, err, errlen);
 }
 
 static void free_server(struct mb_server *s)
@@ -447,12 +526,12 @@ static int modbus_server_open(struct output *o, char *err, size_t errlen)
 		return -ENOMEM;
 	s->lfd = s->stop_fd = -1;
 	describe_addr(cfg, s->addr, sizeof(s->addr));
-	s->base = cfg->reg_base;
-	s->stride = cfg->reg_stride;
-	s->order = cfg->word_order;
-	s->writable = cfg->writable_regs;
-	s->max_clients = cfg->max_clients;
-	s->idle_ns = (uint64_t)(cfg->idle_timeout * 1e9);
+	s->base = opts_of(cfg)->reg_base;
+	s->stride = opts_of(cfg)->reg_stride;
+	s->order = opts_of(cfg)->word_order;
+	s->writable = opts_of(cfg)->writable_regs;
+	s->max_clients = opts_of(cfg)->max_clients;
+	s->idle_ns = (uint64_t)(opts_of(cfg)->idle_timeout * 1e9);
 	s->n_avatars = o->n_avatars;
 	s->slot = calloc((size_t)o->n_avatars + 1, sizeof(*s->slot));
 	for (int i = 0; s->slot && i < o->n_avatars; i++)
@@ -560,9 +639,10 @@ static bool modbus_server_adopt(struct output *o, struct output *old)
 	if (!s)
 		return false;
 	describe_addr(cfg, addr, sizeof(addr));
-	if (strcmp(addr, s->addr) || s->base != cfg->reg_base || s->stride != cfg->reg_stride ||
-	    s->order != cfg->word_order || s->writable != cfg->writable_regs || s->max_clients != cfg->max_clients ||
-	    s->idle_ns != (uint64_t)(cfg->idle_timeout * 1e9) || s->n_avatars != o->n_avatars)
+	if (strcmp(addr, s->addr) || s->base != opts_of(cfg)->reg_base || s->stride != opts_of(cfg)->reg_stride ||
+	    s->order != opts_of(cfg)->word_order || s->writable != opts_of(cfg)->writable_regs ||
+	    s->max_clients != opts_of(cfg)->max_clients || s->idle_ns != (uint64_t)(opts_of(cfg)->idle_timeout * 1e9) ||
+	    s->n_avatars != o->n_avatars)
 		return false;
 	for (int i = 0; i < o->n_avatars; i++) {
 		if ((s->slot[i] >= 0) != o->wants[i])
@@ -606,6 +686,16 @@ static void modbus_server_report(struct output *o, FILE *out, bool json)
 }
 
 const struct output_ops modbus_output_ops = {
+	.type = {
+		.name = "modbus",
+		.doc = "Modbus TCP server: frame, states and joint angles as input registers",
+		.keys = modbus_keys,
+		.check = modbus_server_check,
+		.n_keys = CFG_N(modbus_keys),
+		.opt_size = sizeof(struct modbus_out_opts),
+		.built = true,
+	},
+	.quiet_accept = true,
 	.open = modbus_server_open,
 	.close = modbus_server_close,
 	.send = modbus_server_send,

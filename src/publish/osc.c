@@ -24,6 +24,7 @@
  * +y with the back of the hand up at avatargw's rest posture).
  */
 #include "publish/output.h"
+#include "publish/osc.h"
 #include "base/clock.h"
 #include "publish/snapshot.h"
 
@@ -36,6 +37,87 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+
+static const struct cfg_key vmc_keys[] = {
+	{ .name = "address",
+	  .kind = CFG_STR,
+	  CFG_AT(struct osc_opts, address),
+	  .def = "127.0.0.1",
+	  .doc = "vmc, vrchat: destination host; websocket: listen address (any other address shows the viewer to "
+		 "the network)" },
+	{ .name = "port",
+	  .kind = CFG_INT,
+	  CFG_AT(struct osc_opts, port),
+	  .min = 1,
+	  .max = 65535,
+	  .def = "39539",
+	  .doc = "UDP destination port of the VMC marionette" },
+	{ .name = "rate",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct osc_opts, rate),
+	  .min = 1,
+	  .max = 240,
+	  .def = "60",
+	  .unit = "Hz",
+	  .doc = "OSC bundles per second (the newest frame each time)" },
+	{ .name = "torso",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct osc_opts, torso),
+	  .min = 0.1,
+	  .max = 1.5,
+	  .def = "0.5",
+	  .unit = "m",
+	  .doc = "shoulder line to hips: places the Hips bone below the tracked chest" },
+};
+
+static const struct cfg_key vrchat_keys[] = {
+	{ .name = "address",
+	  .kind = CFG_STR,
+	  CFG_AT(struct osc_opts, address),
+	  .def = "127.0.0.1",
+	  .doc = "vmc, vrchat: destination host; websocket: listen address (any other address shows the viewer to "
+		 "the network)" },
+	{ .name = "port",
+	  .kind = CFG_INT,
+	  CFG_AT(struct osc_opts, port),
+	  .min = 1,
+	  .max = 65535,
+	  .def = "9000",
+	  .doc = "UDP port VRChat listens on for OSC" },
+	{ .name = "rate",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct osc_opts, rate),
+	  .min = 1,
+	  .max = 240,
+	  .def = "60",
+	  .unit = "Hz",
+	  .doc = "OSC bundles per second (the newest frame each time)" },
+	{ .name = "head",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct osc_opts, head),
+	  .def = "yes",
+	  .doc = "also send the head pose (/tracking/trackers/head/*), which VRChat uses to align our space with "
+		 "its own" },
+};
+
+/* VMC and VRChat speak for one body: the output carries exactly one avatar */
+static int osc_check(const struct config *c, const void *section, const char **key, char *why, size_t len)
+{
+	const struct cfg_output *o = section;
+	int n = cfg_output_avatars(c, o);
+
+	if (n == 1)
+		return 0;
+	*key = "avatars";
+	snprintf(why, len, "avatars: a %s output carries one avatar, not %d (avatars = NAME)",
+		 cfg_output_type(o->type)->name, n);
+	return -1;
+}
+
+static const struct osc_opts *opts_of(const struct cfg_output *c)
+{
+	return c->opt;
+}
 
 struct qd {
 	double w, x, y, z;
@@ -247,7 +329,7 @@ static bool body_of(const struct wire_frame *f, double torso, struct body *b)
 /* ---- the output ---------------------------------------------------------------------- */
 
 struct osc {
-	int type;
+	bool vmc; /* the VMC protocol, else VRChat's */
 	lo_address addr;
 	struct snap snap;
 	int avatar; /* the one avatar (index) */
@@ -397,7 +479,7 @@ static void *osc_main(void *arg)
 		pthread_mutex_unlock(&s->mu);
 		e = snap_take(&s->snap, s->avatar, &fresh);
 		if (e && fresh) {
-			if (s->type == CFG_OUT_VMC)
+			if (s->vmc)
 				send_vmc(o, s, e, (double)(mono_ns() - (uint64_t)s->t0) * 1e-9);
 			else
 				send_vrchat(o, s, e);
@@ -433,10 +515,10 @@ static int osc_open(struct output *o, char *err, size_t errlen)
 
 	if (!s)
 		return -ENOMEM;
-	s->type = cfg->type;
-	s->torso = cfg->torso;
-	s->head = cfg->head;
-	s->period_ns = (uint64_t)(1e9 / cfg->rate);
+	s->vmc = cfg_output_is(cfg, "vmc");
+	s->torso = opts_of(cfg)->torso;
+	s->head = opts_of(cfg)->head;
+	s->period_ns = (uint64_t)(1e9 / opts_of(cfg)->rate);
 	s->avatar = -1;
 	for (int i = 0; i < o->n_avatars; i++)
 		if (o->wants[i]) {
@@ -453,8 +535,8 @@ static int osc_open(struct output *o, char *err, size_t errlen)
 		osc_free(s);
 		return -EINVAL;
 	}
-	snprintf(port, sizeof(port), "%d", cfg->port);
-	s->addr = lo_address_new(cfg->address, port);
+	snprintf(port, sizeof(port), "%d", opts_of(cfg)->port);
+	s->addr = lo_address_new(opts_of(cfg)->address, port);
 	if (!s->addr || snap_init(&s->snap, o->n_avatars)) {
 		snprintf(err, errlen, "[output %s]: out of memory", cfg->name);
 		osc_free(s);
@@ -476,7 +558,7 @@ static int osc_open(struct output *o, char *err, size_t errlen)
 		o->priv = NULL;
 		return -rc;
 	}
-	pthread_setname_np(s->thread, cfg->type == CFG_OUT_VMC ? "avatargw-vmc" : "avatargw-vrchat");
+	pthread_setname_np(s->thread, cfg_output_is(cfg, "vmc") ? "avatargw-vmc" : "avatargw-vrchat");
 	return 0;
 }
 
@@ -516,6 +598,15 @@ static void osc_service(struct output *o)
 }
 
 const struct output_ops vmc_output_ops = {
+	.type = {
+		.name = "vmc",
+		.doc = "the VMC protocol over OSC (VSeeFace, EVMC4U, VMC4UE)",
+		.keys = vmc_keys,
+		.check = osc_check,
+		.n_keys = CFG_N(vmc_keys),
+		.opt_size = sizeof(struct osc_opts),
+		.built = true,
+	},
 	.open = osc_open,
 	.close = osc_close,
 	.send = osc_send,
@@ -523,6 +614,15 @@ const struct output_ops vmc_output_ops = {
 };
 
 const struct output_ops vrchat_output_ops = {
+	.type = {
+		.name = "vrchat",
+		.doc = "VRChat's OSC trackers",
+		.keys = vrchat_keys,
+		.check = osc_check,
+		.n_keys = CFG_N(vrchat_keys),
+		.opt_size = sizeof(struct osc_opts),
+		.built = true,
+	},
 	.open = osc_open,
 	.close = osc_close,
 	.send = osc_send,

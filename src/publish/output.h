@@ -48,6 +48,10 @@ struct output_stats {
 struct output;
 
 struct output_ops {
+	/* its name, keys, options and checks, as the configuration sees them */
+	struct cfg_type type;
+	/* a new client asks for no burst of DESCRIBEs (Modbus: an HMI may connect for every poll) */
+	bool quiet_accept;
 	int (*open)(struct output *o, char *err, size_t errlen);
 	void (*close)(struct output *o);
 	void (*send)(struct output *o, const struct out_msg *m, int n);
@@ -75,14 +79,9 @@ struct output {
 	void *priv;
 };
 
-extern const struct output_ops udp_output_ops;
-extern const struct output_ops stream_output_ops;
-extern const struct output_ops modbus_output_ops;
-extern const struct output_ops can_output_ops;
-extern const struct output_ops vrpn_output_ops;	     /* vrpn.c */
-extern const struct output_ops vmc_output_ops;	     /* osc.c */
-extern const struct output_ops vrchat_output_ops;    /* osc.c */
-extern const struct output_ops websocket_output_ops; /* websocket.c */
+/* the table: index = cfg_output.type (outputs.c) */
+extern const struct output_ops *const outputs_table[];
+extern const int outputs_count;
 
 /* start-up: opens the transport; wants[] from the config's avatar list (ids by index) */
 /* old: an output of the configuration being replaced, whose subscribers this one may take over */

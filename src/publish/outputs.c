@@ -9,13 +9,64 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const struct output_ops *const outputs_table[] = {
-	[CFG_OUT_UDP] = &udp_output_ops,       [CFG_OUT_MULTICAST] = &udp_output_ops,
-	[CFG_OUT_TCP] = &stream_output_ops,    [CFG_OUT_UNIX] = &stream_output_ops,
-	[CFG_OUT_MODBUS] = &modbus_output_ops, [CFG_OUT_CAN] = &can_output_ops,
-	[CFG_OUT_VRPN] = &vrpn_output_ops,     [CFG_OUT_VMC] = &vmc_output_ops,
-	[CFG_OUT_VRCHAT] = &vrchat_output_ops, [CFG_OUT_WEBSOCKET] = &websocket_output_ops,
+/*
+ * Every output type, one row each. Those whose library pkg-config did not
+ * find at build time (the Makefile's HAVE_*) are left out, and the
+ * configuration says so for their type.
+ */
+#ifndef HAVE_LIBMODBUS
+#define HAVE_LIBMODBUS 1
+#endif
+#ifndef HAVE_LIBLO
+#define HAVE_LIBLO 1
+#endif
+#ifndef HAVE_LIBWEBSOCKETS
+#define HAVE_LIBWEBSOCKETS 1
+#endif
+
+extern const struct output_ops udp_output_ops, multicast_output_ops, tcp_output_ops, unix_output_ops, modbus_output_ops,
+	can_output_ops, vrpn_output_ops, vmc_output_ops, vrchat_output_ops, websocket_output_ops;
+
+const struct output_ops *const outputs_table[] = {
+	&udp_output_ops,       &multicast_output_ops, &tcp_output_ops, &unix_output_ops,
+#if HAVE_LIBMODBUS
+	&modbus_output_ops,
+#endif
+	&can_output_ops,       &vrpn_output_ops,
+#if HAVE_LIBLO
+	&vmc_output_ops,       &vrchat_output_ops,
+#endif
+#if HAVE_LIBWEBSOCKETS
+	&websocket_output_ops,
+#endif
 };
+
+const int outputs_count = (int)(sizeof(outputs_table) / sizeof(outputs_table[0]));
+
+/* types this build left out: known, so that the configuration can say why */
+static const struct cfg_type not_built[] = {
+#if !HAVE_LIBMODBUS
+	{ .name = "modbus", .doc = "Modbus TCP server (needs libmodbus)" },
+#endif
+#if !HAVE_LIBLO
+	{ .name = "vmc", .doc = "the VMC protocol over OSC (needs liblo)" },
+	{ .name = "vrchat", .doc = "VRChat's OSC trackers (needs liblo)" },
+#endif
+#if !HAVE_LIBWEBSOCKETS
+	{ .name = "websocket", .doc = "JSON frames and the browser viewer (needs libwebsockets)" },
+#endif
+	{ .name = NULL },
+};
+
+const struct cfg_type *cfg_output_type(int i)
+{
+	if (i < 0)
+		return NULL;
+	if (i < outputs_count)
+		return &outputs_table[i]->type;
+	i -= outputs_count;
+	return i < (int)(sizeof(not_built) / sizeof(not_built[0])) - 1 ? &not_built[i] : NULL;
+}
 
 int output_open(struct output *o, const struct cfg_output *cfg, const uint16_t *avatar_ids, int n_avatars,
 		struct output *old, char *err, size_t errlen)
@@ -23,8 +74,7 @@ int output_open(struct output *o, const struct cfg_output *cfg, const uint16_t *
 	int rc;
 
 	memset(o, 0, sizeof(*o));
-	if (cfg->type < 0 || (size_t)cfg->type >= sizeof(outputs_table) / sizeof(outputs_table[0]) ||
-	    !outputs_table[cfg->type]) {
+	if (cfg->type < 0 || cfg->type >= outputs_count) {
 		snprintf(err, errlen, "[output %s] type: not built into this daemon", cfg->name);
 		return -ENOSYS;
 	}

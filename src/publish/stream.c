@@ -12,6 +12,7 @@
  * the subscribers are handed to the new configuration (adopt()).
  */
 #include "publish/output.h"
+#include "publish/stream.h"
 #include "publish/listen.h"
 
 #include "avatargw/wire.h"
@@ -28,6 +29,65 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+static const struct cfg_key tcp_keys[] = {
+	{ .name = "address",
+	  .kind = CFG_STR,
+	  CFG_AT(struct stream_opts, address),
+	  .def = "127.0.0.1",
+	  .doc = "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: "
+		 "listen address" },
+	{ .name = "port",
+	  .kind = CFG_INT,
+	  CFG_AT(struct stream_opts, port),
+	  .min = 1,
+	  .max = 65535,
+	  .def = "7770",
+	  .doc = "UDP destination port or TCP listening port (modbus: required)" },
+	{ .name = "max_clients",
+	  .kind = CFG_INT,
+	  CFG_AT(struct stream_opts, max_clients),
+	  .min = 1,
+	  .max = 256,
+	  .def = "8",
+	  .doc = "stream subscribers (Modbus, VRPN, WebSocket clients) at most; more are refused" },
+	{ .name = "client_buffer",
+	  .kind = CFG_INT,
+	  CFG_AT(struct stream_opts, client_buffer),
+	  .min = 4096,
+	  .max = 16777216,
+	  .def = "65536",
+	  .unit = "bytes",
+	  .doc = "per-subscriber buffer; messages that do not fit are dropped and counted" },
+};
+
+static const struct cfg_key unix_keys[] = {
+	{ .name = "path",
+	  .kind = CFG_PATH,
+	  CFG_AT(struct stream_opts, path),
+	  .def = "/run/avatargw/stream",
+	  .doc = "Unix socket path to listen on" },
+	{ .name = "max_clients",
+	  .kind = CFG_INT,
+	  CFG_AT(struct stream_opts, max_clients),
+	  .min = 1,
+	  .max = 256,
+	  .def = "8",
+	  .doc = "stream subscribers (Modbus, VRPN, WebSocket clients) at most; more are refused" },
+	{ .name = "client_buffer",
+	  .kind = CFG_INT,
+	  CFG_AT(struct stream_opts, client_buffer),
+	  .min = 4096,
+	  .max = 16777216,
+	  .def = "65536",
+	  .unit = "bytes",
+	  .doc = "per-subscriber buffer; messages that do not fit are dropped and counted" },
+};
+
+static const struct stream_opts *opts_of(const struct cfg_output *c)
+{
+	return c->opt;
+}
+
 struct client {
 	int fd; /* -1: free slot */
 	uint8_t *buf;
@@ -36,7 +96,7 @@ struct client {
 
 struct stream {
 	int lfd;
-	int type;
+	bool is_unix;		     /* a Unix stream socket, else TCP */
 	char addr[CFG_PATH_MAX + 8]; /* what adopt() compares */
 	int max_clients;
 	size_t buf_size;
@@ -46,15 +106,15 @@ struct stream {
 
 static void describe_addr(const struct cfg_output *cfg, char *buf, size_t len)
 {
-	if (cfg->type == CFG_OUT_UNIX)
-		snprintf(buf, len, "unix:%s", cfg->path);
+	if (cfg_output_is(cfg, "unix"))
+		snprintf(buf, len, "unix:%s", opts_of(cfg)->path);
 	else
-		snprintf(buf, len, "tcp:%s:%d", cfg->address, cfg->port);
+		snprintf(buf, len, "tcp:%s:%d", opts_of(cfg)->address, opts_of(cfg)->port);
 }
 
 static int listen_tcp(const struct cfg_output *cfg, char *err, size_t errlen)
 {
-	return out_listen_tcp(cfg, "listen", false, err, errlen);
+	return out_listen_tcp(cfg->name, opts_of(cfg)->address, opts_of(cfg)->port, "listen", false, err, errlen);
 }
 
 static int listen_unix(const struct cfg_output *cfg, char *err, size_t errlen)
@@ -63,24 +123,25 @@ static int listen_unix(const struct cfg_output *cfg, char *err, size_t errlen)
 	struct stat st;
 	int fd, rc;
 
-	if (strlen(cfg->path) >= sizeof(sun.sun_path)) {
+	if (strlen(opts_of(cfg)->path) >= sizeof(sun.sun_path)) {
 		snprintf(err, errlen, "[output %s] path: longer than %zu characters", cfg->name,
 			 sizeof(sun.sun_path) - 1);
 		return -ENAMETOOLONG;
 	}
-	strcpy(sun.sun_path, cfg->path);
+	strcpy(sun.sun_path, opts_of(cfg)->path);
 	/* a socket left by a previous run is ours to replace; anything else is not */
-	if (lstat(cfg->path, &st) == 0) {
+	if (lstat(opts_of(cfg)->path, &st) == 0) {
 		if (!S_ISSOCK(st.st_mode)) {
-			snprintf(err, errlen, "[output %s] path: %s exists and is not a socket", cfg->name, cfg->path);
+			snprintf(err, errlen, "[output %s] path: %s exists and is not a socket", cfg->name,
+				 opts_of(cfg)->path);
 			return -EEXIST;
 		}
-		unlink(cfg->path);
+		unlink(opts_of(cfg)->path);
 	}
 	fd = socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
 	if (fd < 0 || bind(fd, (struct sockaddr *)&sun, sizeof(sun)) || listen(fd, 16)) {
 		rc = -errno;
-		snprintf(err, errlen, "[output %s]: listen on %s: %s", cfg->name, cfg->path, strerror(errno));
+		snprintf(err, errlen, "[output %s]: listen on %s: %s", cfg->name, opts_of(cfg)->path, strerror(errno));
 		if (fd >= 0)
 			close(fd);
 		return rc;
@@ -95,10 +156,10 @@ static int stream_open(struct output *o, char *err, size_t errlen)
 
 	if (!s)
 		return -ENOMEM;
-	s->type = cfg->type;
+	s->is_unix = cfg_output_is(cfg, "unix");
 	describe_addr(cfg, s->addr, sizeof(s->addr));
-	s->max_clients = cfg->max_clients;
-	s->buf_size = (size_t)cfg->client_buffer;
+	s->max_clients = opts_of(cfg)->max_clients;
+	s->buf_size = (size_t)opts_of(cfg)->client_buffer;
 	s->cl = calloc((size_t)s->max_clients, sizeof(*s->cl));
 	s->pool = malloc((size_t)s->max_clients * s->buf_size);
 	if (!s->cl || !s->pool) {
@@ -111,7 +172,7 @@ static int stream_open(struct output *o, char *err, size_t errlen)
 		s->cl[i].fd = -1;
 		s->cl[i].buf = s->pool + (size_t)i * s->buf_size;
 	}
-	s->lfd = cfg->type == CFG_OUT_UNIX ? listen_unix(cfg, err, errlen) : listen_tcp(cfg, err, errlen);
+	s->lfd = cfg_output_is(cfg, "unix") ? listen_unix(cfg, err, errlen) : listen_tcp(cfg, err, errlen);
 	if (s->lfd < 0) {
 		int rc = s->lfd;
 
@@ -144,8 +205,8 @@ static void stream_close(struct output *o)
 		if (s->cl[i].fd >= 0)
 			close(s->cl[i].fd);
 	close(s->lfd);
-	if (s->type == CFG_OUT_UNIX)
-		unlink(o->cfg->path);
+	if (s->is_unix)
+		unlink(opts_of(o->cfg)->path);
 	free(s->cl);
 	free(s->pool);
 	free(s);
@@ -209,7 +270,7 @@ static void stream_service(struct output *o)
 			ctr_add(&o->st.refused, 1);
 			continue;
 		}
-		if (s->type == CFG_OUT_TCP)
+		if (!s->is_unix)
 			setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
 		{
 			/* a small kernel queue: a slow reader gets recent frames, not seconds-old ones */
@@ -243,8 +304,8 @@ static bool stream_adopt(struct output *o, struct output *old)
 	if (!s)
 		return false;
 	describe_addr(o->cfg, addr, sizeof(addr));
-	if (strcmp(addr, s->addr) || s->max_clients != o->cfg->max_clients ||
-	    s->buf_size != (size_t)o->cfg->client_buffer)
+	if (strcmp(addr, s->addr) || s->max_clients != opts_of(o->cfg)->max_clients ||
+	    s->buf_size != (size_t)opts_of(o->cfg)->client_buffer)
 		return false;
 	o->priv = s;
 	old->priv = NULL;
@@ -253,7 +314,31 @@ static bool stream_adopt(struct output *o, struct output *old)
 	return true;
 }
 
-const struct output_ops stream_output_ops = {
+const struct output_ops tcp_output_ops = {
+	.type = {
+		.name = "tcp",
+		.doc = "TCP server, each message after a u32 length",
+		.keys = tcp_keys,
+		.n_keys = CFG_N(tcp_keys),
+		.opt_size = sizeof(struct stream_opts),
+		.built = true,
+	},
+	.open = stream_open,
+	.close = stream_close,
+	.send = stream_send,
+	.service = stream_service,
+	.adopt = stream_adopt,
+};
+
+const struct output_ops unix_output_ops = {
+	.type = {
+		.name = "unix",
+		.doc = "Unix stream socket server, each message after a u32 length",
+		.keys = unix_keys,
+		.n_keys = CFG_N(unix_keys),
+		.opt_size = sizeof(struct stream_opts),
+		.built = true,
+	},
 	.open = stream_open,
 	.close = stream_close,
 	.send = stream_send,

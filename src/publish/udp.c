@@ -17,6 +17,7 @@
  * good at the first refusal, and the messages go one per datagram.
  */
 #include "publish/output.h"
+#include "publish/udp.h"
 
 #include "avatargw/wire.h"
 
@@ -31,6 +32,73 @@
 #include <netinet/udp.h>
 #include <sys/socket.h>
 #include <unistd.h>
+
+static const struct cfg_key udp_keys[] = {
+	{ .name = "address",
+	  .kind = CFG_STR,
+	  CFG_AT(struct udp_opts, address),
+	  .def = "127.0.0.1",
+	  .doc = "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: "
+		 "listen address" },
+	{ .name = "port",
+	  .kind = CFG_INT,
+	  CFG_AT(struct udp_opts, port),
+	  .min = 1,
+	  .max = 65535,
+	  .def = "7770",
+	  .doc = "UDP destination port or TCP listening port (modbus: required)" },
+	{ .name = "gso",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct udp_opts, gso),
+	  .def = "yes",
+	  .doc = "send runs of equal-length messages as one buffer the kernel cuts into datagrams (UDP_SEGMENT); "
+		 "off by itself where refused" },
+};
+
+static const struct cfg_key multicast_keys[] = {
+	{ .name = "address",
+	  .kind = CFG_STR,
+	  CFG_AT(struct udp_opts, address),
+	  .missing = "a multicast group",
+	  .doc = "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: "
+		 "listen address" },
+	{ .name = "port",
+	  .kind = CFG_INT,
+	  CFG_AT(struct udp_opts, port),
+	  .min = 1,
+	  .max = 65535,
+	  .def = "7770",
+	  .doc = "UDP destination port or TCP listening port (modbus: required)" },
+	{ .name = "interface",
+	  .kind = CFG_STR,
+	  CFG_AT(struct udp_opts, interface),
+	  .def = "",
+	  .doc = "multicast: network interface (empty: the kernel's choice); can: CAN interface or fd:N "
+		 "(required)" },
+	{ .name = "ttl",
+	  .kind = CFG_INT,
+	  CFG_AT(struct udp_opts, ttl),
+	  .min = 0,
+	  .max = 255,
+	  .def = "1",
+	  .doc = "multicast hop limit" },
+	{ .name = "loopback",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct udp_opts, mcast_loop),
+	  .def = "yes",
+	  .doc = "deliver multicast to listeners on this host too" },
+	{ .name = "gso",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct udp_opts, gso),
+	  .def = "yes",
+	  .doc = "send runs of equal-length messages as one buffer the kernel cuts into datagrams (UDP_SEGMENT); "
+		 "off by itself where refused" },
+};
+
+static const struct udp_opts *opts_of(const struct cfg_output *c)
+{
+	return c->opt;
+}
 
 #ifndef UDP_SEGMENT
 #define UDP_SEGMENT 103
@@ -69,13 +137,13 @@ static bool is_multicast(const struct sockaddr *sa)
 
 static int set_multicast(struct udp *u, const struct cfg_output *cfg, char *err, size_t errlen)
 {
-	int ttl = cfg->ttl, loop = cfg->mcast_loop;
+	int ttl = opts_of(cfg)->ttl, loop = opts_of(cfg)->mcast_loop;
 	unsigned ifindex = 0;
 
-	if (cfg->interface[0]) {
-		ifindex = if_nametoindex(cfg->interface);
+	if (opts_of(cfg)->interface[0]) {
+		ifindex = if_nametoindex(opts_of(cfg)->interface);
 		if (!ifindex) {
-			snprintf(err, errlen, "[output %s] interface: %s: %s", cfg->name, cfg->interface,
+			snprintf(err, errlen, "[output %s] interface: %s: %s", cfg->name, opts_of(cfg)->interface,
 				 strerror(errno));
 			return -ENODEV;
 		}
@@ -113,10 +181,11 @@ static int udp_open(struct output *o, char *err, size_t errlen)
 	struct udp *u;
 	int rc;
 
-	snprintf(port, sizeof(port), "%d", cfg->port);
-	rc = getaddrinfo(cfg->address, port, &hints, &ai);
+	snprintf(port, sizeof(port), "%d", opts_of(cfg)->port);
+	rc = getaddrinfo(opts_of(cfg)->address, port, &hints, &ai);
 	if (rc) {
-		snprintf(err, errlen, "[output %s] address: %s: %s", cfg->name, cfg->address, gai_strerror(rc));
+		snprintf(err, errlen, "[output %s] address: %s: %s", cfg->name, opts_of(cfg)->address,
+			 gai_strerror(rc));
 		return -EINVAL;
 	}
 	u = calloc(1, sizeof(*u));
@@ -127,10 +196,10 @@ static int udp_open(struct output *o, char *err, size_t errlen)
 	memcpy(&u->dst, ai->ai_addr, ai->ai_addrlen);
 	u->dst_len = ai->ai_addrlen;
 	freeaddrinfo(ai);
-	if ((cfg->type == CFG_OUT_MULTICAST) != is_multicast((struct sockaddr *)&u->dst)) {
+	if ((cfg_output_is(cfg, "multicast")) != is_multicast((struct sockaddr *)&u->dst)) {
 		snprintf(err, errlen, "[output %s] address: %s is %sa multicast address: use type = %s", cfg->name,
-			 cfg->address, cfg->type == CFG_OUT_MULTICAST ? "not " : "",
-			 cfg->type == CFG_OUT_MULTICAST ? "udp" : "multicast");
+			 opts_of(cfg)->address, cfg_output_is(cfg, "multicast") ? "not " : "",
+			 cfg_output_is(cfg, "multicast") ? "udp" : "multicast");
 		free(u);
 		return -EINVAL;
 	}
@@ -140,7 +209,7 @@ static int udp_open(struct output *o, char *err, size_t errlen)
 		free(u);
 		return -errno;
 	}
-	if (cfg->type == CFG_OUT_MULTICAST && (rc = set_multicast(u, cfg, err, errlen))) {
+	if (cfg_output_is(cfg, "multicast") && (rc = set_multicast(u, cfg, err, errlen))) {
 		close(u->fd);
 		free(u);
 		return rc;
@@ -169,7 +238,7 @@ static int udp_open(struct output *o, char *err, size_t errlen)
 		c->cmsg_type = UDP_SEGMENT;
 		c->cmsg_len = CMSG_LEN(sizeof(uint16_t));
 	}
-	u->gso = cfg->gso;
+	u->gso = opts_of(cfg)->gso;
 	o->priv = u;
 	return 0;
 }
@@ -287,6 +356,29 @@ static void udp_service(struct output *o)
 }
 
 const struct output_ops udp_output_ops = {
+	.type = {
+		.name = "udp",
+		.doc = "UDP datagrams to one address (protocol v1)",
+		.keys = udp_keys,
+		.n_keys = CFG_N(udp_keys),
+		.opt_size = sizeof(struct udp_opts),
+		.built = true,
+	},
+	.open = udp_open,
+	.close = udp_close,
+	.send = udp_send,
+	.service = udp_service,
+};
+
+const struct output_ops multicast_output_ops = {
+	.type = {
+		.name = "multicast",
+		.doc = "UDP datagrams to a multicast group (a CAVE cluster)",
+		.keys = multicast_keys,
+		.n_keys = CFG_N(multicast_keys),
+		.opt_size = sizeof(struct udp_opts),
+		.built = true,
+	},
 	.open = udp_open,
 	.close = udp_close,
 	.send = udp_send,

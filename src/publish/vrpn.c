@@ -29,6 +29,7 @@
  * go again once there is room, so a client never misses a release.
  */
 #include "publish/output.h"
+#include "publish/vrpn.h"
 #include "base/clock.h"
 #include "publish/listen.h"
 
@@ -49,6 +50,62 @@
 #include <sys/socket.h>
 #include <time.h>
 #include <unistd.h>
+
+static const struct cfg_key vrpn_keys[] = {
+	{ .name = "address",
+	  .kind = CFG_STR,
+	  CFG_AT(struct vrpn_opts, address),
+	  .def = "0.0.0.0",
+	  .doc = "listen address for TCP connections and UDP connection requests (0.0.0.0: every IPv4 interface, "
+		 "::: every interface)" },
+	{ .name = "port",
+	  .kind = CFG_INT,
+	  CFG_AT(struct vrpn_opts, port),
+	  .min = 1,
+	  .max = 65535,
+	  .def = "3883",
+	  .doc = "TCP and UDP port of the VRPN server (clients name it as NAME@host:port when it is not 3883)" },
+	{ .name = "max_clients",
+	  .kind = CFG_INT,
+	  CFG_AT(struct vrpn_opts, max_clients),
+	  .min = 1,
+	  .max = 256,
+	  .def = "8",
+	  .doc = "stream subscribers (Modbus, VRPN, WebSocket clients) at most; more are refused" },
+	{ .name = "client_buffer",
+	  .kind = CFG_INT,
+	  CFG_AT(struct vrpn_opts, client_buffer),
+	  .min = 4096,
+	  .max = 16777216,
+	  .def = "65536",
+	  .unit = "bytes",
+	  .doc = "per-subscriber buffer; messages that do not fit are dropped and counted" },
+	{ .name = "device",
+	  .kind = CFG_STR,
+	  CFG_AT(struct vrpn_opts, device),
+	  .def = "Avatar%d",
+	  .doc = "VRPN device name of each avatar, %d = its id: clients open Avatar0@host (tracker, analog and "
+		 "button)" },
+	{ .name = "udp",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct vrpn_opts, udp),
+	  .def = "yes",
+	  .doc = "tracker and analog reports over UDP to clients that offer a UDP port (VRPN's low-latency "
+		 "class); no: all over TCP" },
+	{ .name = "client_timeout",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct vrpn_opts, client_timeout),
+	  .min = 0.1,
+	  .max = 3600,
+	  .def = "5",
+	  .unit = "s",
+	  .doc = "a client that has not finished its handshake, or whose buffer stays full, this long is dropped" },
+};
+
+static const struct vrpn_opts *opts_of(const struct cfg_output *c)
+{
+	return c->opt;
+}
 
 /* the protocol (facts from VRPN's vrpn_Connection.[Ch], vrpn_Tracker.C, vrpn_Analog.C, vrpn_Button.C) */
 #define VRPN_MAGIC "vrpn: ver. 07.35" /* 16 bytes; peers compare up to the last '.' */
@@ -329,8 +386,8 @@ static int map_build(struct vmap *m, const struct output *o, char *err, size_t e
 	}
 	for (int i = 0; i < m->n; i++) {
 		m->wants[i] = o->wants[i];
-		if (device_name(o->cfg->device, o->ids[i], m->name[i], VRPN_DEVICE_MAX + 1, &why)) {
-			snprintf(err, errlen, "[output %s] device: '%s': %s", o->name, o->cfg->device, why);
+		if (device_name(opts_of(o->cfg)->device, o->ids[i], m->name[i], VRPN_DEVICE_MAX + 1, &why)) {
+			snprintf(err, errlen, "[output %s] device: '%s': %s", o->name, opts_of(o->cfg)->device, why);
 			map_free(m);
 			return -EINVAL;
 		}
@@ -634,11 +691,12 @@ static int vrpn_listen(struct vrpn *v, const struct cfg_output *cfg, char *err, 
 	char port[8];
 	int one = 1, rc;
 
-	snprintf(port, sizeof(port), "%d", cfg->port);
+	snprintf(port, sizeof(port), "%d", opts_of(cfg)->port);
 	hints.ai_socktype = SOCK_STREAM;
-	rc = getaddrinfo(cfg->address[0] ? cfg->address : NULL, port, &hints, &ai);
+	rc = getaddrinfo(opts_of(cfg)->address[0] ? opts_of(cfg)->address : NULL, port, &hints, &ai);
 	if (rc) {
-		snprintf(err, errlen, "[output %s] address: %s: %s", cfg->name, cfg->address, gai_strerror(rc));
+		snprintf(err, errlen, "[output %s] address: %s: %s", cfg->name, opts_of(cfg)->address,
+			 gai_strerror(rc));
 		return -EINVAL;
 	}
 	v->family = ai->ai_family;
@@ -649,7 +707,7 @@ static int vrpn_listen(struct vrpn *v, const struct cfg_output *cfg, char *err, 
 	    bind(v->ufd, ai->ai_addr, ai->ai_addrlen)) {
 		rc = -errno;
 		snprintf(err, errlen, "[output %s]: VRPN server on %s port %d (TCP and UDP): %s", cfg->name,
-			 cfg->address, cfg->port, strerror(errno));
+			 opts_of(cfg)->address, opts_of(cfg)->port, strerror(errno));
 		freeaddrinfo(ai);
 		return rc;
 	}
@@ -675,8 +733,8 @@ static void vrpn_free(struct vrpn *v)
 
 static void describe_key(const struct cfg_output *cfg, char *buf, size_t len)
 {
-	snprintf(buf, len, "%s|%d|%d|%d|%d|%.9g", cfg->address, cfg->port, cfg->udp, cfg->max_clients,
-		 cfg->client_buffer, cfg->client_timeout);
+	snprintf(buf, len, "%s|%d|%d|%d|%d|%.9g", opts_of(cfg)->address, opts_of(cfg)->port, opts_of(cfg)->udp,
+		 opts_of(cfg)->max_clients, opts_of(cfg)->client_buffer, opts_of(cfg)->client_timeout);
 }
 
 static int vrpn_open(struct output *o, char *err, size_t errlen)
@@ -688,10 +746,10 @@ static int vrpn_open(struct output *o, char *err, size_t errlen)
 	if (!v)
 		return -ENOMEM;
 	v->lfd = v->ufd = -1;
-	v->max_clients = cfg->max_clients;
-	v->buf_size = (size_t)cfg->client_buffer;
-	v->udp = cfg->udp;
-	v->timeout_ns = (uint64_t)(cfg->client_timeout * 1e9);
+	v->max_clients = opts_of(cfg)->max_clients;
+	v->buf_size = (size_t)opts_of(cfg)->client_buffer;
+	v->udp = opts_of(cfg)->udp;
+	v->timeout_ns = (uint64_t)(opts_of(cfg)->client_timeout * 1e9);
 	describe_key(cfg, v->key, sizeof(v->key));
 	v->cl = calloc((size_t)v->max_clients, sizeof(*v->cl));
 	v->pool = malloc((size_t)v->max_clients * v->buf_size);
@@ -1032,6 +1090,14 @@ static void vrpn_send(struct output *o, const struct out_msg *msgs, int n)
 }
 
 const struct output_ops vrpn_output_ops = {
+	.type = {
+		.name = "vrpn",
+		.doc = "VRPN server: a tracker, an analog and buttons per avatar",
+		.keys = vrpn_keys,
+		.n_keys = CFG_N(vrpn_keys),
+		.opt_size = sizeof(struct vrpn_opts),
+		.built = true,
+	},
 	.open = vrpn_open,
 	.close = vrpn_close,
 	.send = vrpn_send,

@@ -20,6 +20,7 @@
  * use. The thread's counters go to the output whose snapshot it reads.
  */
 #include "publish/output.h"
+#include "publish/websocket.h"
 #include "base/clock.h"
 #include "publish/snapshot.h"
 
@@ -38,6 +39,53 @@
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
+
+static const struct cfg_key websocket_keys[] = {
+	{ .name = "address",
+	  .kind = CFG_STR,
+	  CFG_AT(struct websocket_opts, address),
+	  .def = "127.0.0.1",
+	  .doc = "vmc, vrchat: destination host; websocket: listen address (any other address shows the viewer to "
+		 "the network)" },
+	{ .name = "port",
+	  .kind = CFG_INT,
+	  CFG_AT(struct websocket_opts, port),
+	  .min = 1,
+	  .max = 65535,
+	  .def = "7780",
+	  .doc = "TCP port of the viewer page (HTTP) and its WebSocket" },
+	{ .name = "max_clients",
+	  .kind = CFG_INT,
+	  CFG_AT(struct websocket_opts, max_clients),
+	  .min = 1,
+	  .max = 256,
+	  .def = "8",
+	  .doc = "stream subscribers (Modbus, VRPN, WebSocket clients) at most; more are refused" },
+	{ .name = "rate",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct websocket_opts, rate),
+	  .min = 1,
+	  .max = 60,
+	  .def = "30",
+	  .unit = "Hz",
+	  .doc = "JSON frames per second to each browser (the newest frame of each avatar each time)" },
+	{ .name = "www",
+	  .kind = CFG_PATH,
+	  CFG_AT(struct websocket_opts, www),
+	  .def = "auto",
+	  .doc = "directory of the viewer page; auto = $AVATARGW_WWW, else ../share/avatargw/www or ../www beside "
+		 "the program" },
+	{ .name = "three",
+	  .kind = CFG_PATH,
+	  CFG_AT(struct websocket_opts, three),
+	  .def = "/usr/share/javascript/three",
+	  .doc = "directory of three.js (Debian's libjs-three), served as /three/" },
+};
+
+static const struct websocket_opts *opts_of(const struct cfg_output *c)
+{
+	return c->opt;
+}
 
 #define WS_PROTOCOL "avatargw-json"
 #define WS_AVATAR_JSON 4096 /* bytes of one avatar's record, at most */
@@ -465,8 +513,8 @@ static void srv_free(struct ws_srv *w)
 
 static void describe_key(const struct cfg_output *cfg, char *buf, size_t len)
 {
-	snprintf(buf, len, "%s|%d|%d|%.9g|%s|%s", cfg->address, cfg->port, cfg->max_clients, cfg->rate, cfg->www,
-		 cfg->three);
+	snprintf(buf, len, "%s|%d|%d|%.9g|%s|%s", opts_of(cfg)->address, opts_of(cfg)->port, opts_of(cfg)->max_clients,
+		 opts_of(cfg)->rate, opts_of(cfg)->www, opts_of(cfg)->three);
 }
 
 static int ws_open(struct output *o, char *err, size_t errlen)
@@ -481,16 +529,16 @@ static int ws_open(struct output *o, char *err, size_t errlen)
 	pthread_mutex_init(&w->mu, NULL);
 	pthread_cond_init(&w->started_cv, NULL);
 	describe_key(cfg, w->key, sizeof(w->key));
-	snprintf(w->address, sizeof(w->address), "%s", cfg->address);
-	w->port = cfg->port;
-	w->max_clients = cfg->max_clients;
-	w->period_us = (uint64_t)(1e6 / cfg->rate);
-	if (find_www(cfg->www, w->www, sizeof(w->www), tried, sizeof(tried))) {
+	snprintf(w->address, sizeof(w->address), "%s", opts_of(cfg)->address);
+	w->port = opts_of(cfg)->port;
+	w->max_clients = opts_of(cfg)->max_clients;
+	w->period_us = (uint64_t)(1e6 / opts_of(cfg)->rate);
+	if (find_www(opts_of(cfg)->www, w->www, sizeof(w->www), tried, sizeof(tried))) {
 		snprintf(err, errlen, "[output %s] www: no viewer page (index.html) in %s", cfg->name, tried);
 		srv_free(w);
 		return -ENOENT;
 	}
-	snprintf(w->three, sizeof(w->three), "%s", cfg->three);
+	snprintf(w->three, sizeof(w->three), "%s", opts_of(cfg)->three);
 	if (!has_file(w->three, "build/three.module.js")) {
 		snprintf(err, errlen,
 			 "[output %s] three: no build/three.module.js in %s (install Debian's libjs-three)", cfg->name,
@@ -619,6 +667,14 @@ static void ws_service(struct output *o)
 }
 
 const struct output_ops websocket_output_ops = {
+	.type = {
+		.name = "websocket",
+		.doc = "JSON frames and the browser viewer (HTTP and WebSocket)",
+		.keys = websocket_keys,
+		.n_keys = CFG_N(websocket_keys),
+		.opt_size = sizeof(struct websocket_opts),
+		.built = true,
+	},
 	.open = ws_open,
 	.close = ws_close,
 	.send = ws_send,

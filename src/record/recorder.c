@@ -531,10 +531,10 @@ static size_t session_payload(struct gateway *g, uint8_t *buf, size_t cap)
 		const struct tracker *t = &g->trk[i];
 
 		recfile_w_str(&w, t->name);
-		recfile_w_str(&w, t->drv->name);
+		recfile_w_str(&w, t->drv->type.name);
 		recfile_w_u32(&w, (uint32_t)t->n_sensors);
 		for (int k = 0; k < t->n_sensors; k++) {
-			t->drv->sensor_name(t->cfg, k, name, sizeof(name));
+			t->drv->type.sensor_name(t->cfg, k, name, sizeof(name));
 			recfile_w_str(&w, name);
 		}
 		for (int k = 0; k < 3; k++)
@@ -700,25 +700,4 @@ int recorder_apply(struct recorder **rp, struct gateway *g, char *err, size_t er
 			return rc;
 	}
 	return recorder_attach(*rp, g, err, errlen);
-}
-
-void recorder_log_replay_damage(struct gateway *g)
-{
-	for (int i = 0; i < g->n_trackers; i++) {
-		struct tracker *t = &g->trk[i];
-		struct recfile_damage d;
-		size_t k;
-
-		if (t->drv != &replay_driver)
-			continue;
-		for (k = 0; replay_damage(t, k, &d) == 0; k++) {
-			if (k == 20) {
-				pr_warning("source %s: more damaged regions not listed", t->name);
-				break;
-			}
-			pr_warning("source %s: %s: %s at bytes %zu..%zu (%zu bytes) skipped%s", t->name, t->cfg->file,
-				   d.truncated ? "cut-off record" : "damaged region", d.off, d.off + d.len, d.len,
-				   d.truncated ? "" : ", replay resumes at the next good record");
-		}
-	}
 }

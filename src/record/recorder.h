@@ -81,7 +81,4 @@ int recorder_apply(struct recorder **rp, struct gateway *g, char *err, size_t er
 /* control thread, once a second: logs what changed (new file, drops, errors) */
 void recorder_log(struct recorder *r);
 
-/* logs (control thread) what the replay sources of g found damaged in their recordings */
-void recorder_log_replay_damage(struct gateway *g);
-
 #endif /* AGW_RECORDER_H */

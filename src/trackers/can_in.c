@@ -19,6 +19,7 @@
  * tries again.
  */
 #include "trackers/tracker.h"
+#include "trackers/can_in.h"
 
 #include "base/log.h"
 #include "wire/can_port.h"
@@ -29,6 +30,68 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+static const char *const e_quat[] = { "wxyz", "xyzw", NULL };
+
+static const struct cfg_key can_keys[] = {
+	{ .name = "sensors",
+	  .kind = CFG_INT,
+	  CFG_AT(struct can_in_opts, sensors),
+	  .min = 1,
+	  .max = 16,
+	  .def = "1",
+	  .doc = "poses the device reports; they are sensors pose0, pose1, ..." },
+	{ .name = "position_scale",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct can_in_opts, pos_scale),
+	  .min = 1e-9,
+	  .max = 1e3,
+	  .def = "0.001",
+	  .unit = "m",
+	  .doc = "metres per count of a position value (0.0001 for 0.1 mm)" },
+	{ .name = "interface",
+	  .kind = CFG_STR,
+	  CFG_AT(struct can_in_opts, interface),
+	  .doc = "SocketCAN interface (can0), or fd:N for an inherited descriptor (required)" },
+	{ .name = "orientation_id",
+	  .kind = CFG_INT,
+	  CFG_AT(struct can_in_opts, ori_id),
+	  .min = 0,
+	  .max = 536870911,
+	  .def = "0x200",
+	  .doc = "CAN identifier of sensor 0's orientation frame; sensor k uses orientation_id + k" },
+	{ .name = "position_id",
+	  .kind = CFG_INT,
+	  CFG_AT(struct can_in_opts, pos_id),
+	  .min = -1,
+	  .max = 536870911,
+	  .def = "0x280",
+	  .doc = "CAN identifier of sensor 0's position frame; sensor k uses position_id + k; -1: orientation "
+		 "only" },
+	{ .name = "quaternion_scale",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct can_in_opts, quat_scale),
+	  .min = 1,
+	  .max = 1e9,
+	  .def = "32768",
+	  .doc = "the count that stands for 1.0 in a quaternion component (16384 for a BNO055)" },
+	{ .name = "quaternion_order",
+	  .kind = CFG_ENUM,
+	  CFG_AT(struct can_in_opts, quat_order),
+	  .def = "wxyz",
+	  .enums = e_quat,
+	  .doc = "order of the four components in the orientation frame" },
+	{ .name = "extended_ids",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct can_in_opts, extended_ids),
+	  .def = "no",
+	  .doc = "29-bit CAN identifiers instead of 11-bit" },
+};
+
+static const struct can_in_opts *opts_of(const struct cfg_source *c)
+{
+	return c->opt;
+}
 
 #define CAN_IN_BUDGET 1024 /* frames read per cycle at most */
 
@@ -47,7 +110,7 @@ struct can_in {
 
 static int can_in_sensor_count(const struct cfg_source *cfg)
 {
-	return cfg->sensors;
+	return opts_of(cfg)->sensors;
 }
 
 static void can_in_sensor_name(const struct cfg_source *cfg, int i, char *buf, size_t len)
@@ -56,12 +119,15 @@ static void can_in_sensor_name(const struct cfg_source *cfg, int i, char *buf, s
 	snprintf(buf, len, "pose%d", i);
 }
 
-static int can_in_check(const struct cfg_source *cfg, char *err, size_t errlen)
+static int can_in_check(const struct config *c __attribute__((unused)), const void *section,
+			const char **key __attribute__((unused)), char *err, size_t errlen)
 {
-	long max = cfg->extended_ids ? CAN_EFF_MASK : CAN_SFF_MASK;
-	long o0 = cfg->ori_id, o1 = o0 + cfg->sensors - 1, p0 = cfg->pos_id, p1 = p0 + cfg->sensors - 1;
+	const struct cfg_source *cfg = section;
+	long max = opts_of(cfg)->extended_ids ? CAN_EFF_MASK : CAN_SFF_MASK;
+	long o0 = opts_of(cfg)->ori_id, o1 = o0 + opts_of(cfg)->sensors - 1, p0 = opts_of(cfg)->pos_id,
+	     p1 = p0 + opts_of(cfg)->sensors - 1;
 
-	if (!cfg->interface[0]) {
+	if (!opts_of(cfg)->interface[0]) {
 		snprintf(err, errlen, "interface: missing (a CAN interface such as can0)");
 		return -1;
 	}
@@ -69,7 +135,7 @@ static int can_in_check(const struct cfg_source *cfg, char *err, size_t errlen)
 		snprintf(err, errlen,
 			 "orientation_id, position_id: %d sensors need identifiers up to 0x%lX, above "
 			 "0x%lX (set extended_ids = yes for 29-bit identifiers)",
-			 cfg->sensors, o1 > p1 ? o1 : p1, max);
+			 opts_of(cfg)->sensors, o1 > p1 ? o1 : p1, max);
 		return -1;
 	}
 	if (p0 >= 0 && o0 <= p1 && p0 <= o1) {
@@ -96,8 +162,8 @@ static int can_in_open(struct tracker *t, char *err, size_t errlen)
 {
 	const struct cfg_source *cfg = t->cfg;
 	struct can_in *c = calloc(1, sizeof(*c));
-	canid_t eff = cfg->extended_ids ? CAN_EFF_FLAG : 0;
-	size_t n = (size_t)cfg->sensors;
+	canid_t eff = opts_of(cfg)->extended_ids ? CAN_EFF_FLAG : 0;
+	size_t n = (size_t)opts_of(cfg)->sensors;
 	char why[160];
 
 	if (!c)
@@ -113,14 +179,14 @@ static int can_in_open(struct tracker *t, char *err, size_t errlen)
 		return -ENOMEM;
 	}
 	c->map = (struct cancodec_sensor_map){
-		.ori_id = (canid_t)cfg->ori_id | eff,
-		.pos_id = cfg->pos_id < 0 ? CANCODEC_NO_ID : (canid_t)cfg->pos_id | eff,
-		.n = cfg->sensors,
-		.quat_scale = cfg->quat_scale,
-		.xyzw = cfg->quat_order == CFG_QUAT_XYZW,
-		.pos_scale = cfg->pos_scale,
+		.ori_id = (canid_t)opts_of(cfg)->ori_id | eff,
+		.pos_id = opts_of(cfg)->pos_id < 0 ? CANCODEC_NO_ID : (canid_t)opts_of(cfg)->pos_id | eff,
+		.n = opts_of(cfg)->sensors,
+		.quat_scale = opts_of(cfg)->quat_scale,
+		.xyzw = opts_of(cfg)->quat_order == CFG_QUAT_XYZW,
+		.pos_scale = opts_of(cfg)->pos_scale,
 	};
-	if (can_port_open(&c->port, cfg->interface, true, why, sizeof(why))) {
+	if (can_port_open(&c->port, opts_of(cfg)->interface, true, why, sizeof(why))) {
 		c->disabled = true;
 		snprintf(c->why, sizeof(c->why), "%s", why);
 		pr_warning("source %s: %s: CAN source disabled (its sensors are missing), the daemon carries on",
@@ -219,7 +285,7 @@ static void can_in_report(struct tracker *t, FILE *out, bool json)
 	int e = atomic_load_explicit(&c->last_errno, memory_order_relaxed);
 
 	if (json) {
-		fprintf(out, ",\"can\":{\"interface\":\"%s\",\"state\":\"%s\",\"why\":\"", t->cfg->interface,
+		fprintf(out, ",\"can\":{\"interface\":\"%s\",\"state\":\"%s\",\"why\":\"", opts_of(t->cfg)->interface,
 			c->disabled ? "disabled" : "open");
 		for (const char *s = c->disabled ? c->why : e ? strerror(e) : ""; *s; s++)
 			fprintf(out, *s == '"' || *s == '\\' ? "\\%c" : "%c", *s);
@@ -233,17 +299,23 @@ static void can_in_report(struct tracker *t, FILE *out, bool json)
 		return;
 	}
 	fprintf(out, "  %s: CAN %s: %llu frames, %llu of other identifiers, %llu of a wrong length, %llu bad values\n",
-		t->name, t->cfg->interface, (unsigned long long)ctr_get(&c->frames),
+		t->name, opts_of(t->cfg)->interface, (unsigned long long)ctr_get(&c->frames),
 		(unsigned long long)ctr_get(&c->unknown_id), (unsigned long long)ctr_get(&c->bad_length),
 		(unsigned long long)ctr_get(&c->bad_value));
 }
 
 const struct tracker_driver can_driver = {
-	.name = "can",
-	.summary = "sensor orientations (int16 quaternions) and positions from SocketCAN frames",
-	.sensor_count = can_in_sensor_count,
-	.sensor_name = can_in_sensor_name,
-	.check = can_in_check,
+	.type = {
+		.name = "can",
+		.doc = "sensor orientations (int16 quaternions) and positions from SocketCAN frames",
+		.keys = can_keys,
+		.n_keys = CFG_N(can_keys),
+		.opt_size = sizeof(struct can_in_opts),
+		.built = true,
+		.check = can_in_check,
+		.sensor_count = can_in_sensor_count,
+		.sensor_name = can_in_sensor_name,
+	},
 	.open = can_in_open,
 	.close = can_in_close,
 	.poll = can_in_poll,

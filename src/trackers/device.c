@@ -105,7 +105,7 @@ int device_start(struct device *d, device_run_fn *run, void *drv, const char *na
 int device_begin(struct device *d, struct capture *cap, bool *use_capture, device_run_fn *run, void *drv,
 		 const char *name, char *err, size_t errlen)
 {
-	const struct cfg_source *cfg = d->t->cfg;
+	const struct device_opts *cfg = d->t->cfg->opt; /* the first member of the driver's options */
 	int rc;
 
 	if (cfg->capture[0]) {

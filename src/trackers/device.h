@@ -39,6 +39,15 @@
 #define DEVICE_NOTES 16 /* notes kept for the control thread; older ones are dropped (and counted) */
 #define DEVICE_NOTE_LEN 512
 
+/* the keys of every device source: the first member of its options (hydra_opts, polhemus_opts) */
+struct device_opts {
+	char device[CFG_PATH_MAX];  /* auto, or which one: hidraw node (hydra), USB port (polhemus) */
+	char capture[CFG_PATH_MAX]; /* a capture of raw reports to play instead of the device; "" = none */
+	char record[CFG_PATH_MAX];  /* write the raw reports read from the device to this capture; "" = none */
+	double speed;		    /* capture playback speed */
+	bool loop;		    /* play the capture again at its end */
+};
+
 /* one decoded sample, in the tracker's frame (z up, metres, unit quaternion) */
 struct device_sample {
 	struct dq pose;

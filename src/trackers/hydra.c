@@ -54,6 +54,60 @@
 #include <unistd.h>
 #include <wchar.h>
 
+static const struct cfg_key hydra_keys[] = {
+	{ .name = "speed",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct hydra_opts, dev.speed),
+	  .min = 0.01,
+	  .max = 100,
+	  .def = "1",
+	  .doc = "playback speed of the recording or capture, 1 = real time" },
+	{ .name = "loop",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct hydra_opts, dev.loop),
+	  .def = "yes",
+	  .doc = "start the recording or capture again at its end; otherwise the source ENDS and its sensors go "
+		 "STALE" },
+	{ .name = "device",
+	  .kind = CFG_STR,
+	  CFG_AT(struct hydra_opts, dev.device),
+	  .def = "auto",
+	  .doc = "which device: auto (the first found); hydra: a hidraw node of its motion interface "
+		 "(/dev/hidraw3, or a udev symlink) or its USB port; polhemus: its USB port; a USB port is "
+		 "BUS-PORT[.PORT...] as avatargw --list-devices shows it" },
+	{ .name = "capture",
+	  .kind = CFG_PATH,
+	  CFG_AT(struct hydra_opts, dev.capture),
+	  .def = "",
+	  .doc = "play this capture of raw reports (hex, one report per line) instead of reading the device; "
+		 "relative to this file's directory; empty = the device" },
+	{ .name = "record",
+	  .kind = CFG_PATH,
+	  CFG_AT(struct hydra_opts, dev.record),
+	  .def = "",
+	  .doc = "write every raw report read from the device to this capture file, with timestamps (for a bug "
+		 "report or a test; avatargw-decode reads it); relative to this file's directory; empty = none" },
+	{ .name = "interface",
+	  .kind = CFG_INT,
+	  CFG_AT(struct hydra_opts, hid_interface),
+	  .min = 0,
+	  .max = 255,
+	  .def = "0",
+	  .doc = "USB interface number of the 52-byte motion reports" },
+	{ .name = "control_interface",
+	  .kind = CFG_INT,
+	  CFG_AT(struct hydra_opts, control_interface),
+	  .min = 0,
+	  .max = 255,
+	  .def = "1",
+	  .doc = "USB interface number that takes the feature report switching between gamepad and motion mode" },
+};
+
+static const struct hydra_opts *opts_of(const struct cfg_source *c)
+{
+	return c->opt;
+}
+
 struct hydra_timing hydra_timing = {
 	.probe_ms = 250,  /* 60 reports' worth: a device in motion mode has sent some by then */
 	.retry_ms = 5000, /* VRPN's wait after a mode request */
@@ -494,23 +548,23 @@ static int hydra_open_dev(struct hydra *h)
 {
 	const struct cfg_source *cfg = h->dev.t->cfg;
 	struct hydra_node found[8][2];
-	int n = hydra_find(cfg->hid_interface, cfg->control_interface, found, 8), k, e;
+	int n = hydra_find(opts_of(cfg)->hid_interface, opts_of(cfg)->control_interface, found, 8), k, e;
 
 	for (k = 0; k < n; k++)
-		if (hydra_wanted(cfg->device, found[k]))
+		if (hydra_wanted(opts_of(cfg)->dev.device, found[k]))
 			break;
 	if (k == n)
 		return -ENOENT;
 	if (!found[k][1].path[0]) {
 		device_set_status(&h->dev, "Razer Hydra on %s: no node for the control interface %d", found[k][0].path,
-				  cfg->control_interface);
+				  opts_of(cfg)->control_interface);
 		return -ENODEV;
 	}
 	pthread_mutex_lock(&hydra_hid_lock);
 	errno = 0;
 	h->data = hid_open_path(found[k][0].path);
 	e = errno;
-	h->ctrl_is_data = cfg->control_interface == cfg->hid_interface;
+	h->ctrl_is_data = opts_of(cfg)->control_interface == opts_of(cfg)->hid_interface;
 	if (h->data && !h->ctrl_is_data) {
 		errno = 0;
 		h->ctrl = hid_open_path(found[k][1].path);
@@ -651,8 +705,8 @@ static void hydra_run(struct device *d)
 	bool told_missing = false;
 
 	if (h->use_capture) {
-		device_set_status(d, "playing capture %s", d->t->cfg->capture);
-		device_play(d, &h->cap, d->t->cfg->speed, d->t->cfg->loop);
+		device_set_status(d, "playing capture %s", opts_of(d->t->cfg)->dev.capture);
+		device_play(d, &h->cap, opts_of(d->t->cfg)->dev.speed, opts_of(d->t->cfg)->dev.loop);
 		return;
 	}
 	while (!device_stopping(d)) {
@@ -661,10 +715,11 @@ static void hydra_run(struct device *d)
 
 		device_set_link(d, DEVICE_DOWN);
 		if (rc == -ENOENT) {
-			device_set_status(d, "no Razer Hydra%s%s found; looking every %d ms",
-					  strcmp(d->t->cfg->device, "auto") ? " at " : "",
-					  strcmp(d->t->cfg->device, "auto") ? d->t->cfg->device : "",
-					  hydra_timing.search_ms);
+			device_set_status(
+				d, "no Razer Hydra%s%s found; looking every %d ms",
+				strcmp(opts_of(d->t->cfg)->dev.device, "auto") ? " at " : "",
+				strcmp(opts_of(d->t->cfg)->dev.device, "auto") ? opts_of(d->t->cfg)->dev.device : "",
+				hydra_timing.search_ms);
 			if (!told_missing)
 				device_note(d, LOG_WARNING,
 					    "[source %s] no Razer Hydra (1532:0300) found; waiting for one",
@@ -733,13 +788,17 @@ static void hydra_sensor_name(const struct cfg_source *cfg, int i, char *buf, si
 	snprintf(buf, len, "%s", hydra_sensors[i]);
 }
 
-static int hydra_check(const struct cfg_source *cfg, char *err, size_t errlen)
+static int hydra_check(const struct config *c __attribute__((unused)), const void *section, const char **key, char *err,
+		       size_t errlen)
 {
+	const struct cfg_source *cfg = section;
+
+	*key = "capture"; /* what a failure blames */
 	struct capture cap;
 
-	if (!cfg->capture[0])
+	if (!opts_of(cfg)->dev.capture[0])
 		return 0;
-	if (capture_load(&cap, cfg->capture, err, errlen))
+	if (capture_load(&cap, opts_of(cfg)->dev.capture, err, errlen))
 		return -1;
 	capture_free(&cap);
 	return 0;
@@ -821,11 +880,17 @@ static int hydra_list(FILE *out)
 }
 
 const struct tracker_driver hydra_driver = {
-	.name = "hydra",
-	.summary = "Razer Hydra over hidapi (hidraw): two wands, buttons, joysticks, triggers",
-	.sensor_count = hydra_sensor_count,
-	.sensor_name = hydra_sensor_name,
-	.check = hydra_check,
+	.type = {
+		.name = "hydra",
+		.doc = "Razer Hydra over hidapi (hidraw): two wands, buttons, joysticks, triggers",
+		.keys = hydra_keys,
+		.n_keys = CFG_N(hydra_keys),
+		.opt_size = sizeof(struct hydra_opts),
+		.built = true,
+		.check = hydra_check,
+		.sensor_count = hydra_sensor_count,
+		.sensor_name = hydra_sensor_name,
+	},
 	.open = hydra_open,
 	.close = hydra_close,
 	.poll = device_drv_poll,

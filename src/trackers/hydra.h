@@ -6,6 +6,9 @@
 #ifndef AGW_HYDRA_H
 #define AGW_HYDRA_H
 
+#include "config/config.h"
+#include "trackers/device.h"
+
 #define HYDRA_VID 0x1532
 #define HYDRA_PID 0x0300
 #define HYDRA_REPORT_LEN 52  /* motion report, no report id */
@@ -43,5 +46,13 @@ struct hydra_timing {
 };
 
 extern struct hydra_timing hydra_timing;
+
+struct hydra_opts {
+	struct device_opts dev; /* device, capture, record, speed, loop: first (device.c reads them) */
+	int hid_interface;	/* hydra: USB interface of the motion reports */
+	int control_interface;	/* hydra: USB interface that takes the mode feature report */
+};
+
+extern const struct tracker_driver hydra_driver;
 
 #endif /* AGW_HYDRA_H */

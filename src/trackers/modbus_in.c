@@ -24,6 +24,7 @@
  * or a quaternion far from unit length are counted as malformed and dropped.
  */
 #include "trackers/tracker.h"
+#include "trackers/modbus_in.h"
 
 #include "base/log.h"
 #include "base/seqlock.h"
@@ -40,6 +41,126 @@
 #include <sys/eventfd.h>
 #include <time.h>
 #include <unistd.h>
+
+static const char *const e_regtype[] = { "holding", "input", NULL };
+static const char *const e_regfmt[] = { "int16", "uint16", "int32", "uint32", "float32", NULL };
+static const char *const e_ori[] = { "rotvec", "quat_wxyz", "quat_xyzw", "rpy", "none", NULL };
+
+static const struct cfg_key modbus_keys[] = {
+	{ .name = "address",
+	  .kind = CFG_STR,
+	  CFG_AT(struct modbus_in_opts, address),
+	  .doc = "host name or address of the Modbus TCP device (required)" },
+	{ .name = "port",
+	  .kind = CFG_INT,
+	  CFG_AT(struct modbus_in_opts, port),
+	  .min = 1,
+	  .max = 65535,
+	  .def = "502",
+	  .doc = "TCP port of the Modbus device" },
+	{ .name = "unit_id",
+	  .kind = CFG_INT,
+	  CFG_AT(struct modbus_in_opts, unit_id),
+	  .min = 0,
+	  .max = 255,
+	  .def = "1",
+	  .doc = "Modbus unit identifier of the requests" },
+	{ .name = "register_type",
+	  .kind = CFG_ENUM,
+	  CFG_AT(struct modbus_in_opts, register_type),
+	  .def = "holding",
+	  .enums = e_regtype,
+	  .doc = "holding (function 3) or input (function 4) registers" },
+	{ .name = "sensors",
+	  .kind = CFG_INT,
+	  CFG_AT(struct modbus_in_opts, sensors),
+	  .min = 1,
+	  .max = 16,
+	  .def = "1",
+	  .doc = "poses the device reports; they are sensors pose0, pose1, ..." },
+	{ .name = "sensor_stride",
+	  .kind = CFG_INT,
+	  CFG_AT(struct modbus_in_opts, sensor_stride),
+	  .min = 0,
+	  .max = 65535,
+	  .def = "0",
+	  .doc = "registers from one sensor's position (and orientation) to the next's; needed when sensors > 1" },
+	{ .name = "position_register",
+	  .kind = CFG_INT,
+	  CFG_AT(struct modbus_in_opts, pos_register),
+	  .min = 0,
+	  .max = 65535,
+	  .def = "0",
+	  .doc = "first register of the position x, y, z (0-based protocol address)" },
+	{ .name = "position_format",
+	  .kind = CFG_ENUM,
+	  CFG_AT(struct modbus_in_opts, pos_format),
+	  .def = "int16",
+	  .enums = e_regfmt,
+	  .doc = "type of each position value (32-bit types take two registers)" },
+	{ .name = "position_scale",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct modbus_in_opts, pos_scale),
+	  .min = 1e-9,
+	  .max = 1e3,
+	  .def = "0.001",
+	  .unit = "m",
+	  .doc = "metres per count of a position value (0.0001 for 0.1 mm)" },
+	{ .name = "orientation_register",
+	  .kind = CFG_INT,
+	  CFG_AT(struct modbus_in_opts, ori_register),
+	  .min = 0,
+	  .max = 65535,
+	  .def = "3",
+	  .doc = "first register of the orientation values (0-based protocol address)" },
+	{ .name = "orientation_format",
+	  .kind = CFG_ENUM,
+	  CFG_AT(struct modbus_in_opts, ori_format),
+	  .def = "int16",
+	  .enums = e_regfmt,
+	  .doc = "type of each orientation value" },
+	{ .name = "orientation_scale",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct modbus_in_opts, ori_scale),
+	  .min = 1e-12,
+	  .max = 1e3,
+	  .def = "0.001",
+	  .doc = "radians per count (rotvec, rpy) or quaternion units per count (quat_*)" },
+	{ .name = "orientation",
+	  .kind = CFG_ENUM,
+	  CFG_AT(struct modbus_in_opts, orientation),
+	  .def = "rotvec",
+	  .enums = e_ori,
+	  .doc = "rotvec (rx ry rz, axis times angle), quat_wxyz, quat_xyzw, rpy (roll pitch yaw about fixed x, "
+		 "y, z) or none" },
+	{ .name = "word_order",
+	  .kind = CFG_ENUM,
+	  CFG_AT(struct modbus_in_opts, word_order),
+	  .def = "abcd",
+	  .enums = cfg_word_orders,
+	  .doc = "byte order of 32-bit values over two registers, A = most significant byte" },
+	{ .name = "poll_rate",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct modbus_in_opts, poll_rate),
+	  .min = 0.1,
+	  .max = 1000,
+	  .def = "50",
+	  .unit = "Hz",
+	  .doc = "requests per second" },
+	{ .name = "timeout_ms",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct modbus_in_opts, timeout_ms),
+	  .min = 1,
+	  .max = 60000,
+	  .def = "200",
+	  .unit = "ms",
+	  .doc = "a response (or a connection) taking longer fails; the connection is then made again" },
+};
+
+static const struct modbus_in_opts *opts_of(const struct cfg_source *c)
+{
+	return c->opt;
+}
 
 #define MODBUS_IN_BACKOFF_MIN_NS 200000000ull  /* first retry after 0.2 s */
 #define MODBUS_IN_BACKOFF_MAX_NS 5000000000ull /* then doubling up to 5 s */
@@ -99,7 +220,7 @@ struct modbus_in {
 
 static int modbus_in_sensor_count(const struct cfg_source *cfg)
 {
-	return cfg->sensors;
+	return opts_of(cfg)->sensors;
 }
 
 static void modbus_in_sensor_name(const struct cfg_source *cfg, int i, char *buf, size_t len)
@@ -118,34 +239,37 @@ static int ori_values(int ori)
 	return ori == CFG_ORI_NONE ? 0 : ori == CFG_ORI_QUAT_WXYZ || ori == CFG_ORI_QUAT_XYZW ? 4 : 3;
 }
 
-static int modbus_in_check(const struct cfg_source *cfg, char *err, size_t errlen)
+static int modbus_in_check(const struct config *c __attribute__((unused)), const void *section,
+			   const char **key __attribute__((unused)), char *err, size_t errlen)
 {
-	int pn = 3 * width(cfg->pos_format), on = ori_values(cfg->orientation) * width(cfg->ori_format);
-	long last = (long)(cfg->sensors - 1) * cfg->sensor_stride;
+	const struct cfg_source *cfg = section;
+	int pn = 3 * width(opts_of(cfg)->pos_format),
+	    on = ori_values(opts_of(cfg)->orientation) * width(opts_of(cfg)->ori_format);
+	long last = (long)(opts_of(cfg)->sensors - 1) * opts_of(cfg)->sensor_stride;
 
-	if (!cfg->address[0]) {
+	if (!opts_of(cfg)->address[0]) {
 		snprintf(err, errlen, "address: missing (the Modbus device's host name or address)");
 		return -1;
 	}
-	if (cfg->unit_id > 247 && cfg->unit_id != 255) {
-		snprintf(err, errlen, "unit_id: %d is reserved (0-247, or 255)", cfg->unit_id);
+	if (opts_of(cfg)->unit_id > 247 && opts_of(cfg)->unit_id != 255) {
+		snprintf(err, errlen, "unit_id: %d is reserved (0-247, or 255)", opts_of(cfg)->unit_id);
 		return -1;
 	}
-	if (cfg->sensors > 1 && cfg->sensor_stride == 0) {
+	if (opts_of(cfg)->sensors > 1 && opts_of(cfg)->sensor_stride == 0) {
 		snprintf(err, errlen, "sensor_stride: missing (%d sensors need the registers from one to the next)",
-			 cfg->sensors);
+			 opts_of(cfg)->sensors);
 		return -1;
 	}
-	if (cfg->pos_register + last + pn > 65536 || cfg->ori_register + last + on > 65536) {
+	if (opts_of(cfg)->pos_register + last + pn > 65536 || opts_of(cfg)->ori_register + last + on > 65536) {
 		snprintf(err, errlen,
 			 "position_register, orientation_register: the map of %d sensors goes beyond "
 			 "register 65535",
-			 cfg->sensors);
+			 opts_of(cfg)->sensors);
 		return -1;
 	}
-	for (int k = 0; k < cfg->sensors && on; k++) {
-		long p0 = cfg->pos_register + (long)k * cfg->sensor_stride,
-		     o0 = cfg->ori_register + (long)k * cfg->sensor_stride;
+	for (int k = 0; k < opts_of(cfg)->sensors && on; k++) {
+		long p0 = opts_of(cfg)->pos_register + (long)k * opts_of(cfg)->sensor_stride,
+		     o0 = opts_of(cfg)->ori_register + (long)k * opts_of(cfg)->sensor_stride;
 
 		if (p0 < o0 + on && o0 < p0 + pn) {
 			snprintf(err, errlen,
@@ -167,13 +291,14 @@ static int cmp_read(const void *a, const void *b)
 static void plan_reads(struct modbus_in *m, const struct cfg_source *cfg)
 {
 	struct modbus_in_read r[MODBUS_IN_MAX_READS];
-	int n = 0, on = ori_values(cfg->orientation) * width(cfg->ori_format);
+	int n = 0, on = ori_values(opts_of(cfg)->orientation) * width(opts_of(cfg)->ori_format);
 
-	for (int k = 0; k < cfg->sensors; k++) {
-		r[n++] = (struct modbus_in_read){ cfg->pos_register + k * cfg->sensor_stride,
-						  3 * width(cfg->pos_format) };
+	for (int k = 0; k < opts_of(cfg)->sensors; k++) {
+		r[n++] = (struct modbus_in_read){ opts_of(cfg)->pos_register + k * opts_of(cfg)->sensor_stride,
+						  3 * width(opts_of(cfg)->pos_format) };
 		if (on)
-			r[n++] = (struct modbus_in_read){ cfg->ori_register + k * cfg->sensor_stride, on };
+			r[n++] = (struct modbus_in_read){ opts_of(cfg)->ori_register + k * opts_of(cfg)->sensor_stride,
+							  on };
 	}
 	qsort(r, (size_t)n, sizeof(r[0]), cmp_read);
 	m->reads = 0;
@@ -215,22 +340,25 @@ static double reg_value(const uint16_t *r, int fmt, int order)
 static bool decode_pose(const struct modbus_in *m, int k, struct modbus_in_pose *out)
 {
 	const struct cfg_source *cfg = m->cfg;
-	int pw = width(cfg->pos_format), ow = width(cfg->ori_format), nv = ori_values(cfg->orientation);
-	const uint16_t *pr = m->img + (cfg->pos_register + k * cfg->sensor_stride - m->lo);
-	const uint16_t *orr = m->img + (cfg->ori_register + k * cfg->sensor_stride - m->lo);
+	int pw = width(opts_of(cfg)->pos_format), ow = width(opts_of(cfg)->ori_format),
+	    nv = ori_values(opts_of(cfg)->orientation);
+	const uint16_t *pr = m->img + (opts_of(cfg)->pos_register + k * opts_of(cfg)->sensor_stride - m->lo);
+	const uint16_t *orr = m->img + (opts_of(cfg)->ori_register + k * opts_of(cfg)->sensor_stride - m->lo);
 	double v[4] = { 0, 0, 0, 0 }, n;
 
 	for (int i = 0; i < 3; i++) {
-		out->p[i] = reg_value(pr + i * pw, cfg->pos_format, cfg->word_order) * cfg->pos_scale;
+		out->p[i] = reg_value(pr + i * pw, opts_of(cfg)->pos_format, opts_of(cfg)->word_order) *
+			    opts_of(cfg)->pos_scale;
 		if (!isfinite(out->p[i]))
 			return false;
 	}
 	for (int i = 0; i < nv; i++) {
-		v[i] = reg_value(orr + i * ow, cfg->ori_format, cfg->word_order) * cfg->ori_scale;
+		v[i] = reg_value(orr + i * ow, opts_of(cfg)->ori_format, opts_of(cfg)->word_order) *
+		       opts_of(cfg)->ori_scale;
 		if (!isfinite(v[i]))
 			return false;
 	}
-	switch (cfg->orientation) {
+	switch (opts_of(cfg)->orientation) {
 	case CFG_ORI_ROTVEC:
 		/* axis times angle, radians (Universal Robots' rx ry rz) */
 		n = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
@@ -244,7 +372,7 @@ static bool decode_pose(const struct modbus_in *m, int k, struct modbus_in_pose 
 		if (!(n > 0.8 && n < 1.2))
 			return false;
 		for (int i = 0; i < 4; i++)
-			out->q[i] = (cfg->orientation == CFG_ORI_QUAT_XYZW ? v[(i + 3) % 4] : v[i]) / n;
+			out->q[i] = (opts_of(cfg)->orientation == CFG_ORI_QUAT_XYZW ? v[(i + 3) % 4] : v[i]) / n;
 		return true;
 	case CFG_ORI_RPY: {
 		/* R = Rz(yaw) Ry(pitch) Rx(roll): roll, pitch, yaw about the fixed x, y, z axes */
@@ -317,7 +445,7 @@ static int poll_device(struct modbus_in *m)
 	for (int i = 0; i < m->reads; i++) {
 		const struct modbus_in_read *r = &m->read[i];
 		uint16_t *dst = m->img + (r->addr - m->lo);
-		int rc = cfg->register_type == CFG_REGS_INPUT
+		int rc = opts_of(cfg)->register_type == CFG_REGS_INPUT
 				 ? modbus_read_input_registers(m->ctx, r->addr, r->count, dst)
 				 : modbus_read_registers(m->ctx, r->addr, r->count, dst);
 
@@ -437,30 +565,30 @@ static int modbus_in_open(struct tracker *t, char *err, size_t errlen)
 	struct modbus_in *m = calloc(1, sizeof(*m));
 	char port[8];
 	pthread_condattr_t ca;
-	uint32_t to_ms = (uint32_t)cfg->timeout_ms;
+	uint32_t to_ms = (uint32_t)opts_of(cfg)->timeout_ms;
 	int rc;
 
 	if (!m)
 		return -ENOMEM;
 	m->efd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
 	snprintf(m->name, sizeof(m->name), "%s", cfg->name);
-	snprintf(m->where, sizeof(m->where), "%s:%d", cfg->address, cfg->port);
+	snprintf(m->where, sizeof(m->where), "%s:%d", opts_of(cfg)->address, opts_of(cfg)->port);
 	m->cfg = cfg;
-	m->n = cfg->sensors;
-	m->period_ns = (uint64_t)(1e9 / cfg->poll_rate);
+	m->n = opts_of(cfg)->sensors;
+	m->period_ns = (uint64_t)(1e9 / opts_of(cfg)->poll_rate);
 	plan_reads(m, cfg);
 	m->img = calloc((size_t)m->span, sizeof(uint16_t));
 	m->slot = calloc((size_t)m->n, sizeof(*m->slot));
 	m->seen = calloc((size_t)m->n, sizeof(*m->seen));
-	snprintf(port, sizeof(port), "%d", cfg->port);
+	snprintf(port, sizeof(port), "%d", opts_of(cfg)->port);
 	/* the _pi variant takes host names and IPv6 addresses */
-	m->ctx = modbus_new_tcp_pi(cfg->address, port);
+	m->ctx = modbus_new_tcp_pi(opts_of(cfg)->address, port);
 	if (!m->img || !m->slot || !m->seen || !m->ctx || m->efd < 0) {
 		snprintf(err, errlen, "[source %s]: %s", cfg->name, m->ctx ? "out of memory" : modbus_strerror(errno));
 		free_priv(m);
 		return -ENOMEM;
 	}
-	if (modbus_set_slave(m->ctx, cfg->unit_id) ||
+	if (modbus_set_slave(m->ctx, opts_of(cfg)->unit_id) ||
 	    modbus_set_response_timeout(m->ctx, to_ms / 1000, (to_ms % 1000) * 1000 + (to_ms ? 0 : 1000))) {
 		snprintf(err, errlen, "[source %s]: %s", cfg->name, modbus_strerror(errno));
 		free_priv(m);
@@ -572,11 +700,17 @@ static void modbus_in_report(struct tracker *t, FILE *out, bool json)
 }
 
 const struct tracker_driver modbus_driver = {
-	.name = "modbus",
-	.summary = "poses polled from a Modbus TCP device (robot tool pose, laser tracker)",
-	.sensor_count = modbus_in_sensor_count,
-	.sensor_name = modbus_in_sensor_name,
-	.check = modbus_in_check,
+	.type = {
+		.name = "modbus",
+		.doc = "poses polled from a Modbus TCP device (robot tool pose, laser tracker)",
+		.keys = modbus_keys,
+		.n_keys = CFG_N(modbus_keys),
+		.opt_size = sizeof(struct modbus_in_opts),
+		.built = true,
+		.check = modbus_in_check,
+		.sensor_count = modbus_in_sensor_count,
+		.sensor_name = modbus_in_sensor_name,
+	},
 	.open = modbus_in_open,
 	.close = modbus_in_close,
 	.poll = modbus_in_poll,

@@ -48,6 +48,69 @@
 #include <string.h>
 #include <syslog.h>
 
+static const char *const e_model[] = { "auto", "liberty", "liberty_hs", "patriot", "patriot_hs", NULL };
+
+static const struct cfg_key polhemus_keys[] = {
+	{ .name = "speed",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct polhemus_opts, dev.speed),
+	  .min = 0.01,
+	  .max = 100,
+	  .def = "1",
+	  .doc = "playback speed of the recording or capture, 1 = real time" },
+	{ .name = "loop",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct polhemus_opts, dev.loop),
+	  .def = "yes",
+	  .doc = "start the recording or capture again at its end; otherwise the source ENDS and its sensors go "
+		 "STALE" },
+	{ .name = "device",
+	  .kind = CFG_STR,
+	  CFG_AT(struct polhemus_opts, dev.device),
+	  .def = "auto",
+	  .doc = "which device: auto (the first found); hydra: a hidraw node of its motion interface "
+		 "(/dev/hidraw3, or a udev symlink) or its USB port; polhemus: its USB port; a USB port is "
+		 "BUS-PORT[.PORT...] as avatargw --list-devices shows it" },
+	{ .name = "capture",
+	  .kind = CFG_PATH,
+	  CFG_AT(struct polhemus_opts, dev.capture),
+	  .def = "",
+	  .doc = "play this capture of raw reports (hex, one report per line) instead of reading the device; "
+		 "relative to this file's directory; empty = the device" },
+	{ .name = "record",
+	  .kind = CFG_PATH,
+	  CFG_AT(struct polhemus_opts, dev.record),
+	  .def = "",
+	  .doc = "write every raw report read from the device to this capture file, with timestamps (for a bug "
+		 "report or a test; avatargw-decode reads it); relative to this file's directory; empty = none" },
+	{ .name = "model",
+	  .kind = CFG_ENUM,
+	  CFG_AT(struct polhemus_opts, model),
+	  .def = "auto",
+	  .enums = e_model,
+	  .doc = "which Polhemus product to open: auto (any of them) or one; it sets the expected record header "
+		 "and rate" },
+	{ .name = "sensors",
+	  .kind = CFG_NAMES,
+	  CFG_AT(struct polhemus_opts, stations),
+	  .min = 1,
+	  .max = CFG_MAX_STATIONS,
+	  .def = "head left_hand right_hand",
+	  .doc = "sensor names of stations 1, 2, 3, ... in order (- skips a station)" },
+	{ .name = "hemisphere",
+	  .kind = CFG_VEC3,
+	  CFG_AT(struct polhemus_opts, hemisphere),
+	  .min = -1,
+	  .max = 1,
+	  .def = "1 0 0",
+	  .doc = "the hemisphere the sensors stay in, a vector in the Polhemus source's frame (its H command)" },
+};
+
+static const struct polhemus_opts *opts_of(const struct cfg_source *c)
+{
+	return c->opt;
+}
+
 struct polhemus_timing polhemus_timing = {
 	.drain_ms = 50, /* what the Polhemus drivers use */
 	.stall_ms = 500,
@@ -87,7 +150,7 @@ static int station_map(const struct cfg_source *cfg, int map[CFG_MAX_STATIONS + 
 
 	for (int i = 0; i <= CFG_MAX_STATIONS; i++)
 		map[i] = -1;
-	snprintf(buf, sizeof(buf), "%s", cfg->stations);
+	snprintf(buf, sizeof(buf), "%s", opts_of(cfg)->stations);
 	for (tok = strtok_r(buf, " \t,", &save); tok && st <= CFG_MAX_STATIONS;
 	     tok = strtok_r(NULL, " \t,", &save), st++) {
 		if (!strcmp(tok, "-"))
@@ -144,13 +207,16 @@ static int polhemus_codec_init(void *st, const struct cfg_source *cfg, char *err
 	memset(p, 0, sizeof(*p));
 	station_map(cfg, p->sensor_of, NULL);
 	/* the record header names the product: accept only the configured one's */
-	if (cfg->model == CFG_PH_AUTO || cfg->model == CFG_PH_LIBERTY || cfg->model == CFG_PH_LIBERTY_HS)
+	if (opts_of(cfg)->model == CFG_PH_AUTO || opts_of(cfg)->model == CFG_PH_LIBERTY ||
+	    opts_of(cfg)->model == CFG_PH_LIBERTY_HS)
 		memcpy(p->magic[p->n_magic++], "LY", 2);
-	if (cfg->model == CFG_PH_AUTO || cfg->model == CFG_PH_LIBERTY_HS)
+	if (opts_of(cfg)->model == CFG_PH_AUTO || opts_of(cfg)->model == CFG_PH_LIBERTY_HS)
 		memcpy(p->magic[p->n_magic++], "LU", 2);
-	if (cfg->model == CFG_PH_AUTO || cfg->model == CFG_PH_PATRIOT || cfg->model == CFG_PH_PATRIOT_HS)
+	if (opts_of(cfg)->model == CFG_PH_AUTO || opts_of(cfg)->model == CFG_PH_PATRIOT ||
+	    opts_of(cfg)->model == CFG_PH_PATRIOT_HS)
 		memcpy(p->magic[p->n_magic++], "PA", 2);
-	p->period = cfg->model == CFG_PH_PATRIOT || cfg->model == CFG_PH_PATRIOT_HS ? 1.0 / 60 : 1.0 / 240;
+	p->period = opts_of(cfg)->model == CFG_PH_PATRIOT || opts_of(cfg)->model == CFG_PH_PATRIOT_HS ? 1.0 / 60
+												      : 1.0 / 240;
 	p->in_sync = true;
 	return 0;
 }
@@ -493,7 +559,8 @@ static int usb_open(struct polhemus *p)
 			continue;
 		pr = polhemus_product(dd.idProduct);
 		port_of(list[i], port, sizeof(port));
-		if (!pr || !model_matches(cfg->model, pr) || (strcmp(cfg->device, "auto") && strcmp(cfg->device, port)))
+		if (!pr || !model_matches(opts_of(cfg)->model, pr) ||
+		    (strcmp(opts_of(cfg)->dev.device, "auto") && strcmp(opts_of(cfg)->dev.device, port)))
 			continue;
 		if (pr->needs_firmware) {
 			device_set_status(&p->dev,
@@ -614,7 +681,8 @@ static int usb_setup(struct polhemus *p)
 
 	device_set_link(&p->dev, DEVICE_STARTING);
 	p->dev.codec->reset(p->dev.codec_st);
-	snprintf(hemi, sizeof(hemi), "H*,%g,%g,%g\r", cfg->hemisphere[0], cfg->hemisphere[1], cfg->hemisphere[2]);
+	snprintf(hemi, sizeof(hemi), "H*,%g,%g,%g\r", opts_of(cfg)->hemisphere[0], opts_of(cfg)->hemisphere[1],
+		 opts_of(cfg)->hemisphere[2]);
 	if ((rc = usb_write(p, "P")) || (rc = usb_drain(p)))
 		return rc;
 	for (size_t i = 0; i < sizeof(cmds) / sizeof(cmds[0]); i++)
@@ -737,8 +805,8 @@ static void polhemus_run(struct device *d)
 	int rc;
 
 	if (p->use_capture) {
-		device_set_status(d, "playing capture %s", d->t->cfg->capture);
-		device_play(d, &p->cap, d->t->cfg->speed, d->t->cfg->loop);
+		device_set_status(d, "playing capture %s", opts_of(d->t->cfg)->dev.capture);
+		device_play(d, &p->cap, opts_of(d->t->cfg)->dev.speed, opts_of(d->t->cfg)->dev.loop);
 		return;
 	}
 	while (!device_stopping(d) && (rc = libusb_init(&p->ctx))) {
@@ -761,11 +829,14 @@ static void polhemus_run(struct device *d)
 			if (!told_missing)
 				device_note(d, LOG_WARNING,
 					    "[source %s] no Polhemus found (model = %s, device = %s); waiting for one",
-					    d->t->name, model_names[d->t->cfg->model], d->t->cfg->device);
+					    d->t->name, model_names[opts_of(d->t->cfg)->model],
+					    opts_of(d->t->cfg)->dev.device);
 			if (!p->told_fw[0])
 				device_set_status(d, "no Polhemus%s%s found; waiting (%s)",
-						  strcmp(d->t->cfg->device, "auto") ? " on USB port " : "",
-						  strcmp(d->t->cfg->device, "auto") ? d->t->cfg->device : "",
+						  strcmp(opts_of(d->t->cfg)->dev.device, "auto") ? " on USB port " : "",
+						  strcmp(opts_of(d->t->cfg)->dev.device, "auto")
+							  ? opts_of(d->t->cfg)->dev.device
+							  : "",
 						  p->hotplug ? "hot-plug events" : "looking every 200 ms");
 			told_missing = true;
 			usb_wait(p);
@@ -817,13 +888,17 @@ static void polhemus_run(struct device *d)
 
 /* ---- the driver ------------------------------------------------------------------------ */
 
-static int polhemus_check(const struct cfg_source *cfg, char *err, size_t errlen)
+static int polhemus_check(const struct config *c __attribute__((unused)), const void *section, const char **key,
+			  char *err, size_t errlen)
 {
+	const struct cfg_source *cfg = section;
+
+	*key = "capture"; /* what a failure blames */
 	struct capture cap;
 
-	if (!cfg->capture[0])
+	if (!opts_of(cfg)->dev.capture[0])
 		return 0;
-	if (capture_load(&cap, cfg->capture, err, errlen))
+	if (capture_load(&cap, opts_of(cfg)->dev.capture, err, errlen))
 		return -1;
 	capture_free(&cap);
 	return 0;
@@ -927,11 +1002,17 @@ static int polhemus_list(FILE *out)
 }
 
 const struct tracker_driver polhemus_driver = {
-	.name = "polhemus",
-	.summary = "Polhemus Liberty, Liberty HS (Latus), Patriot over libusb bulk endpoints",
-	.sensor_count = polhemus_sensor_count,
-	.sensor_name = polhemus_sensor_name,
-	.check = polhemus_check,
+	.type = {
+		.name = "polhemus",
+		.doc = "Polhemus Liberty, Liberty HS (Latus), Patriot over libusb bulk endpoints",
+		.keys = polhemus_keys,
+		.n_keys = CFG_N(polhemus_keys),
+		.opt_size = sizeof(struct polhemus_opts),
+		.built = true,
+		.check = polhemus_check,
+		.sensor_count = polhemus_sensor_count,
+		.sensor_name = polhemus_sensor_name,
+	},
 	.open = polhemus_open,
 	.close = polhemus_close,
 	.poll = device_drv_poll,

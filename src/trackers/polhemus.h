@@ -7,6 +7,9 @@
 #ifndef AGW_POLHEMUS_H
 #define AGW_POLHEMUS_H
 
+#include "config/config.h"
+#include "trackers/device.h"
+
 #include <stdbool.h>
 #include <stdint.h>
 
@@ -46,5 +49,16 @@ struct polhemus_timing {
 };
 
 extern struct polhemus_timing polhemus_timing;
+
+enum cfg_polhemus_model { CFG_PH_AUTO, CFG_PH_LIBERTY, CFG_PH_LIBERTY_HS, CFG_PH_PATRIOT, CFG_PH_PATRIOT_HS };
+
+struct polhemus_opts {
+	struct device_opts dev;	     /* device, capture, record, speed, loop: first (device.c reads them) */
+	int model;		     /* polhemus: enum cfg_polhemus_model */
+	char stations[CFG_PATH_MAX]; /* polhemus: sensor names of stations 1, 2, ...; "-" = unused */
+	double hemisphere[3];	     /* polhemus: the H command's vector, Polhemus frame */
+};
+
+extern const struct tracker_driver polhemus_driver;
 
 #endif /* AGW_POLHEMUS_H */

@@ -27,6 +27,7 @@
  * listed for the control thread to log (replay_damage()).
  */
 #include "trackers/replay.h"
+#include "base/log.h"
 
 #include "config/builtin.h"
 #include "record/keyframe.h"
@@ -41,6 +42,65 @@
 #include <sys/timerfd.h>
 #include <time.h>
 #include <unistd.h>
+
+static const char *const e_interp[] = { "none", "linear", "catmull-rom", "natural", NULL };
+
+static const struct cfg_key replay_keys[] = {
+	{ .name = "sample_rate",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct replay_opts, sample_rate),
+	  .min = 1,
+	  .max = 4000,
+	  .def = "240",
+	  .unit = "Hz",
+	  .doc = "sensor samples per second (replay: made between keyframes when interpolate is set)" },
+	{ .name = "file",
+	  .kind = CFG_PATH,
+	  CFG_AT(struct replay_opts, file),
+	  .missing = "the recording to replay",
+	  .doc = "a recording of avatargw (record_dir) or a sensor CSV (columns t, head_x..head_qz, lhand_*, "
+		 "rhand_*), relative to this file's directory; builtin:NAME for a clip compiled into the daemon" },
+	{ .name = "speed",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct replay_opts, speed),
+	  .min = 0.01,
+	  .max = 100,
+	  .def = "1",
+	  .doc = "playback speed of the recording or capture, 1 = real time" },
+	{ .name = "loop",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct replay_opts, loop),
+	  .def = "yes",
+	  .doc = "start the recording or capture again at its end; otherwise the source ENDS and its sensors go "
+		 "STALE" },
+	{ .name = "start",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct replay_opts, start),
+	  .min = 0,
+	  .max = 1e6,
+	  .def = "0",
+	  .unit = "s",
+	  .doc = "begin this far into the recording" },
+	{ .name = "step",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct replay_opts, step),
+	  .def = "no",
+	  .doc = "stepped: play the first instant, then one more per 'avatargw-ctl step' (speed is ignored)" },
+	{ .name = "interpolate",
+	  .kind = CFG_ENUM,
+	  CFG_AT(struct replay_opts, interpolate),
+	  .def = "none",
+	  .enums = e_interp,
+	  .doc = "treat the samples as keyframes and rebuild sample_rate samples per second between them: linear "
+		 "(and slerp), catmull-rom or natural (cubic splines, and squad)" },
+};
+
+extern const struct tracker_driver replay_driver;
+
+static const struct replay_opts *opts_of(const struct cfg_source *c)
+{
+	return c->opt;
+}
 
 #define CSV_ROLES 3
 
@@ -186,14 +246,14 @@ static struct name_cache *file_kind(const char *path)
 
 static int replay_sensor_count(const struct cfg_source *cfg)
 {
-	struct name_cache *c = file_kind(cfg->file);
+	struct name_cache *c = file_kind(opts_of(cfg)->file);
 
 	return c && c->recording ? (int)c->n : CSV_ROLES;
 }
 
 static void replay_sensor_name(const struct cfg_source *cfg, int i, char *buf, size_t len)
 {
-	struct name_cache *c = file_kind(cfg->file);
+	struct name_cache *c = file_kind(opts_of(cfg)->file);
 
 	if (c && c->recording)
 		snprintf(buf, len, "%s", i >= 0 && (uint32_t)i < c->n ? c->names[i] : "?");
@@ -574,14 +634,14 @@ static void replay_free(struct replay *rp)
 
 static int load(struct replay *rp, const struct cfg_source *cfg, char *err, size_t errlen)
 {
-	struct name_cache *kind = file_kind(cfg->file);
+	struct name_cache *kind = file_kind(opts_of(cfg)->file);
 	int rc;
 
 	if (kind && kind->recording) {
-		rc = load_recording(rp, cfg->file, err, errlen);
+		rc = load_recording(rp, opts_of(cfg)->file, err, errlen);
 	} else {
 		bool owned;
-		char *text = load_text(cfg->file, &owned, err, errlen), *copy;
+		char *text = load_text(opts_of(cfg)->file, &owned, err, errlen), *copy;
 
 		if (!text)
 			return -1;
@@ -590,18 +650,22 @@ static int load(struct replay *rp, const struct cfg_source *cfg, char *err, size
 			snprintf(err, errlen, "file: out of memory");
 			return -1;
 		}
-		rc = parse_csv(rp, copy, cfg->file, err, errlen);
+		rc = parse_csv(rp, copy, opts_of(cfg)->file, err, errlen);
 		free(copy);
 	}
 	if (!rc)
-		rc = index_instants(rp, cfg->file, err, errlen);
-	if (!rc && cfg->interpolate)
-		rc = build_tracks(rp, (enum kf_interp)(cfg->interpolate - 1), cfg->file, err, errlen);
+		rc = index_instants(rp, opts_of(cfg)->file, err, errlen);
+	if (!rc && opts_of(cfg)->interpolate)
+		rc = build_tracks(rp, (enum kf_interp)(opts_of(cfg)->interpolate - 1), opts_of(cfg)->file, err, errlen);
 	return rc;
 }
 
-static int replay_check(const struct cfg_source *cfg, char *err, size_t errlen)
+static int replay_check(const struct config *c __attribute__((unused)), const void *section, const char **key,
+			char *err, size_t errlen)
 {
+	const struct cfg_source *cfg = section;
+
+	*key = "file"; /* what a failure blames */
 	struct replay *rp = calloc(1, sizeof(*rp));
 	int rc;
 
@@ -630,7 +694,7 @@ static int replay_open(struct tracker *t, char *err, size_t errlen)
 	if (rp->n_sensors != (uint32_t)t->n_sensors) {
 		/* the file changed between reading the configuration and now */
 		snprintf(err, errlen, "[source %s] file: %s changed while the configuration was read", t->cfg->name,
-			 t->cfg->file);
+			 opts_of(t->cfg)->file);
 		replay_free(rp);
 		return -EINVAL;
 	}
@@ -639,11 +703,11 @@ static int replay_open(struct tracker *t, char *err, size_t errlen)
 	rp->last = -1;
 	rp->cur_inst = -1;
 	rp->last_sample = -1;
-	rp->sample_period = 1.0 / t->cfg->sample_rate;
+	rp->sample_period = 1.0 / opts_of(t->cfg)->sample_rate;
 	rp->tfd = timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
 	/* event mode: wake at the instants' mean rate, or the sample rate when interpolating */
-	dt = t->cfg->interpolate ? rp->sample_period : rp->duration / (double)rp->n_inst;
-	dt /= t->cfg->step ? 1.0 : t->cfg->speed;
+	dt = opts_of(t->cfg)->interpolate ? rp->sample_period : rp->duration / (double)rp->n_inst;
+	dt /= opts_of(t->cfg)->step ? 1.0 : opts_of(t->cfg)->speed;
 	if (rp->tfd >= 0) {
 		long ns = (long)(dt * 1e9);
 		struct itimerspec its = { { ns / 1000000000, ns % 1000000000 }, { ns / 1000000000, ns % 1000000000 } };
@@ -682,14 +746,14 @@ static void put_event(struct tracker *t, const struct replay_ev *e, uint64_t due
 /* clip time in s since the first event, for the clocked modes; -1 before the start */
 static double clip_elapsed(const struct replay *rp, const struct cfg_source *cfg, const struct tracker_clock *now)
 {
-	return (double)(now->mono_ns - rp->t0_ns) * 1e-9 * cfg->speed + cfg->start;
+	return (double)(now->mono_ns - rp->t0_ns) * 1e-9 * opts_of(cfg)->speed + opts_of(cfg)->start;
 }
 
 /* the monotonic time at which clip time ct (counting passes) was due */
 static uint64_t due_at(const struct replay *rp, const struct cfg_source *cfg, double ct,
 		       const struct tracker_clock *now)
 {
-	uint64_t due = rp->t0_ns + (uint64_t)llround((ct - cfg->start) / cfg->speed * 1e9);
+	uint64_t due = rp->t0_ns + (uint64_t)llround((ct - opts_of(cfg)->start) / opts_of(cfg)->speed * 1e9);
 
 	return due > now->mono_ns ? now->mono_ns : due;
 }
@@ -703,7 +767,7 @@ static int poll_clocked(struct tracker *t, struct replay *rp, const struct track
 	size_t lo, hi;
 	int put = 0;
 
-	if (cfg->loop) {
+	if (opts_of(cfg)->loop) {
 		pass = (int64_t)floor(el / rp->duration);
 		ct = el - (double)pass * rp->duration;
 	} else {
@@ -764,7 +828,7 @@ static int poll_stepped(struct tracker *t, struct replay *rp, const struct track
 		size_t k = 0;
 
 		/* the first instant comes by itself */
-		while (k + 1 < rp->n_inst && rp->ev[rp->inst[k + 1]].t <= t->cfg->start)
+		while (k + 1 < rp->n_inst && rp->ev[rp->inst[k + 1]].t <= opts_of(t->cfg)->start)
 			k++;
 		rp->cur_inst = (int64_t)k - 1;
 		steps++;
@@ -773,7 +837,7 @@ static int poll_stepped(struct tracker *t, struct replay *rp, const struct track
 		int64_t next = rp->cur_inst + 1;
 		size_t k = (size_t)(next % (int64_t)rp->n_inst);
 
-		if (!t->cfg->loop && next >= (int64_t)rp->n_inst) {
+		if (!opts_of(t->cfg)->loop && next >= (int64_t)rp->n_inst) {
 			atomic_store_explicit(&t->st.state, TRACKER_ENDED, memory_order_relaxed);
 			break;
 		}
@@ -793,12 +857,12 @@ static int poll_interpolated(struct tracker *t, struct replay *rp, const struct 
 	uint64_t due;
 	int put = 0;
 
-	if (cfg->step) {
+	if (opts_of(cfg)->step) {
 		uint64_t req = atomic_load_explicit(&rp->steps_req, memory_order_acquire);
 
 		if (rp->last_sample >= 0 && req == rp->steps_done)
 			return 0;
-		k = rp->last_sample < 0 ? (int64_t)floor(cfg->start / rp->sample_period)
+		k = rp->last_sample < 0 ? (int64_t)floor(opts_of(cfg)->start / rp->sample_period)
 					: rp->last_sample + (int64_t)(req - rp->steps_done);
 		rp->steps_done = req;
 		due = now->mono_ns;
@@ -813,7 +877,7 @@ static int poll_interpolated(struct tracker *t, struct replay *rp, const struct 
 	}
 	rp->last_sample = k;
 	el = (double)k * rp->sample_period;
-	if (cfg->loop) {
+	if (opts_of(cfg)->loop) {
 		ct = fmod(el, rp->duration);
 	} else {
 		ct = el;
@@ -856,7 +920,7 @@ static int replay_poll(struct tracker *t, const struct tracker_clock *now)
 		rp->t0_ns = now->mono_ns;
 	if (rp->track)
 		return poll_interpolated(t, rp, now);
-	if (t->cfg->step)
+	if (opts_of(t->cfg)->step)
 		return poll_stepped(t, rp, now);
 	return poll_clocked(t, rp, now);
 }
@@ -873,7 +937,7 @@ static int replay_fd(struct tracker *t)
 
 bool replay_is_stepped(const struct tracker *t)
 {
-	return t->drv == &replay_driver && t->priv && t->cfg->step;
+	return t->drv == &replay_driver && t->priv && opts_of(t->cfg)->step;
 }
 
 int replay_step(struct tracker *t, unsigned n)
@@ -902,14 +966,35 @@ int replay_malformed_line(const struct tracker *t)
 }
 
 const struct tracker_driver replay_driver = {
-	.name = "replay",
-	.summary = "plays a recording of the daemon or a sensor CSV (../shared/mocap/csv format): real time, faster, "
+	.type = {
+		.name = "replay",
+		.doc = "plays a recording of the daemon or a sensor CSV (../shared/mocap/csv format): real time, faster, "
 		   "stepped, or rebuilt from keyframes",
-	.sensor_count = replay_sensor_count,
-	.sensor_name = replay_sensor_name,
-	.check = replay_check,
+		.keys = replay_keys,
+		.n_keys = CFG_N(replay_keys),
+		.opt_size = sizeof(struct replay_opts),
+		.built = true,
+		.check = replay_check,
+		.sensor_count = replay_sensor_count,
+		.sensor_name = replay_sensor_name,
+	},
 	.open = replay_open,
 	.close = replay_close,
 	.poll = replay_poll,
 	.fd = replay_fd,
 };
+
+void replay_log_damage(const struct tracker *t)
+{
+	struct recfile_damage d;
+
+	for (size_t k = 0; replay_damage(t, k, &d) == 0; k++) {
+		if (k == 20) {
+			pr_warning("source %s: more damaged regions not listed", t->name);
+			break;
+		}
+		pr_warning("source %s: %s: %s at bytes %zu..%zu (%zu bytes) skipped%s", t->name, opts_of(t->cfg)->file,
+			   d.truncated ? "cut-off record" : "damaged region", d.off, d.off + d.len, d.len,
+			   d.truncated ? "" : ", replay resumes at the next good record");
+	}
+}

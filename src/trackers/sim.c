@@ -15,6 +15,7 @@
  * with its own phase.
  */
 #include "trackers/tracker.h"
+#include "trackers/sim.h"
 
 #include "ik/arm.h"
 #include "ik/avatar.h"
@@ -26,6 +27,44 @@
 #include <stdbool.h>
 #include <sys/timerfd.h>
 #include <unistd.h>
+
+static const struct cfg_key sim_keys[] = {
+	{ .name = "people",
+	  .kind = CFG_INT,
+	  CFG_AT(struct sim_opts, people),
+	  .min = 1,
+	  .max = CFG_MAX_AVATARS,
+	  .def = "1",
+	  .doc = "simulated people; their sensors are pN.head, pN.left_hand, pN.right_hand" },
+	{ .name = "seed",
+	  .kind = CFG_U32,
+	  CFG_AT(struct sim_opts, seed),
+	  .min = 0,
+	  .max = 4294967295.0,
+	  .def = "1",
+	  .doc = "seed of the motion (same seed, same motion)" },
+	{ .name = "sample_rate",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct sim_opts, sample_rate),
+	  .min = 1,
+	  .max = 4000,
+	  .def = "240",
+	  .unit = "Hz",
+	  .doc = "sensor samples per second (replay: made between keyframes when interpolate is set)" },
+	{ .name = "spacing",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct sim_opts, spacing),
+	  .min = 0,
+	  .max = 100,
+	  .def = "1",
+	  .unit = "m",
+	  .doc = "distance between simulated people along x" },
+};
+
+static const struct sim_opts *opts_of(const struct cfg_source *c)
+{
+	return c->opt;
+}
 
 #define SIM_CYCLE_S 20.0
 #define SIM_ROLES 3
@@ -45,7 +84,7 @@ static const char *const roles[SIM_ROLES] = { "head", "left_hand", "right_hand" 
 
 static int sim_sensor_count(const struct cfg_source *cfg)
 {
-	return cfg->people * SIM_ROLES;
+	return opts_of(cfg)->people * SIM_ROLES;
 }
 
 static void sim_sensor_name(const struct cfg_source *cfg, int i, char *buf, size_t len)
@@ -130,8 +169,8 @@ static int sim_open(struct tracker *t, char *err, size_t errlen)
 		snprintf(err, errlen, "[source %s]: out of memory", cfg->name);
 		return -ENOMEM;
 	}
-	s->people = cfg->people;
-	s->n_table = (int)lround(SIM_CYCLE_S * cfg->sample_rate);
+	s->people = opts_of(cfg)->people;
+	s->n_table = (int)lround(SIM_CYCLE_S * opts_of(cfg)->sample_rate);
 	s->table = malloc((size_t)s->n_table * SIM_ROLES * sizeof(*s->table));
 	if (!s->table) {
 		free(s);
@@ -140,8 +179,8 @@ static int sim_open(struct tracker *t, char *err, size_t errlen)
 	}
 	avatar_init(&av, &dims, &head_off, NULL);
 	for (int i = 0; i < s->n_table; i++)
-		sim_pose_at(&av, cfg->seed, i / cfg->sample_rate, &s->table[i * SIM_ROLES]);
-	s->period_ns = (uint64_t)llround(1e9 / cfg->sample_rate);
+		sim_pose_at(&av, opts_of(cfg)->seed, i / opts_of(cfg)->sample_rate, &s->table[i * SIM_ROLES]);
+	s->period_ns = (uint64_t)llround(1e9 / opts_of(cfg)->sample_rate);
 	clock_gettime(CLOCK_MONOTONIC, &now);
 	s->t0_ns = (uint64_t)now.tv_sec * 1000000000ull + (uint64_t)now.tv_nsec;
 	s->last = -1;
@@ -189,7 +228,7 @@ static int sim_poll(struct tracker *t, const struct tracker_clock *now)
 		int64_t i = (n + (int64_t)k * 7919) % s->n_table;
 		const struct dq *row = &s->table[i * SIM_ROLES];
 		/* a pure translation along x: the dual part gains x/2 times the rotation */
-		sc_t hx = SC_C(0.5) * k * t->cfg->spacing;
+		sc_t hx = SC_C(0.5) * k * opts_of(t->cfg)->spacing;
 
 		for (int r = 0; r < SIM_ROLES; r++) {
 			struct dq placed = row[r];
@@ -221,10 +260,16 @@ static int sim_fd(struct tracker *t)
 }
 
 const struct tracker_driver sim_driver = {
-	.name = "sim",
-	.summary = "synthetic human-like head and hand motion, any number of people",
-	.sensor_count = sim_sensor_count,
-	.sensor_name = sim_sensor_name,
+	.type = {
+		.name = "sim",
+		.doc = "synthetic human-like head and hand motion, any number of people",
+		.keys = sim_keys,
+		.n_keys = CFG_N(sim_keys),
+		.opt_size = sizeof(struct sim_opts),
+		.built = true,
+		.sensor_count = sim_sensor_count,
+		.sensor_name = sim_sensor_name,
+	},
 	.open = sim_open,
 	.close = sim_close,
 	.poll = sim_poll,

@@ -48,13 +48,8 @@ struct tracker_clock {
 };
 
 struct tracker_driver {
-	const char *name;
-	const char *summary;
-	/* the sensors a source of this driver has, from its config alone */
-	int (*sensor_count)(const struct cfg_source *cfg);
-	void (*sensor_name)(const struct cfg_source *cfg, int i, char *buf, size_t len);
-	/* checks what config cannot (a file's content); 0 or -1 with err */
-	int (*check)(const struct cfg_source *cfg, char *err, size_t errlen);
+	/* its name, keys, options, checks and sensors, as the configuration sees them */
+	struct cfg_type type;
 	/* start-up: allocate, open; 0 or a negative errno (err says why) */
 	int (*open)(struct tracker *t, char *err, size_t errlen);
 	void (*close)(struct tracker *t);
@@ -107,23 +102,14 @@ struct tracker {
 	uint16_t rec_source;  /* this tracker's index in the recording */
 };
 
-/* the table: index = cfg_source.driver */
+/* the table: index = cfg_source.driver (trackers.c) */
 extern const struct tracker_driver *const trackers_table[];
 extern const int trackers_count;
-int trackers_find(const char *name);
 
 /* start-up: allocates the slots and calls the driver's open() */
 int tracker_open(struct tracker *t, const struct cfg_source *cfg, char *err, size_t errlen);
 void tracker_close(struct tracker *t);
 /* a sample in the tracker's frame, stored in world coordinates (through the sensor's mount, if any) */
 void tracker_put(struct tracker *t, int sensor, const struct dq *local, uint64_t t_ns, uint64_t arrival_ns);
-int tracker_sensor_lookup(const struct cfg_source *cfg, const char *name);
-
-extern const struct tracker_driver sim_driver;
-extern const struct tracker_driver replay_driver;
-extern const struct tracker_driver modbus_driver;
-extern const struct tracker_driver can_driver;
-extern const struct tracker_driver hydra_driver;
-extern const struct tracker_driver polhemus_driver;
 
 #endif /* AGW_TRACKER_H */

@@ -13,32 +13,61 @@
 #include <stdlib.h>
 #include <string.h>
 
+/*
+ * Every tracker driver, one row each. Those whose library pkg-config did not
+ * find at build time (the Makefile's HAVE_*) are left out, and the
+ * configuration says so for their type.
+ */
+#ifndef HAVE_LIBMODBUS
+#define HAVE_LIBMODBUS 1
+#endif
+#ifndef HAVE_HIDAPI
+#define HAVE_HIDAPI 1
+#endif
+#ifndef HAVE_LIBUSB
+#define HAVE_LIBUSB 1
+#endif
+
+extern const struct tracker_driver sim_driver, replay_driver, modbus_driver, can_driver, hydra_driver, polhemus_driver;
+
 const struct tracker_driver *const trackers_table[] = {
-	&sim_driver, &replay_driver, &modbus_driver, &can_driver, &hydra_driver, &polhemus_driver,
+	&sim_driver,	  &replay_driver,
+#if HAVE_LIBMODBUS
+	&modbus_driver,
+#endif
+	&can_driver,
+#if HAVE_HIDAPI
+	&hydra_driver,
+#endif
+#if HAVE_LIBUSB
+	&polhemus_driver,
+#endif
 };
 
 const int trackers_count = (int)(sizeof(trackers_table) / sizeof(trackers_table[0]));
 
-int trackers_find(const char *name)
-{
-	for (int i = 0; i < trackers_count; i++)
-		if (!strcmp(trackers_table[i]->name, name))
-			return i;
-	return -1;
-}
+/* drivers this build left out: known, so that the configuration can say why */
+static const struct cfg_type not_built[] = {
+#if !HAVE_LIBMODBUS
+	{ .name = "modbus", .doc = "poses polled from a Modbus TCP device (needs libmodbus)" },
+#endif
+#if !HAVE_HIDAPI
+	{ .name = "hydra", .doc = "Razer Hydra (needs hidapi)" },
+#endif
+#if !HAVE_LIBUSB
+	{ .name = "polhemus", .doc = "Polhemus trackers (needs libusb)" },
+#endif
+	{ .name = NULL },
+};
 
-int tracker_sensor_lookup(const struct cfg_source *cfg, const char *name)
+const struct cfg_type *cfg_source_type(int i)
 {
-	const struct tracker_driver *d = trackers_table[cfg->driver];
-	int n = d->sensor_count(cfg);
-	char buf[CFG_NAME_MAX * 2];
-
-	for (int i = 0; i < n; i++) {
-		d->sensor_name(cfg, i, buf, sizeof(buf));
-		if (!strcmp(buf, name))
-			return i;
-	}
-	return -1;
+	if (i < 0)
+		return NULL;
+	if (i < trackers_count)
+		return &trackers_table[i]->type;
+	i -= trackers_count;
+	return i < (int)(sizeof(not_built) / sizeof(not_built[0])) - 1 ? &not_built[i] : NULL;
 }
 
 int tracker_open(struct tracker *t, const struct cfg_source *cfg, char *err, size_t errlen)
@@ -53,7 +82,7 @@ int tracker_open(struct tracker *t, const struct cfg_source *cfg, char *err, siz
 	snprintf(t->name, sizeof(t->name), "%s", cfg->name);
 	dq_from_rt(&r, &o, &t->world);
 	t->world_identity = cfg->yaw == 0 && o.x == 0 && o.y == 0 && o.z == 0;
-	t->n_sensors = t->drv->sensor_count(cfg);
+	t->n_sensors = t->drv->type.sensor_count(cfg);
 	t->slot = calloc((size_t)t->n_sensors, sizeof(*t->slot));
 	t->mount = calloc((size_t)t->n_sensors, sizeof(*t->mount));
 	t->mounted = calloc((size_t)t->n_sensors, sizeof(*t->mounted));
@@ -64,7 +93,7 @@ int tracker_open(struct tracker *t, const struct cfg_source *cfg, char *err, siz
 	}
 	for (int i = 0; i < cfg->n_mounts; i++) {
 		const struct cfg_mount *m = &cfg->mount[i];
-		int s = tracker_sensor_lookup(cfg, m->sensor);
+		int s = cfg_sensor_lookup(cfg, m->sensor);
 		struct quat q = { m->q[0], m->q[1], m->q[2], m->q[3] };
 		struct vec3 p = { m->p[0], m->p[1], m->p[2] };
 

@@ -1,0 +1,20 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * vrpn.h - the options of vrpn.c's configuration sections (its keys' values).
+ */
+#ifndef AGW_VRPN_H
+#define AGW_VRPN_H
+
+#include "config/config.h"
+
+struct vrpn_opts {
+	char address[CFG_PATH_MAX]; /* udp/multicast: destination; tcp: listen address */
+	int port;
+	int max_clients;
+	int client_buffer;	   /* bytes per stream client */
+	char device[CFG_PATH_MAX]; /* vrpn: device name pattern, %d = avatar id */
+	bool udp;		   /* vrpn: low-latency reports over UDP when a client offers a port */
+	double client_timeout;	   /* vrpn: s a client may stall or take over its handshake */
+};
+
+#endif /* AGW_VRPN_H */
