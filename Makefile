@@ -69,22 +69,35 @@ $(LIBIK): $(CORE_OBJ)
 # drivers), frames (latest samples -> pose frames), publish (outputs), daemon
 # (loop, control, systemd). main.c alone makes the program.
 INIH_LIBS = $(shell pkg-config --libs inih 2>/dev/null || echo -linih)
-# one line per library the daemon links (each from its Debian -dev package)
-HIDAPI_LIBS = $(shell pkg-config --libs hidapi-hidraw 2>/dev/null || echo -lhidapi-hidraw)
-LIBUSB_LIBS = $(shell pkg-config --libs libusb-1.0 2>/dev/null || echo -lusb-1.0)
-MODBUS_LIBS = $(shell pkg-config --libs libmodbus 2>/dev/null || echo -lmodbus)
-LWS_LIBS = $(shell pkg-config --libs libwebsockets 2>/dev/null || echo -lwebsockets)
-LO_LIBS = $(shell pkg-config --libs liblo 2>/dev/null || echo -llo)
 ZLIB_LIBS = $(shell pkg-config --libs zlib 2>/dev/null || echo -lz)
-DEP_LIBS = $(INIH_LIBS)
-DEP_LIBS += $(MODBUS_LIBS)
-DEP_LIBS += $(LO_LIBS)
-DEP_LIBS += $(LWS_LIBS)
-DEP_LIBS += $(ZLIB_LIBS)
-DEP_LIBS += $(HIDAPI_LIBS)
-DEP_LIBS += $(LIBUSB_LIBS)
+# Optional libraries (each from its Debian -dev package): a driver or output
+# whose library pkg-config cannot find is left out of the build, and the
+# daemon says "not built into this daemon" for its type. make test needs them all.
+have = $(shell pkg-config --exists $(1) 2>/dev/null && echo 1 || echo 0)
+HAVE_LIBMODBUS := $(call have,libmodbus)
+HAVE_LIBLO := $(call have,liblo)
+HAVE_LIBWEBSOCKETS := $(call have,libwebsockets)
+HAVE_HIDAPI := $(call have,hidapi-hidraw)
+HAVE_LIBUSB := $(call have,libusb-1.0)
+FEATURES = -DHAVE_LIBMODBUS=$(HAVE_LIBMODBUS) -DHAVE_LIBLO=$(HAVE_LIBLO) -DHAVE_LIBWEBSOCKETS=$(HAVE_LIBWEBSOCKETS) \
+	-DHAVE_HIDAPI=$(HAVE_HIDAPI) -DHAVE_LIBUSB=$(HAVE_LIBUSB)
+# the sources each optional library takes with it
+OPT_SRC_LIBMODBUS = src/trackers/modbus_in.c src/publish/modbus_server.c src/publish/modbus_map.c src/wire/regcodec.c
+OPT_SRC_LIBLO = src/publish/osc.c
+OPT_SRC_LIBWEBSOCKETS = src/publish/websocket.c
+OPT_SRC_HIDAPI = src/trackers/hydra.c
+OPT_SRC_LIBUSB = src/trackers/polhemus.c
+OPT_LIBS_LIBMODBUS = libmodbus
+OPT_LIBS_LIBLO = liblo
+OPT_LIBS_LIBWEBSOCKETS = libwebsockets
+OPT_LIBS_HIDAPI = hidapi-hidraw
+OPT_LIBS_LIBUSB = libusb-1.0
+OPTIONAL = LIBMODBUS LIBLO LIBWEBSOCKETS HIDAPI LIBUSB
+LEFT_OUT = $(foreach o,$(OPTIONAL),$(if $(filter 0,$(HAVE_$(o))),$(OPT_SRC_$(o))))
+DEP_LIBS = $(INIH_LIBS) $(ZLIB_LIBS)
+DEP_LIBS += $(foreach o,$(OPTIONAL),$(if $(filter 1,$(HAVE_$(o))),$(shell pkg-config --libs $(OPT_LIBS_$(o)))))
 LIBS = $(DEP_LIBS) -lpthread -lm
-GW_SRC = $(filter-out src/daemon/main.c,$(wildcard src/base/*.c src/wire/*.c src/config/*.c src/trackers/*.c \
+GW_SRC = $(filter-out src/daemon/main.c $(LEFT_OUT),$(wildcard src/base/*.c src/wire/*.c src/config/*.c src/trackers/*.c \
 	src/frames/*.c src/publish/*.c src/record/*.c src/daemon/*.c))
 GW_OBJ = $(patsubst src/%.c,$(BUILD)/obj/%.o,$(GW_SRC)) $(BUILD)/obj/gen/builtin.o
 # files compiled into the daemon: the demo configuration and its clip
@@ -102,7 +115,7 @@ DAEMON = $(BUILD)/avatargw
 
 $(BUILD)/obj/%.o: src/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -D_GNU_SOURCE -Isrc -c $< -o $@
+	$(CC) $(ALL_CFLAGS) $(FEATURES) -D_GNU_SOURCE -Isrc -c $< -o $@
 
 $(LIBGW): $(GW_OBJ)
 	@rm -f $@
@@ -188,7 +201,7 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
 TEST_HELPERS = $(BUILD)/tests/osc-recv
 $(BUILD)/tests/osc-recv: tests/helpers/osc_recv.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -D_GNU_SOURCE $(LDFLAGS) -o $@ $< $(LO_LIBS)
+	$(CC) $(ALL_CFLAGS) -D_GNU_SOURCE $(LDFLAGS) -o $@ $< $(shell pkg-config --libs liblo)
 
 # test_alloc counts every allocation made by our code: wrapped at link time
 $(BUILD)/tests/test_alloc: TEST_LDFLAGS = -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free

@@ -43,17 +43,17 @@ const struct output_ops *const outputs_table[] = {
 
 const int outputs_count = (int)(sizeof(outputs_table) / sizeof(outputs_table[0]));
 
-/* types this build left out: known, so that the configuration can say why */
+/* types this build left out: known, so that the configuration can say why (doc: the missing library) */
 static const struct cfg_type not_built[] = {
 #if !HAVE_LIBMODBUS
-	{ .name = "modbus", .doc = "Modbus TCP server (needs libmodbus)" },
+	{ .name = "modbus", .doc = "libmodbus" },
 #endif
 #if !HAVE_LIBLO
-	{ .name = "vmc", .doc = "the VMC protocol over OSC (needs liblo)" },
-	{ .name = "vrchat", .doc = "VRChat's OSC trackers (needs liblo)" },
+	{ .name = "vmc", .doc = "liblo" },
+	{ .name = "vrchat", .doc = "liblo" },
 #endif
 #if !HAVE_LIBWEBSOCKETS
-	{ .name = "websocket", .doc = "JSON frames and the browser viewer (needs libwebsockets)" },
+	{ .name = "websocket", .doc = "libwebsockets" },
 #endif
 	{ .name = NULL },
 };

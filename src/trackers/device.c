@@ -28,9 +28,17 @@
 
 const struct device_codec *device_codec_find(const char *name)
 {
-	static const struct device_codec *const all[] = { &hydra_codec, &polhemus_codec };
+	static const struct device_codec *const all[] = {
+#if !defined(HAVE_HIDAPI) || HAVE_HIDAPI
+		&hydra_codec,
+#endif
+#if !defined(HAVE_LIBUSB) || HAVE_LIBUSB
+		&polhemus_codec,
+#endif
+		NULL,
+	};
 
-	for (size_t i = 0; i < sizeof(all) / sizeof(all[0]); i++)
+	for (size_t i = 0; all[i]; i++)
 		if (!strcmp(all[i]->name, name))
 			return all[i];
 	return NULL;

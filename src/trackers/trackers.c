@@ -46,16 +46,16 @@ const struct tracker_driver *const trackers_table[] = {
 
 const int trackers_count = (int)(sizeof(trackers_table) / sizeof(trackers_table[0]));
 
-/* drivers this build left out: known, so that the configuration can say why */
+/* drivers this build left out: known, so that the configuration can say why (doc: the missing library) */
 static const struct cfg_type not_built[] = {
 #if !HAVE_LIBMODBUS
-	{ .name = "modbus", .doc = "poses polled from a Modbus TCP device (needs libmodbus)" },
+	{ .name = "modbus", .doc = "libmodbus" },
 #endif
 #if !HAVE_HIDAPI
-	{ .name = "hydra", .doc = "Razer Hydra (needs hidapi)" },
+	{ .name = "hydra", .doc = "hidapi" },
 #endif
 #if !HAVE_LIBUSB
-	{ .name = "polhemus", .doc = "Polhemus trackers (needs libusb)" },
+	{ .name = "polhemus", .doc = "libusb" },
 #endif
 	{ .name = NULL },
 };
