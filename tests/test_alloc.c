@@ -147,7 +147,7 @@ static void test_loop_allocates_nothing(void **state)
 	snprintf(conf, sizeof(conf), conf_fmt, free_tcp_port(), tport);
 	assert_int_equal(config_load_text(&c, "alloc.conf", conf, err, sizeof(err)), 0);
 	assert_int_equal(gw_open(&g, &c, NULL, 42, err, sizeof(err)), 0);
-	assert_int_equal(recorder_apply(&rec, &g, err, sizeof(err)), 0);
+	assert_int_equal(gw_record(&g, &rec, err, sizeof(err)), 0);
 	assert_int_equal(loop_start(&l, &g, err, sizeof(err)), 0);
 	/* subscribers: one that reads, one (TCP) that never reads and falls behind */
 	tcp = socket(AF_INET, SOCK_STREAM, 0);

@@ -518,7 +518,7 @@ static void send_describe(struct out_fx *x, int avatar, double rate_hz)
 		d.joint[j].lo = (float)((j ? lim[(j - 1) % 8][0] : -30) * DEG);
 		d.joint[j].hi = (float)((j ? lim[(j - 1) % 8][1] : 30) * DEG);
 	}
-	m = (struct out_msg){ x->desc_msg, (uint16_t)wire_encode_describe(&d, x->desc_msg), (uint16_t)avatar, NULL };
+	m = out_msg_describe(&d, x->desc_msg, (uint16_t)avatar);
 	x->o.ops->send(&x->o, &m, 1);
 }
 
@@ -541,7 +541,7 @@ static void send_frame(struct out_fx *x, int avatar, const double deg[WIRE_JOINT
 	f.arm[WIRE_ARM_LEFT].ik_flags = IK_REACHED | IK_LIMITED;
 	for (int j = 0; j < WIRE_JOINTS; j++)
 		f.joint[j] = (float)(deg[j] * DEG);
-	m = (struct out_msg){ x->frame_msg, (uint16_t)wire_encode_frame(&f, x->frame_msg), (uint16_t)avatar, NULL };
+	m = out_msg_frame(&f, x->frame_msg, (uint16_t)avatar);
 	x->o.ops->send(&x->o, &m, 1);
 }
 

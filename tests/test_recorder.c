@@ -134,7 +134,7 @@ static void test_round_trip(void **state)
 	(void)state;
 	tmp_dir(dir, sizeof(dir));
 	open_gateway(&g, dir, "record_messages = yes\nrecord_flush = 0.05\n");
-	assert_int_equal(recorder_apply(&rec, &g, err, sizeof(err)), 0);
+	assert_int_equal(gw_record(&g, &rec, err, sizeof(err)), 0);
 	assert_non_null(rec);
 	assert_int_equal(loop_start(&l, &g, err, sizeof(err)), 0);
 	sleep_ms(600);
@@ -193,7 +193,7 @@ static void rotation(const char *keys, double max_size)
 
 	tmp_dir(dir, sizeof(dir));
 	open_gateway(&g, dir, keys);
-	assert_int_equal(recorder_apply(&rec, &g, err, sizeof(err)), 0);
+	assert_int_equal(gw_record(&g, &rec, err, sizeof(err)), 0);
 	assert_int_equal(loop_start(&l, &g, err, sizeof(err)), 0);
 	sleep_ms(700);
 	loop_stop(l);
@@ -237,7 +237,7 @@ static void test_overflow_marked(void **state)
 {
 	static struct gateway g;
 	struct recorder *rec = NULL;
-	struct sensor_slot slot;
+	struct recfile_sample smp;
 	struct rec_index ix;
 	char dir[64], err[512], files[4][512];
 	const struct recorder_stats *st;
@@ -246,13 +246,14 @@ static void test_overflow_marked(void **state)
 	(void)state;
 	tmp_dir(dir, sizeof(dir));
 	open_gateway(&g, dir, "record_buffer = 64\nrecord_flush = 0\n");
-	assert_int_equal(recorder_apply(&rec, &g, err, sizeof(err)), 0);
-	memset(&slot, 0, sizeof(slot));
-	dq_identity(&slot.pose);
+	assert_int_equal(gw_record(&g, &rec, err, sizeof(err)), 0);
+	memset(&smp, 0, sizeof(smp));
+	smp.sensor = 1;
+	smp.q[0] = 1;
 	/* faster than any writer: 6.4 MB in a burst into a 64 KiB buffer (this thread is the only producer) */
 	for (int i = 0; i < pushes; i++) {
-		slot.arrival_ns = (uint64_t)i + 1;
-		recorder_sample(rec, 0, 1, &slot);
+		smp.arrival_ns = (uint64_t)i + 1;
+		recorder_sample(rec, &smp);
 	}
 	st = recorder_stats(rec);
 	sleep_ms(50);
@@ -287,7 +288,7 @@ static void test_unwritable(void **state)
 
 	(void)state;
 	open_gateway(&g, "/proc/avatargw-no-such-dir", "record_flush = 0\n");
-	assert_int_equal(recorder_apply(&rec, &g, err, sizeof(err)), 0);
+	assert_int_equal(gw_record(&g, &rec, err, sizeof(err)), 0);
 	assert_int_equal(loop_start(&l, &g, err, sizeof(err)), 0);
 	sleep_ms(300);
 	loop_stop(l);
@@ -311,14 +312,15 @@ static void test_apply(void **state)
 	(void)state;
 	tmp_dir(dir, sizeof(dir));
 	open_gateway(&g1, dir, "");
-	assert_int_equal(recorder_apply(&rec, &g1, err, sizeof(err)), 0);
+	assert_int_equal(gw_record(&g1, &rec, err, sizeof(err)), 0);
 	first = rec;
 	open_gateway(&g2, dir, "");
-	assert_int_equal(recorder_apply(&rec, &g2, err, sizeof(err)), 0);
+	assert_int_equal(gw_record(&g2, &rec, err, sizeof(err)), 0);
 	assert_ptr_equal(rec, first);
-	assert_ptr_equal(g2.trk[0].rec, rec);
+	assert_ptr_equal(g2.trk[0].tap_ctx, rec);
+	assert_ptr_equal(g2.rec, rec);
 	open_gateway(&g3, dir, "record_fsync = yes\n");
-	assert_int_equal(recorder_apply(&rec, &g3, err, sizeof(err)), 0);
+	assert_int_equal(gw_record(&g3, &rec, err, sizeof(err)), 0);
 	assert_non_null(rec);
 	recorder_close(rec);
 	/* two writers, two files (the second named -1 if opened within the same second): 2 + 1 SESSIONs */

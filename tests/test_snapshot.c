@@ -25,11 +25,12 @@ struct shared {
 	_Atomic bool done;
 };
 
-static uint16_t make(uint8_t *buf, uint16_t avatar, uint32_t seq)
+static struct out_msg make(struct wire_frame *fp, uint8_t *buf, uint16_t avatar, uint32_t seq)
 {
 	struct wire_frame f;
 
 	memset(&f, 0, sizeof(f));
+	f.in.buttons[0] = seq;
 	f.h.avatar_id = avatar;
 	f.h.seq = seq;
 	f.h.sample_time_ns = seq;
@@ -39,22 +40,20 @@ static uint16_t make(uint8_t *buf, uint16_t avatar, uint32_t seq)
 	for (int s = 0; s < WIRE_SEGMENTS; s++)
 		for (int k = 0; k < 3; k++)
 			f.segment[s].p[k] = (float)seq;
-	return (uint16_t)wire_encode_frame(&f, buf);
+	*fp = f;
+	return out_msg_frame(fp, buf, avatar);
 }
 
 static void *writer(void *arg)
 {
 	struct shared *sh = arg;
 	uint8_t buf[N_AVATARS][WIRE_MAX_MSG];
-	struct pose_frame pf[N_AVATARS];
+	struct wire_frame f[N_AVATARS];
 	struct out_msg m[N_AVATARS];
 
-	memset(pf, 0, sizeof(pf));
 	for (uint32_t seq = 1; seq <= N_FRAMES; seq++) {
-		for (int a = 0; a < N_AVATARS; a++) {
-			pf[a].buttons[0] = seq;
-			m[a] = (struct out_msg){ buf[a], make(buf[a], (uint16_t)a, seq), (uint16_t)a, &pf[a] };
-		}
+		for (int a = 0; a < N_AVATARS; a++)
+			m[a] = make(&f[a], buf[a], (uint16_t)a, seq);
 		snap_put_batch(&sh->snap, sh->wants, m, N_AVATARS, seq);
 	}
 	atomic_store(&sh->done, true);
@@ -122,6 +121,7 @@ static void test_names_from_describe(void **state)
 	struct snap s;
 	struct wire_describe d;
 	uint8_t dbuf[WIRE_MAX_MSG], fbuf[WIRE_MAX_MSG];
+	struct wire_frame fr;
 	struct out_msg m[2];
 	bool wants[1] = { true }, fresh;
 	const struct snap_entry *e;
@@ -129,8 +129,8 @@ static void test_names_from_describe(void **state)
 	(void)state;
 	memset(&d, 0, sizeof(d));
 	strcpy(d.avatar_name, "alice");
-	m[0] = (struct out_msg){ dbuf, (uint16_t)wire_encode_describe(&d, dbuf), 0, NULL };
-	m[1] = (struct out_msg){ fbuf, make(fbuf, 0, 5), 0, NULL };
+	m[0] = out_msg_describe(&d, dbuf, 0);
+	m[1] = make(&fr, fbuf, 0, 5);
 	assert_int_equal(snap_init(&s, 1), 0);
 	snap_put_batch(&s, wants, &m[1], 1, 1); /* before the DESCRIBE: no name yet */
 	e = snap_take(&s, 0, &fresh);

@@ -187,7 +187,7 @@ static void cycle(struct output *o, const struct out_msg *m, int n)
 }
 
 /* a frame of avatar index a: every segment finite but the head; joints j * 0.01 */
-static uint16_t make_frame(uint8_t *buf, uint16_t id)
+static struct out_msg make_frame(struct wire_frame *fp, uint8_t *buf, uint16_t id, uint16_t avatar)
 {
 	struct wire_frame f;
 
@@ -216,14 +216,15 @@ static uint16_t make_frame(uint8_t *buf, uint16_t id)
 	}
 	for (int j = 0; j < WIRE_JOINTS; j++)
 		f.joint[j] = 0.01f * (float)j;
-	return (uint16_t)wire_encode_frame(&f, buf);
+	*fp = f;
+	return out_msg_frame(fp, buf, avatar);
 }
 
 static void test_reports_buttons_and_analog(void **state)
 {
 	struct fixture fx;
 	struct peer p;
-	struct pose_frame pf[2];
+	struct wire_frame pf[2];
 	uint8_t frames[2][WIRE_MAX_MSG];
 	struct out_msg m[2];
 	struct vmsg msg;
@@ -231,20 +232,19 @@ static void test_reports_buttons_and_analog(void **state)
 	int poses = 0, analogs = 0, changes = 0, states = 0;
 
 	(void)state;
-	memset(pf, 0, sizeof(pf));
 	open_output(&fx, "Rig-%d", NULL);
 	for (int a = 0; a < 2; a++)
-		m[a] = (struct out_msg){ frames[a], make_frame(frames[a], fx.ids[a]), (uint16_t)a, &pf[a] };
-	pf[0].analog[2][1] = 0.75f; /* right hand, second value */
-	pf[0].buttons[1] = 1u << 4; /* left hand, button 4: held from the start */
+		m[a] = make_frame(&pf[a], frames[a], fx.ids[a], (uint16_t)a);
+	pf[0].in.analog[2][1] = 0.75f; /* right hand, second value */
+	pf[0].in.buttons[1] = 1u << 4; /* left hand, button 4: held from the start */
 	cycle(&fx.o, m, 2);	    /* the server knows the buttons before the client comes */
 	peer_connect(&p, fx.port);
 	for (int i = 0; i < 5; i++)
 		cycle(&fx.o, m, 2);
 	/* a press and a release on avatar 9 */
-	pf[1].buttons[2] = 1u << 31;
+	pf[1].in.buttons[2] = 1u << 31;
 	cycle(&fx.o, m, 2);
-	pf[1].buttons[2] = 0;
+	pf[1].in.buttons[2] = 0;
 	cycle(&fx.o, m, 2);
 	peer_read(&p);
 	while (peer_next(&p, &msg, &pos)) {
@@ -305,16 +305,15 @@ static void test_reload_keeps_or_drops_clients(void **state)
 	struct fixture a, b, c;
 	struct peer p;
 	uint8_t frame[WIRE_MAX_MSG];
-	struct pose_frame pf;
+	struct wire_frame pf;
 	struct out_msg m;
 	struct vmsg msg;
 	size_t pos = 0;
 	int n = 0;
 
 	(void)state;
-	memset(&pf, 0, sizeof(pf));
 	open_output(&a, "Avatar%d", NULL);
-	m = (struct out_msg){ frame, make_frame(frame, 3), 0, &pf };
+	m = make_frame(&pf, frame, 3, 0);
 	peer_connect(&p, a.port);
 	for (int i = 0; i < 3; i++)
 		cycle(&a.o, &m, 1);

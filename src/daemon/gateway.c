@@ -7,6 +7,7 @@
 
 #include "base/seqlock.h"
 #include "publish/encode.h"
+#include "record/recfile.h"
 #include "record/recorder.h"
 
 #include <errno.h>
@@ -25,12 +26,12 @@ void gw_clock(struct tracker_clock *c)
 	c->real_off_ns = (int64_t)((uint64_t)r.tv_sec * 1000000000ull + (uint64_t)r.tv_nsec) - (int64_t)c->mono_ns;
 }
 
-static void avatar_setup(struct gateway *g, struct gw_avatar *a, const struct cfg_avatar *c, uint8_t *describe)
+static void avatar_setup(struct gateway *g, struct gw_avatar *a, const struct cfg_avatar *c, uint8_t *describe,
+			 struct wire_describe *d)
 {
 	struct arm_dims dims = { c->dims[0], c->dims[1], c->dims[2], c->dims[3] };
 	struct vec3 off = { c->head_offset[0], c->head_offset[1], c->head_offset[2] };
 	struct arm_limits lim;
-	struct wire_describe d;
 	struct avatar *body = &g->bodies[g->n_bodies];
 
 	a->cfg = c;
@@ -48,6 +49,7 @@ static void avatar_setup(struct gateway *g, struct gw_avatar *a, const struct cf
 		g->n_bodies++;
 	a->av = body;
 	a->describe_msg = describe;
+	a->describe = d;
 	a->kin = c->solver == CFG_SOLVER_MATRIX ? &ik_kin_mat : &ik_kin_dq;
 	ik_default_opts(&a->opts);
 	a->opts.max_iter = c->max_iter;
@@ -59,18 +61,18 @@ static void avatar_setup(struct gateway *g, struct gw_avatar *a, const struct cf
 		a->fs.trk[r] = &g->trk[c->sensor[r].source];
 		a->fs.sensor[r] = c->sensor[r].sensor;
 	}
-	encode_describe(a->av, c->name, g->cfg.daemon.rate, &d);
-	d.h.source_id = g->source_id;
-	d.h.avatar_id = c->id;
-	a->describe_len = (uint16_t)wire_encode_describe(&d, a->describe_msg);
+	encode_describe(a->av, c->name, g->cfg.daemon.rate, d);
+	d->h.source_id = g->source_id;
+	d->h.avatar_id = c->id;
 }
 
 /* the DESCRIBE payloads differ (the header's seq and rev do not count) */
 static bool describe_changed(const struct gw_avatar *a, const struct gw_avatar *b)
 {
-	return a->describe_len != b->describe_len ||
-	       memcmp(a->describe_msg + WIRE_HEADER_LEN, b->describe_msg + WIRE_HEADER_LEN,
-		      (size_t)a->describe_len - WIRE_HEADER_LEN);
+	uint8_t x[WIRE_MAX_MSG], y[WIRE_MAX_MSG];
+	size_t nx = wire_encode_describe(a->describe, x), ny = wire_encode_describe(b->describe, y);
+
+	return nx != ny || memcmp(x + WIRE_HEADER_LEN, y + WIRE_HEADER_LEN, nx - WIRE_HEADER_LEN);
 }
 
 /*
@@ -139,8 +141,11 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 	g->bodies = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*g->bodies));
 	g->msgs = calloc((size_t)g->cfg.n_avatars * 2 + 1, sizeof(*g->msgs));
 	g->frames = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*g->frames));
+	g->wframes = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*g->wframes));
+	g->describes = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*g->describes));
 	ids = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*ids));
-	if (!g->av || !g->arena || !g->describe || !g->bodies || !g->msgs || !g->frames || !ids) {
+	if (!g->av || !g->arena || !g->describe || !g->bodies || !g->msgs || !g->frames || !g->wframes ||
+	    !g->describes || !ids) {
 		free(ids);
 		snprintf(err, errlen, "out of memory");
 		rc = -ENOMEM;
@@ -150,10 +155,11 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 	touch(g->arena, ((size_t)g->cfg.n_avatars + 1) * g->frame_slot);
 	touch(g->msgs, ((size_t)g->cfg.n_avatars * 2 + 1) * sizeof(*g->msgs));
 	touch(g->frames, ((size_t)g->cfg.n_avatars + 1) * sizeof(*g->frames));
+	touch(g->wframes, ((size_t)g->cfg.n_avatars + 1) * sizeof(*g->wframes));
 	for (int i = 0; i < g->cfg.n_avatars; i++) {
 		struct gw_avatar *a = &g->av[i];
 
-		avatar_setup(g, a, &g->cfg.avatar[i], g->describe + (size_t)i * WIRE_MAX_MSG);
+		avatar_setup(g, a, &g->cfg.avatar[i], g->describe + (size_t)i * WIRE_MAX_MSG, &g->describes[i]);
 		ids[i] = a->cfg->id;
 		for (int j = 0; old && j < old->n_avatars; j++) {
 			const struct gw_avatar *o = &old->av[j];
@@ -201,12 +207,55 @@ void gw_close(struct gateway *g)
 		tracker_close(&g->trk[i]);
 	free(g->msgs);
 	free(g->frames);
+	free(g->wframes);
+	free(g->describes);
 	free(g->arena);
 	free(g->describe);
 	free(g->bodies);
 	free(g->av);
 	config_free(&g->cfg);
 	memset(g, 0, sizeof(*g));
+}
+
+/* the recording tap of every tracker: its sample as the recording stores it */
+static void tap_sample(void *ctx, uint16_t source, uint16_t sensor, const struct sensor_slot *s)
+{
+	struct recfile_sample smp;
+	struct vec3 p;
+
+	dq_translation(&s->pose, &p);
+	smp.source = source;
+	smp.sensor = sensor;
+	smp.buttons = s->buttons;
+	smp.t_ns = s->t_ns;
+	smp.arrival_ns = s->arrival_ns;
+	smp.p[0] = (float)p.x;
+	smp.p[1] = (float)p.y;
+	smp.p[2] = (float)p.z;
+	smp.q[0] = (float)s->pose.r.w;
+	smp.q[1] = (float)s->pose.r.x;
+	smp.q[2] = (float)s->pose.r.y;
+	smp.q[3] = (float)s->pose.r.z;
+	smp.has_analog = false;
+	for (int i = 0; i < 4; i++) {
+		smp.analog[i] = s->analog[i];
+		smp.has_analog |= s->analog[i] != 0.0f;
+	}
+	recorder_sample(ctx, &smp);
+}
+
+int gw_record(struct gateway *g, struct recorder **rp, char *err, size_t errlen)
+{
+	int rc = recorder_apply(rp, &g->cfg, g->source_id, err, errlen);
+	struct recorder *r = rc ? NULL : *rp;
+
+	for (int i = 0; i < g->n_trackers; i++) {
+		g->trk[i].tap = r ? tap_sample : NULL;
+		g->trk[i].tap_ctx = r;
+		g->trk[i].tap_source = (uint16_t)i;
+	}
+	g->rec = r;
+	return rc;
 }
 
 int gw_event_fds(struct gateway *g, int *fds, int max)
@@ -313,7 +362,7 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 	for (int i = 0; i < g->n_avatars; i++) {
 		struct gw_avatar *a = &g->av[i];
 		struct pose_frame *pf = &g->frames[i];
-		struct wire_frame wf;
+		struct wire_frame *wf = &g->wframes[i];
 		struct encode_in in = { a->av, pf, NULL, false };
 		const struct dq *s[FRAME_SENSORS];
 		uint8_t missing = 0;
@@ -362,41 +411,34 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 			in.held = true;
 			ctr_add(&a->st.held, 1);
 		}
-		memset(&wf.h, 0, sizeof(wf.h));
-		encode_frame(&in, &wf);
-		frame_inputs(pf, &wf); /* buttons and analog values: an input block after the FRAME */
-		if (in.pose && !encode_frame_finite(&wf)) {
+		memset(&wf->h, 0, sizeof(wf->h));
+		memset(&wf->in, 0, sizeof(wf->in));
+		encode_frame(&in, wf);
+		frame_inputs(pf, wf); /* buttons and analog values: an input block after the FRAME */
+		if (in.pose && !encode_frame_finite(wf)) {
 			/* never publish a NaN posture: count, and forget it as a seed */
 			ctr_add(&a->st.nan_blocked, 1);
 			a->have_pose = false;
 			continue;
 		}
-		wf.h.source_id = g->source_id;
-		wf.h.seq = a->seq++;
-		wf.h.describe_rev = a->describe_rev;
-		wf.h.sample_time_ns = pf->t_ns;
-		wf.h.avatar_id = a->id;
-		g->msgs[n] = (struct out_msg){ slot_of(g, frames), 0, (uint16_t)i, pf };
-		g->msgs[n].len = (uint16_t)wire_encode_frame(&wf, slot_of(g, frames));
-		n++;
+		wf->h.source_id = g->source_id;
+		wf->h.seq = a->seq++;
+		wf->h.describe_rev = a->describe_rev;
+		wf->h.sample_time_ns = pf->t_ns;
+		wf->h.avatar_id = a->id;
+		g->msgs[n++] = out_msg_frame(wf, slot_of(g, frames), (uint16_t)i);
 		frames++;
 		ctr_add(&a->st.frames, 1);
 		if (pf->new_sample) {
 			ctr_add(&a->st.new_frames, 1);
 			a->pose_arrival_ns = pf->arrival_ns;
 		}
-		if (wf.h.flags & WIRE_F_STALE)
+		if (wf->h.flags & WIRE_F_STALE)
 			ctr_add(&a->st.stale_frames, 1);
 		if (now->mono_ns >= a->next_describe_ns) {
-			uint8_t *d = a->describe_msg;
-
-			/* seq (offset 16) and revision (20) change; the rest was encoded at start-up */
-			for (int b = 0; b < 4; b++) {
-				d[16 + b] = (uint8_t)(a->dseq >> (8 * b));
-				d[20 + b] = (uint8_t)(a->describe_rev >> (8 * b));
-			}
-			a->dseq++;
-			g->msgs[n++] = (struct out_msg){ d, a->describe_len, (uint16_t)i, NULL };
+			a->describe->h.seq = a->dseq++;
+			a->describe->h.describe_rev = a->describe_rev;
+			g->msgs[n++] = out_msg_describe(a->describe, a->describe_msg, (uint16_t)i);
 			/*
 			 * Each avatar keeps its own phase within the period, i/n of it,
 			 * so that the DESCRIBEs of many avatars spread over the second
@@ -411,8 +453,8 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 			}
 		}
 	}
-	if (g->rec)
-		recorder_messages(g->rec, now->mono_ns, g->msgs, n);
+	for (int i = 0; g->rec && i < n; i++)
+		recorder_message(g->rec, now->mono_ns, g->msgs[i].data, g->msgs[i].len);
 	for (int o = 0; o < g->n_outputs; o++) {
 		uint64_t acc = ctr_get(&g->out[o].st.accepted);
 

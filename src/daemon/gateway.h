@@ -52,8 +52,8 @@ struct gw_avatar {
 	uint32_t describe_rev;
 	uint64_t next_describe_ns;
 	uint64_t pose_arrival_ns; /* arrival of the newest sample of the frame just queued, 0: none */
-	uint16_t describe_len;
-	uint8_t *describe_msg; /* WIRE_MAX_MSG bytes in the gateway's describe arena */
+	uint8_t *describe_msg;	      /* WIRE_MAX_MSG bytes in the gateway's describe arena */
+	struct wire_describe *describe; /* its values (made at start-up; seq and revision change) */
 	struct gw_avatar_stats st;
 };
 
@@ -99,12 +99,14 @@ struct gateway {
 	struct avatar *bodies; /* the distinct bodies the avatars point to */
 	int n_bodies;
 	struct out_msg *msgs;
-	struct pose_frame *frames; /* per avatar, the frame of this cycle */
+	struct pose_frame *frames;  /* per avatar, the frame of this cycle */
+	struct wire_frame *wframes; /* per avatar, what its FRAME of this cycle says (the outputs read it) */
+	struct wire_describe *describes; /* per avatar */
 	uint32_t source_id;
 	uint64_t stale_ns;
 	uint64_t describe_ns;
 	struct gw_stats st;
-	struct recorder *rec; /* recording this gateway (record/recorder.h), or NULL */
+	struct recorder *rec; /* recording this gateway (record/recorder.h), or NULL: gw_record() */
 	struct gw_probe probe;
 };
 
@@ -118,6 +120,12 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 void gw_close(struct gateway *g);
 /* one cycle at now; returns the number of frames published */
 int gw_cycle(struct gateway *g, const struct tracker_clock *now);
+/*
+ * Control thread, the loop paused or not started: opens, reopens or closes
+ * *rp as g's record_* keys say (recorder_apply), and taps g's samples and
+ * messages into it (or into nothing). 0 or a negative errno with err.
+ */
+int gw_record(struct gateway *g, struct recorder **rp, char *err, size_t errlen);
 /* descriptors that wake an event-mode loop (trackers with one); returns how many were written */
 int gw_event_fds(struct gateway *g, int *fds, int max);
 

@@ -354,7 +354,7 @@ int main(int argc, char **argv)
 	}
 	for (int i = 0; i < gws[cur].n_trackers; i++)
 		replay_log_damage(&gws[cur].trk[i]);
-	if (recorder_apply(&rec, &gws[cur], err, sizeof(err)))
+	if (gw_record(&gws[cur], &rec, err, sizeof(err)))
 		pr_err("%s: the daemon runs without recording", err);
 	if (gws[cur].cfg.daemon.lock_memory && lock_memory())
 		pr_warning("mlockall: %s: memory may be paged out (raise LimitMEMLOCK)", strerror(errno));
@@ -425,7 +425,7 @@ int main(int argc, char **argv)
 				} else {
 					for (int i = 0; i < gws[nxt].n_trackers; i++)
 						replay_log_damage(&gws[nxt].trk[i]);
-					if (recorder_apply(&rec, &gws[nxt], err, sizeof(err)))
+					if (gw_record(&gws[nxt], &rec, err, sizeof(err)))
 						pr_err("%s: the daemon runs without recording", err);
 					loop_resume(loop, &gws[nxt]);
 					drain_notes(&gws[cur]);

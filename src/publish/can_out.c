@@ -169,15 +169,13 @@ static void can_out_close(struct output *o)
 
 static void take_describe(struct output *o, struct can_avatar *a, const struct out_msg *m)
 {
-	struct wire_describe d;
+	const struct wire_describe *d = m->describe;
 
-	if (wire_decode_describe(m->data, m->len, &d))
-		return;
 	for (int j = 0; j < WIRE_JOINTS; j++) {
-		a->lo[j] = d.joint[j].lo;
-		a->hi[j] = d.joint[j].hi;
+		a->lo[j] = d->joint[j].lo;
+		a->hi[j] = d->joint[j].hi;
 	}
-	a->period_s = d.rate_hz > 0 ? (o->cfg->decimate > 1 ? o->cfg->decimate : 1) / (double)d.rate_hz : 0;
+	a->period_s = d->rate_hz > 0 ? (o->cfg->decimate > 1 ? o->cfg->decimate : 1) / (double)d->rate_hz : 0;
 	a->have_limits = a->period_s > 0;
 }
 
@@ -292,20 +290,19 @@ static void can_out_send(struct output *o, const struct out_msg *m, int n)
 	for (int i = 0; i < n; i++) {
 		int k = c->slot[m[i].avatar];
 		struct can_avatar *a;
-		struct wire_frame wf;
 
 		if (k < 0)
 			continue;
 		a = &c->av[k];
-		if (m[i].data[5] == WIRE_DESCRIBE) {
+		if (m[i].type == WIRE_DESCRIBE) {
 			take_describe(o, a, &m[i]);
 			continue;
 		}
-		if (!frames || wire_decode_frame(m[i].data, m[i].len, &wf))
+		if (!frames)
 			continue;
 		if (!now)
 			now = mono_ns();
-		send_avatar(c, o, a, k, &wf, now);
+		send_avatar(c, o, a, k, m[i].frame, now);
 	}
 }
 

@@ -602,13 +602,12 @@ static void modbus_server_send(struct output *o, const struct out_msg *m, int n)
 	for (int i = 0; i < n; i++) {
 		int k = s->slot[m[i].avatar];
 		uint16_t r[MODBUS_MAP_REGS];
-		struct wire_frame wf;
 
-		if (k < 0 || m[i].data[5] != WIRE_FRAME || wire_decode_frame(m[i].data, m[i].len, &wf))
+		if (k < 0 || m[i].type != WIRE_FRAME)
 			continue;
 		if (!now)
 			now = mono_ns();
-		modbus_map_encode(&wf, s->order, r);
+		modbus_map_encode(m[i].frame, s->order, r);
 		block_store(&s->blk[k], r, now);
 		ctr_add(&s->st.updates, 1);
 	}

@@ -14,6 +14,7 @@
 
 #include "base/counter.h"
 #include "config/config.h"
+#include "avatargw/wire.h"
 #include "frames/frame.h"
 
 #include <stdatomic.h>
@@ -21,16 +22,23 @@
 #include <stdio.h>
 
 struct out_msg {
-	const uint8_t *data;
+	const uint8_t *data; /* the message as the wire carries it (UDP, streams and recordings send it as is) */
 	uint16_t len;
+	uint8_t type;	 /* WIRE_FRAME or WIRE_DESCRIBE */
 	uint16_t avatar; /* index into the gateway's avatars */
 	/*
-	 * FRAME messages: the pose frame the message was made from (its
-	 * buttons and analog values, which the v1 FRAME does not carry);
-	 * NULL for DESCRIBE. Valid during send() only.
+	 * What data encodes, as the cycle made it: an output that needs the
+	 * values reads them here and never parses the bytes. FRAME: frame
+	 * (its input block in frame->in, zero when the sensors have none);
+	 * DESCRIBE: describe. Valid during send() only.
 	 */
-	const struct pose_frame *frame;
+	const struct wire_frame *frame;
+	const struct wire_describe *describe;
 };
+
+/* a message from its values: encodes them into buf (WIRE_MAX_MSG bytes) and points at both */
+struct out_msg out_msg_frame(const struct wire_frame *f, uint8_t *buf, uint16_t avatar);
+struct out_msg out_msg_describe(const struct wire_describe *d, uint8_t *buf, uint16_t avatar);
 
 struct output_stats {
 	_Atomic uint64_t sent;	    /* messages handed to the kernel */

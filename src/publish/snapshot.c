@@ -39,11 +39,7 @@ void snap_free(struct snap *s)
 
 static void describe(struct snap_slot *sl, const struct out_msg *m)
 {
-	struct wire_describe d;
-
-	/* once a second per avatar: decoding the whole DESCRIBE is cheap enough */
-	if (!wire_decode_describe(m->data, m->len, &d))
-		memcpy(sl->name, d.avatar_name, sizeof(sl->name));
+	memcpy(sl->name, m->describe->avatar_name, sizeof(sl->name));
 }
 
 void snap_put_batch(struct snap *s, const bool *wants, const struct out_msg *m, int n, uint64_t now_mono)
@@ -56,22 +52,16 @@ void snap_put_batch(struct snap *s, const bool *wants, const struct out_msg *m, 
 		if (a >= s->n || !wants[a])
 			continue;
 		sl = &s->slot[a];
-		if (m[j].data[5] == WIRE_DESCRIBE) {
+		if (m[j].type == WIRE_DESCRIBE) {
 			describe(sl, &m[j]);
 			continue;
 		}
-		if (m[j].data[5] != WIRE_FRAME)
+		if (m[j].type != WIRE_FRAME)
 			continue;
 		e = &sl->buf[sl->back];
-		if (wire_decode_frame(m[j].data, m[j].len, &e->f))
-			continue;
-		if (m[j].frame) {
-			memcpy(e->buttons, m[j].frame->buttons, sizeof(e->buttons));
-			memcpy(e->analog, m[j].frame->analog, sizeof(e->analog));
-		} else {
-			memset(e->buttons, 0, sizeof(e->buttons));
-			memset(e->analog, 0, sizeof(e->analog));
-		}
+		e->f = *m[j].frame;
+		memcpy(e->buttons, m[j].frame->in.buttons, sizeof(e->buttons));
+		memcpy(e->analog, m[j].frame->in.analog, sizeof(e->analog));
 		e->put_mono_ns = now_mono;
 		memcpy(e->name, sl->name, sizeof(e->name));
 		sl->back = atomic_exchange_explicit(&sl->mid, sl->back | SNAP_NEW, memory_order_acq_rel) & 3u;

@@ -233,7 +233,7 @@ static void stream_send(struct output *o, const struct out_msg *m, int n)
 		for (int j = 0; j < n; j++) {
 			size_t need = 4u + m[j].len;
 
-			if (!o->wants[m[j].avatar] || (!frames && m[j].data[5] == WIRE_FRAME))
+			if (!o->wants[m[j].avatar] || (!frames && m[j].type == WIRE_FRAME))
 				continue;
 			if (c->off + c->len + need > s->buf_size && c->off) {
 				memmove(c->buf, c->buf + c->off, c->len);

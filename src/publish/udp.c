@@ -307,7 +307,7 @@ static void udp_send(struct output *o, const struct out_msg *m, int n)
 
 	o->cycle++;
 	for (int j = 0; j < n && k < u->cap; j++) {
-		if (!o->wants[m[j].avatar] || (!frames && m[j].data[5] == WIRE_FRAME))
+		if (!o->wants[m[j].avatar] || (!frames && m[j].type == WIRE_FRAME))
 			continue;
 		u->iov[k].iov_base = (void *)m[j].data;
 		u->iov[k].iov_len = m[j].len;

@@ -277,7 +277,7 @@ static bool pose_finite(const struct wire_pose *p)
 }
 
 /* the tracker and analog reports of one frame; returns their length */
-static size_t encode_low(uint8_t *p, int32_t sender, const struct wire_frame *f, const struct pose_frame *pf)
+static size_t encode_low(uint8_t *p, int32_t sender, const struct wire_frame *f)
 {
 	uint64_t t = f->h.sample_time_ns ? f->h.sample_time_ns : real_ns();
 	size_t n = 0;
@@ -310,7 +310,7 @@ static size_t encode_low(uint8_t *p, int32_t sender, const struct wire_frame *f,
 			put_f64(q + 8 + 8 * j, f->joint[j]);
 		for (int s = 0; s < FRAME_SENSORS; s++)
 			for (int i = 0; i < SENSOR_ANALOG_MAX; i++) {
-				float v = pf ? pf->analog[s][i] : 0.0f;
+				float v = f->in.analog[s][i];
 
 				put_f64(q + 8 + 8 * (WIRE_JOINTS + s * SENSOR_ANALOG_MAX + i), isfinite(v) ? v : 0.0);
 			}
@@ -974,14 +974,12 @@ static void vrpn_service(struct output *o)
 }
 
 /* the changes of one avatar's buttons since the previous frame, as Change messages */
-static size_t encode_buttons(uint8_t *p, struct vmap *m, int a, const struct pose_frame *pf, uint64_t t_ns)
+static size_t encode_buttons(uint8_t *p, struct vmap *m, int a, const struct wire_inputs *in, uint64_t t_ns)
 {
 	size_t n = 0;
 
-	if (!pf)
-		return 0;
 	for (int s = 0; s < FRAME_SENSORS; s++) {
-		uint32_t was = m->buttons_known[a] ? m->buttons[a][s] : 0, now = pf->buttons[s], diff = was ^ now;
+		uint32_t was = m->buttons_known[a] ? m->buttons[a][s] : 0, now = in->buttons[s], diff = was ^ now;
 
 		for (int b = 0; diff && b < 32; b++) {
 			uint8_t *q;
@@ -1031,19 +1029,17 @@ static void vrpn_send(struct output *o, const struct out_msg *msgs, int n)
 		live += v->cl[i].fd >= 0 && v->cl[i].state == VC_LIVE;
 	for (int j = 0; j < n; j++) {
 		const struct out_msg *msg = &msgs[j];
-		struct wire_frame f;
+		const struct wire_frame *f = msg->frame;
 		size_t low, rel;
 		int a = msg->avatar;
 
-		if (msg->data[5] != WIRE_FRAME || a >= m->n || !m->wants[a])
-			continue;
-		if (wire_decode_frame(msg->data, msg->len, &f))
+		if (msg->type != WIRE_FRAME || a >= m->n || !m->wants[a])
 			continue;
 		/* button changes are never decimated away: they are events */
-		rel = encode_buttons(v->rel, m, a, msg->frame, f.h.sample_time_ns ? f.h.sample_time_ns : real_ns());
+		rel = encode_buttons(v->rel, m, a, &f->in, f->h.sample_time_ns ? f->h.sample_time_ns : real_ns());
 		if (!live || (!frames && !rel))
 			continue;
-		low = frames ? encode_low(v->low, a, &f, msg->frame) : 0;
+		low = frames ? encode_low(v->low, a, f) : 0;
 		for (int i = 0; i < v->max_clients; i++) {
 			struct vcl *c = &v->cl[i];
 			uint8_t *p;

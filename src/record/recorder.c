@@ -11,11 +11,11 @@
  */
 #include "record/recorder.h"
 #include "base/clock.h"
+#include "base/counter.h"
 
-#include "daemon/gateway.h"
 #include "base/log.h"
+#include "avatargw/wire.h"
 #include "record/recfile.h"
-#include "trackers/replay.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -120,63 +120,38 @@ static void drop(struct recorder *r, size_t n)
 	ctr_add(&r->st.dropped_bytes, n);
 }
 
-void recorder_sample(struct recorder *r, uint16_t source, uint16_t sensor, const struct sensor_slot *s)
+void recorder_sample(struct recorder *r, const struct recfile_sample *smp)
 {
 	uint8_t rec[RECFILE_REC_OVERHEAD + RECFILE_SAMPLE_LEN_ANALOG];
-	struct recfile_sample smp;
-	struct vec3 p;
 	size_t len;
 
-	if (r->kf_period_ns && source < r->kf_sources) {
+	if (r->kf_period_ns && smp->source < r->kf_sources) {
 		/* keyframes: the first sample at or after each multiple of the period */
-		uint64_t *due = &r->kf_due[r->kf_base[source] + sensor];
+		uint64_t *due = &r->kf_due[r->kf_base[smp->source] + smp->sensor];
 
-		if (s->arrival_ns < *due)
+		if (smp->arrival_ns < *due)
 			return;
-		*due = *due && s->arrival_ns - *due < r->kf_period_ns ? *due + r->kf_period_ns
-								      : s->arrival_ns + r->kf_period_ns;
+		*due = *due && smp->arrival_ns - *due < r->kf_period_ns ? *due + r->kf_period_ns
+									: smp->arrival_ns + r->kf_period_ns;
 	}
-	dq_translation(&s->pose, &p);
-	smp.source = source;
-	smp.sensor = sensor;
-	smp.buttons = s->buttons;
-	smp.t_ns = s->t_ns;
-	smp.arrival_ns = s->arrival_ns;
-	smp.p[0] = (float)p.x;
-	smp.p[1] = (float)p.y;
-	smp.p[2] = (float)p.z;
-	smp.q[0] = (float)s->pose.r.w;
-	smp.q[1] = (float)s->pose.r.x;
-	smp.q[2] = (float)s->pose.r.y;
-	smp.q[3] = (float)s->pose.r.z;
-	smp.has_analog = false;
-	for (int i = 0; i < 4; i++) {
-		smp.analog[i] = s->analog[i];
-		smp.has_analog |= s->analog[i] != 0.0f;
-	}
-	len = recfile_sample_encode(&smp, rec + RECFILE_REC_HEAD);
+	len = recfile_sample_encode(smp, rec + RECFILE_REC_HEAD);
 	recfile_frame(rec, RECFILE_SAMPLE, (uint32_t)len);
 	if (!ring_push(&r->ring, rec, RECFILE_REC_OVERHEAD + len))
 		drop(r, RECFILE_REC_OVERHEAD + len);
 }
 
-void recorder_messages(struct recorder *r, uint64_t mono, const struct out_msg *msgs, int n)
+void recorder_message(struct recorder *r, uint64_t mono, const uint8_t *data, size_t n)
 {
 	uint8_t rec[RECFILE_REC_OVERHEAD + RECFILE_MESSAGE_HEAD + WIRE_MAX_MSG];
+	size_t len = RECFILE_MESSAGE_HEAD + n;
 
-	if (!r->messages)
+	if (!r->messages || n > WIRE_MAX_MSG)
 		return;
-	for (int i = 0; i < n; i++) {
-		size_t len = RECFILE_MESSAGE_HEAD + msgs[i].len;
-
-		if (msgs[i].len > WIRE_MAX_MSG)
-			continue;
-		recfile_frame(rec, RECFILE_MESSAGE, (uint32_t)len);
-		recfile_put64(rec + RECFILE_REC_HEAD, mono);
-		memcpy(rec + RECFILE_REC_HEAD + RECFILE_MESSAGE_HEAD, msgs[i].data, msgs[i].len);
-		if (!ring_push(&r->ring, rec, RECFILE_REC_OVERHEAD + len))
-			drop(r, RECFILE_REC_OVERHEAD + len);
-	}
+	recfile_frame(rec, RECFILE_MESSAGE, (uint32_t)len);
+	recfile_put64(rec + RECFILE_REC_HEAD, mono);
+	memcpy(rec + RECFILE_REC_HEAD + RECFILE_MESSAGE_HEAD, data, n);
+	if (!ring_push(&r->ring, rec, RECFILE_REC_OVERHEAD + len))
+		drop(r, RECFILE_REC_OVERHEAD + len);
 }
 
 /* ---- the writer thread -------------------------------------------------------------------------- */
@@ -512,8 +487,8 @@ void recorder_close(struct recorder *r)
 	free(r);
 }
 
-/* the SESSION payload of g */
-static size_t session_payload(struct gateway *g, uint8_t *buf, size_t cap)
+/* the SESSION payload of configuration c */
+static size_t session_payload(const struct config *c, uint32_t source_id, uint8_t *buf, size_t cap)
 {
 	struct recfile_writer w = { buf, cap, 0, false };
 	struct timespec rt, mt;
@@ -523,26 +498,28 @@ static size_t session_payload(struct gateway *g, uint8_t *buf, size_t cap)
 	clock_gettime(CLOCK_MONOTONIC, &mt);
 	recfile_w_u64(&w, (uint64_t)rt.tv_sec * 1000000000ull + (uint64_t)rt.tv_nsec);
 	recfile_w_u64(&w, (uint64_t)mt.tv_sec * 1000000000ull + (uint64_t)mt.tv_nsec);
-	recfile_w_f64(&w, g->cfg.daemon.rate);
-	recfile_w_u32(&w, g->source_id);
-	recfile_w_u16(&w, (uint16_t)g->n_trackers);
-	recfile_w_u16(&w, (uint16_t)g->n_avatars);
-	for (int i = 0; i < g->n_trackers; i++) {
-		const struct tracker *t = &g->trk[i];
+	recfile_w_f64(&w, c->daemon.rate);
+	recfile_w_u32(&w, source_id);
+	recfile_w_u16(&w, (uint16_t)c->n_sources);
+	recfile_w_u16(&w, (uint16_t)c->n_avatars);
+	for (int i = 0; i < c->n_sources; i++) {
+		const struct cfg_source *src = &c->source[i];
+		const struct cfg_type *type = cfg_source_type(src->driver);
+		int n = type->sensor_count(src);
 
-		recfile_w_str(&w, t->name);
-		recfile_w_str(&w, t->drv->type.name);
-		recfile_w_u32(&w, (uint32_t)t->n_sensors);
-		for (int k = 0; k < t->n_sensors; k++) {
-			t->drv->type.sensor_name(t->cfg, k, name, sizeof(name));
+		recfile_w_str(&w, src->name);
+		recfile_w_str(&w, type->name);
+		recfile_w_u32(&w, (uint32_t)n);
+		for (int k = 0; k < n; k++) {
+			type->sensor_name(src, k, name, sizeof(name));
 			recfile_w_str(&w, name);
 		}
 		for (int k = 0; k < 3; k++)
-			recfile_w_f64(&w, t->cfg->origin[k]);
-		recfile_w_f64(&w, t->cfg->yaw);
+			recfile_w_f64(&w, src->origin[k]);
+		recfile_w_f64(&w, src->yaw);
 	}
-	for (int i = 0; i < g->n_avatars; i++) {
-		const struct cfg_avatar *a = g->av[i].cfg;
+	for (int i = 0; i < c->n_avatars; i++) {
+		const struct cfg_avatar *a = &c->avatar[i];
 
 		recfile_w_str(&w, a->name);
 		recfile_w_u16(&w, a->id);
@@ -558,7 +535,13 @@ static size_t session_payload(struct gateway *g, uint8_t *buf, size_t cap)
 	return w.overflow ? 0 : w.len;
 }
 
-int recorder_attach(struct recorder *r, struct gateway *g, char *err, size_t errlen)
+/* the sensors of source i */
+static int sensors_of(const struct config *c, int i)
+{
+	return cfg_source_type(c->source[i].driver)->sensor_count(&c->source[i]);
+}
+
+int recorder_attach(struct recorder *r, const struct config *c, uint32_t source_id, char *err, size_t errlen)
 {
 	uint8_t *rec;
 	size_t len, waited = 0;
@@ -566,21 +549,16 @@ int recorder_attach(struct recorder *r, struct gateway *g, char *err, size_t err
 	uint64_t *due;
 	uint32_t n = 0;
 
-	for (int i = 0; i < g->n_trackers; i++) {
-		g->trk[i].rec = r;
-		g->trk[i].rec_source = (uint16_t)i;
-	}
-	g->rec = r;
 	if (!r)
 		return 0;
-	for (int i = 0; i < g->n_trackers; i++) {
-		if (g->trk[i].n_sensors > 65535) {
-			snprintf(err, errlen, "recorder: source %s has more than 65535 sensors", g->trk[i].name);
-			goto detach_inval;
+	for (int i = 0; i < c->n_sources; i++) {
+		if (sensors_of(c, i) > 65535) {
+			snprintf(err, errlen, "recorder: source %s has more than 65535 sensors", c->source[i].name);
+			return -EINVAL;
 		}
-		n += (uint32_t)g->trk[i].n_sensors;
+		n += (uint32_t)sensors_of(c, i);
 	}
-	base = calloc((size_t)g->n_trackers + 1, sizeof(*base));
+	base = calloc((size_t)c->n_sources + 1, sizeof(*base));
 	due = calloc((size_t)n + 1, sizeof(*due));
 	rec = malloc(r->ring.cap);
 	if (!base || !due || !rec) {
@@ -588,23 +566,22 @@ int recorder_attach(struct recorder *r, struct gateway *g, char *err, size_t err
 		free(due);
 		free(rec);
 		snprintf(err, errlen, "recorder: out of memory");
-		recorder_attach(NULL, g, err, errlen);
 		return -ENOMEM;
 	}
 	n = 0;
-	for (int i = 0; i < g->n_trackers; i++) {
+	for (int i = 0; i < c->n_sources; i++) {
 		base[i] = n;
-		n += (uint32_t)g->trk[i].n_sensors;
+		n += (uint32_t)sensors_of(c, i);
 	}
 	/* the loop is paused: the old tables can go */
 	free(r->kf_base);
 	free(r->kf_due);
 	r->kf_base = base;
 	r->kf_due = due;
-	r->kf_sources = g->n_trackers;
+	r->kf_sources = c->n_sources;
 
 	len = r->ring.cap > RECFILE_REC_OVERHEAD
-		      ? session_payload(g, rec + RECFILE_REC_HEAD, r->ring.cap - RECFILE_REC_OVERHEAD)
+		      ? session_payload(c, source_id, rec + RECFILE_REC_HEAD, r->ring.cap - RECFILE_REC_OVERHEAD)
 		      : 0;
 	if (!len || len > RECFILE_MAX_PAYLOAD) {
 		free(rec);
@@ -612,7 +589,6 @@ int recorder_attach(struct recorder *r, struct gateway *g, char *err, size_t err
 			 "recorder: the SESSION record of this configuration does not fit record_buffer "
 			 "(%zu KiB): raise it",
 			 r->ring.cap / 1024);
-		recorder_attach(NULL, g, err, errlen);
 		return -ENOSPC;
 	}
 	recfile_frame(rec, RECFILE_SESSION, (uint32_t)len);
@@ -623,16 +599,12 @@ int recorder_attach(struct recorder *r, struct gateway *g, char *err, size_t err
 		if (++waited > 5000) {
 			free(rec);
 			snprintf(err, errlen, "recorder: the writer does not drain its buffer");
-			recorder_attach(NULL, g, err, errlen);
 			return -EBUSY;
 		}
 		nanosleep(&ts, NULL);
 	}
 	free(rec);
 	return 0;
-detach_inval:
-	recorder_attach(NULL, g, err, errlen);
-	return -EINVAL;
 }
 
 const struct recorder_stats *recorder_stats(const struct recorder *r)
@@ -684,9 +656,9 @@ void recorder_log(struct recorder *r)
 	}
 }
 
-int recorder_apply(struct recorder **rp, struct gateway *g, char *err, size_t errlen)
+int recorder_apply(struct recorder **rp, const struct config *c, uint32_t source_id, char *err, size_t errlen)
 {
-	const struct cfg_daemon *d = &g->cfg.daemon;
+	const struct cfg_daemon *d = &c->daemon;
 	int rc;
 
 	if (*rp && (!d->record_dir[0] || recorder_config_changed(&(*rp)->cfg, d))) {
@@ -699,5 +671,5 @@ int recorder_apply(struct recorder **rp, struct gateway *g, char *err, size_t er
 		if (rc)
 			return rc;
 	}
-	return recorder_attach(*rp, g, err, errlen);
+	return recorder_attach(*rp, c, source_id, err, errlen);
 }

@@ -11,7 +11,7 @@
  * gap in the file); the loop never waits.
  *
  * Threads: recorder_open/attach/close and the stats readers run in the
- * control thread; recorder_sample/recorder_messages in the loop (the one
+ * control thread; recorder_sample/recorder_message in the loop (the one
  * producer; attach pushes only while the loop is paused or not yet
  * started); the writer thread is the consumer.
  */
@@ -21,11 +21,10 @@
 #include "config/config.h"
 
 #include <stdatomic.h>
+#include <stddef.h>
 #include <stdint.h>
 
-struct gateway;
-struct sensor_slot;
-struct out_msg;
+struct recfile_sample;
 struct recorder;
 
 struct recorder_stats {
@@ -53,17 +52,18 @@ void recorder_close(struct recorder *r);
 bool recorder_config_changed(const struct cfg_daemon *a, const struct cfg_daemon *b);
 
 /*
- * Control thread, with the loop paused or not started: g's trackers and
- * outputs feed r from now on, and a SESSION record describing g (sources,
- * sensors, avatars) is queued. r NULL detaches g. Returns 0 or -ENOSPC if
- * the SESSION record does not fit the ring (raise record_buffer).
+ * Control thread, with the loop paused or not started: a SESSION record
+ * describing configuration c (sources, sensors, avatars) is queued; the
+ * samples and messages that follow are of c (the gateway taps its trackers
+ * and messages into recorder_sample and recorder_message). Returns 0 or
+ * -ENOSPC if the SESSION record does not fit the ring (raise record_buffer).
  */
-int recorder_attach(struct recorder *r, struct gateway *g, char *err, size_t errlen);
+int recorder_attach(struct recorder *r, const struct config *c, uint32_t source_id, char *err, size_t errlen);
 
-/* loop: one sample of sensor `sensor` of the tracker attached as `source` (its slot after the update) */
-void recorder_sample(struct recorder *r, uint16_t source, uint16_t sensor, const struct sensor_slot *s);
-/* loop: the messages of one cycle (only if record_messages) */
-void recorder_messages(struct recorder *r, uint64_t mono_ns, const struct out_msg *msgs, int n);
+/* loop: one sample (smp->source: the source's index in the configuration) */
+void recorder_sample(struct recorder *r, const struct recfile_sample *smp);
+/* loop: one published message, as the wire carries it (recorded only with record_messages) */
+void recorder_message(struct recorder *r, uint64_t mono_ns, const uint8_t *data, size_t len);
 
 /* control thread */
 const struct recorder_stats *recorder_stats(const struct recorder *r);
@@ -74,10 +74,10 @@ void recorder_ring_use(const struct recorder *r, uint64_t *used, uint64_t *cap);
 
 /*
  * Control thread: opens, reopens (record_* keys changed) or closes *rp as
- * g's [daemon] record_* keys say, and attaches g. With the loop paused or
+ * c's [daemon] record_* keys say, and attaches c. With the loop paused or
  * not started. 0 or a negative errno with err.
  */
-int recorder_apply(struct recorder **rp, struct gateway *g, char *err, size_t errlen);
+int recorder_apply(struct recorder **rp, const struct config *c, uint32_t source_id, char *err, size_t errlen);
 /* control thread, once a second: logs what changed (new file, drops, errors) */
 void recorder_log(struct recorder *r);
 

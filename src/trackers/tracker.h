@@ -20,7 +20,6 @@
 #include <stdio.h>
 
 struct tracker;
-struct recorder;
 
 enum tracker_state {
 	TRACKER_OK = 0,
@@ -98,8 +97,13 @@ struct tracker {
 	bool *mounted;	     /* per sensor: mount is not the identity */
 	struct tracker_stats st;
 	void *priv;	      /* the driver's state */
-	struct recorder *rec; /* records every sample when not NULL (record/recorder.h) */
-	uint16_t rec_source;  /* this tracker's index in the recording */
+	/*
+	 * A tap on every sample stored (recording: the gateway sets it), or
+	 * NULL. Called by tracker_put in the loop with the slot just updated.
+	 */
+	void (*tap)(void *ctx, uint16_t source, uint16_t sensor, const struct sensor_slot *s);
+	void *tap_ctx;
+	uint16_t tap_source; /* this tracker's index in the configuration */
 };
 
 /* the table: index = cfg_source.driver (trackers.c) */

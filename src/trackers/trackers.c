@@ -6,7 +6,6 @@
  */
 #include "trackers/tracker.h"
 
-#include "record/recorder.h"
 
 #include <errno.h>
 #include <math.h>
@@ -151,6 +150,6 @@ void tracker_put(struct tracker *t, int sensor, const struct dq *local, uint64_t
 	s->count++;
 	s->seen = true;
 	ctr_add(&t->st.samples, 1);
-	if (t->rec)
-		recorder_sample(t->rec, t->rec_source, (uint16_t)sensor, s);
+	if (t->tap)
+		t->tap(t->tap_ctx, t->tap_source, (uint16_t)sensor, s);
 }
