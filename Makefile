@@ -203,6 +203,10 @@ $(BUILD)/tests/osc-recv: tests/helpers/osc_recv.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -D_GNU_SOURCE $(LDFLAGS) -o $@ $< $(shell pkg-config --libs liblo)
 
+# the tests that read the benchmark's files read them as the IK tools do (tools/lib/benchfile.c)
+$(BUILD)/obj/tests/test_arm.o: TEST_CFLAGS = -Itools
+$(BUILD)/tests/test_arm: $(BENCHFILE_OBJ)
+
 # test_alloc counts every allocation made by our code: wrapped at link time
 $(BUILD)/tests/test_alloc: TEST_LDFLAGS = -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free
 $(BUILD)/tests/test_udp: TEST_LDFLAGS = -Wl,--wrap=sendmmsg
@@ -225,7 +229,7 @@ $(BUILD)/obj/tools/lib/%.qs.o: tools/lib/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) $(SC_qs) -Itools -c $< -o $@
 $(BUILD)/obj/tests/test_fixq.o: TEST_CFLAGS = $(SC_q) -Itools
-$(BUILD)/tests/test_fixq: $(BUILD)/obj/tests/test_fixq.o $(QS_OBJ) $(IKX_OBJ) $(BUILD)/obj/tests/fake/clip.o \
+$(BUILD)/tests/test_fixq: $(BUILD)/obj/tests/test_fixq.o $(QS_OBJ) $(IKX_OBJ) $(BUILD)/obj/tests/fake/clip.o $(BENCHFILE_OBJ) \
 	$(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
 	@mkdir -p $(dir $@)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) $(LIBS)

@@ -19,6 +19,7 @@
 
 #include "ik/ik.h"
 
+#include "lib/benchfile.h"
 #include "testutil.h"
 
 #define PI 3.14159265358979323846
@@ -348,52 +349,33 @@ static void test_fk_pose(void **state)
 static void test_fk_bench_targets(void **state)
 {
 	const char *path = SHARED_DIR "/bench/targets.csv";
-	FILE *f = fopen(path, "r");
-	char line[1024];
+	struct bench_row *rows = NULL;
+	size_t n = 0;
 	struct arm a;
-	int rows = 0, lineno = 0;
 
 	(void)state;
 	set_ctx("%s", path);
-	if (!f)
-		fail_msg("cannot open %s", path);
+	assert_ctx(bench_load_rows("test_arm", path, 200, &rows, &n) == 0);
+	assert_ctx(n == 200);
 	make_arm(&a, 0, bench_dims);
-	while (rows < 200 && fgets(line, sizeof(line), f)) {
-		double v[15], q[ARM_DOF], s;
-		char *p = line, *end;
+	for (size_t i = 0; i < n; i++) {
+		const struct bench_row *r = &rows[i];
 		struct dq ee;
 		struct vec3 pos;
-		int k;
+		double s;
 
-		lineno++;
-		if (lineno == 1) {
-			assert_ctx(strncmp(line, "q1,q2,q3,q4,q5,q6,q7,q8,px,py,pz,qw,qx,qy,qz", 44) == 0);
-			continue;
-		}
-		for (k = 0; k < 15; k++) {
-			v[k] = strtod(p, &end);
-			assert_ctx(end != p);
-			p = end;
-			if (*p == ',')
-				p++;
-		}
-		set_ctx("%s line %d", path, lineno);
-		for (k = 0; k < ARM_DOF; k++)
-			q[k] = v[k];
-		arm_fk(&a, q, &ee);
+		set_ctx("%s row %zu", path, i + 1);
+		arm_fk(&a, r->q, &ee);
 		dq_translation(&ee, &pos);
-		assert_v3_near(pos, ((struct vec3){ v[8], v[9], v[10] }), 1e-9);
+		assert_v3_near(pos, ((struct vec3){ r->p[0], r->p[1], r->p[2] }), 1e-9);
 		/* the file has qw >= 0; ours may be the other sign of the same rotation */
-		s = ee.r.w * v[11] + ee.r.x * v[12] + ee.r.y * v[13] + ee.r.z * v[14] < 0 ? -1 : 1;
-		assert_near(s * ee.r.w, v[11], 1e-9);
-		assert_near(s * ee.r.x, v[12], 1e-9);
-		assert_near(s * ee.r.y, v[13], 1e-9);
-		assert_near(s * ee.r.z, v[14], 1e-9);
-		rows++;
+		s = ee.r.w * r->r[0] + ee.r.x * r->r[1] + ee.r.y * r->r[2] + ee.r.z * r->r[3] < 0 ? -1 : 1;
+		assert_near(s * ee.r.w, r->r[0], 1e-9);
+		assert_near(s * ee.r.x, r->r[1], 1e-9);
+		assert_near(s * ee.r.y, r->r[2], 1e-9);
+		assert_near(s * ee.r.z, r->r[3], 1e-9);
 	}
-	fclose(f);
-	set_ctx("%s", path);
-	assert_ctx(rows == 200);
+	free(rows);
 }
 
 /* ---- the Jacobian ------------------------------------------------------------------- */

@@ -902,7 +902,7 @@ static void test_err_key_of_other_type(void **state)
 		NULL);
 	expect_text_err(*state, "[output o]\ntype = udp\npath = /tmp/x\n",
 			"e.conf:3: [output o] path: unknown key for type udp",
-			"(known: type, decimate, avatars, address, port, gso)", NULL);
+			"(known: type, decimate, avatars, port, gso, address)", NULL);
 }
 
 static void test_err_unknown_section(void **state)

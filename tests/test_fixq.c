@@ -27,6 +27,7 @@
 #include "ik/avatar.h"
 #include "ik/ik.h"
 #include "lib/ikx.h"
+#include "lib/benchfile.h"
 #include "testutil.h"
 
 IKX_DECLARE(_qs)
@@ -36,44 +37,21 @@ extern unsigned long sc_saturations_qs;
 #define DEG (M_PI / 180.0)
 #define RAD2DEG (180.0 / M_PI)
 
-struct row {
-	double q[ARM_DOF], p[3], r[4];
-};
-
 static const struct ikx_setup bench = { .dims = { 0.18, 0.30, 0.26, 0.08 } };
 
 /* up to max rows of a benchmark file, every step-th */
-static size_t load(const char *name, struct row *rows, size_t max, size_t step)
+static size_t load(const char *name, struct bench_row *rows, size_t max, size_t step)
 {
-	char path[512], line[1024];
-	size_t n = 0, k = 0;
-	FILE *f;
+	char path[512];
+	struct bench_row *all = NULL;
+	size_t n_all = 0, n = 0;
 
 	snprintf(path, sizeof(path), "%s/bench/%s", SHARED_DIR, name);
-	f = fopen(path, "r");
-	if (!f) {
-		fail_msg("cannot open %s (the shared benchmark files are needed)", path);
-		return 0;
-	}
-	assert_non_null(fgets(line, sizeof(line), f));
-	while (n < max && fgets(line, sizeof(line), f)) {
-		double v[15];
-		char *s = line;
-		int j;
-
-		if (k++ % step)
-			continue;
-		for (j = 0; j < 15; j++) {
-			v[j] = strtod(s, &s);
-			if (*s == ',')
-				s++;
-		}
-		memcpy(rows[n].q, v, sizeof(rows[n].q));
-		memcpy(rows[n].p, v + 8, sizeof(rows[n].p));
-		memcpy(rows[n].r, v + 11, sizeof(rows[n].r));
-		n++;
-	}
-	fclose(f);
+	if (bench_load_rows("test_fixq", path, max * step, &all, &n_all))
+		fail_msg("cannot read %s (the shared benchmark files are needed)", path);
+	for (size_t k = 0; k < n_all && n < max; k += step)
+		rows[n++] = all[k];
+	free(all);
 	return n;
 }
 
@@ -335,7 +313,7 @@ struct tally {
 };
 
 /* one row through double and the counting fixed build; warm rows start from their own previous solution */
-static void solve_both(const struct ikx_setup *o, const struct row *r, const double *seed_d, const double *seed_q,
+static void solve_both(const struct ikx_setup *o, const struct bench_row *r, const double *seed_d, const double *seed_q,
 		       double qd[ARM_DOF], double qq[ARM_DOF], struct tally *t)
 {
 	struct ikx_result rd, rq;
@@ -376,7 +354,7 @@ static void check_goals(const char *what, const struct tally *t)
 
 static void test_random_reset(void **state)
 {
-	static struct row rows[1000];
+	static struct bench_row rows[1000];
 	size_t n = load("targets.csv", rows, 1000, 10), i;
 	struct tally t = { 0 };
 	unsigned long sat = sc_saturations_qs;
@@ -401,7 +379,7 @@ static void test_random_reset(void **state)
 
 static void test_trajectory_warm(void **state)
 {
-	static struct row rows[3000];
+	static struct bench_row rows[3000];
 	size_t n = load("trajectory.csv", rows, 3000, 1), i;
 	struct tally t = { 0 };
 	double pd[ARM_DOF], pq[ARM_DOF];
@@ -428,7 +406,7 @@ static void test_trajectory_warm(void **state)
 /* the matrix backend and the left arm in fixed point too */
 static void test_matrix_and_left(void **state)
 {
-	static struct row rows[300];
+	static struct bench_row rows[300];
 	size_t n = load("targets.csv", rows, 300, 31), i, mirrored = 0;
 	struct ikx_setup mat = bench, left = bench;
 	struct tally t = { 0 };
@@ -464,7 +442,7 @@ static void test_matrix_and_left(void **state)
 /* the paper's Newton from q = 0: converges in fixed point as in double */
 static void test_paper_newton(void **state)
 {
-	static struct row rows[200];
+	static struct bench_row rows[200];
 	size_t n = load("targets.csv", rows, 200, 7), i, reached = 0;
 	struct ikx_setup o = bench;
 	double zero[ARM_DOF] = { 0 };
@@ -504,7 +482,7 @@ bool swivel_agree_q(const double dims[4], const double p[3], const double r[4], 
  */
 static void test_swivel_inside(void **state)
 {
-	static struct row rows[10000];
+	static struct bench_row rows[10000];
 	size_t n = load("targets.csv", rows, 10000, 1), i, found = 0;
 
 	(void)state;

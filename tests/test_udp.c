@@ -99,8 +99,8 @@ static int setup(void **state)
 		memset(f.buf[i], 0, len);
 		f.buf[i][5] = longer ? WIRE_DESCRIBE : WIRE_FRAME;
 		memcpy(&f.buf[i][8], &i, sizeof(i)); /* a serial number to check the order */
-		f.msgs[i] = (struct out_msg){ f.buf[i], len, longer ? WIRE_DESCRIBE : WIRE_FRAME, (uint16_t)(i % N_AV), NULL,
-					     NULL };
+		f.msgs[i] = (struct out_msg){ f.buf[i], len, longer ? WIRE_DESCRIBE : WIRE_FRAME, (uint16_t)(i % N_AV),
+					      NULL,	NULL };
 	}
 	f.n = N_AV + 2;
 	*state = &f;

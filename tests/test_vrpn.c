@@ -237,7 +237,7 @@ static void test_reports_buttons_and_analog(void **state)
 		m[a] = make_frame(&pf[a], frames[a], fx.ids[a], (uint16_t)a);
 	pf[0].in.analog[2][1] = 0.75f; /* right hand, second value */
 	pf[0].in.buttons[1] = 1u << 4; /* left hand, button 4: held from the start */
-	cycle(&fx.o, m, 2);	    /* the server knows the buttons before the client comes */
+	cycle(&fx.o, m, 2);	       /* the server knows the buttons before the client comes */
 	peer_connect(&p, fx.port);
 	for (int i = 0; i < 5; i++)
 		cycle(&fx.o, m, 2);

@@ -836,11 +836,11 @@ static const struct cfg_key *key_at(const struct section_ctx *s, int i, void **o
 		return &common[s->sect].keys[i];
 	}
 	i -= common[s->sect].n;
-	if (!s->type || i >= s->type->n_keys)
+	if (!s->type || i >= s->type->n_shared + s->type->n_keys)
 		return NULL;
 	if (obj)
 		*obj = s->opt;
-	return &s->type->keys[i];
+	return i < s->type->n_shared ? &s->type->shared[i] : &s->type->keys[i - s->type->n_shared];
 }
 
 /* the key called name in the section (mount_SENSOR: the key's name ends in a sensor's name), or NULL */
@@ -1704,6 +1704,15 @@ static void print_key(FILE *out, const struct cfg_key *k, const char *types, con
 	fputc('\n', out);
 }
 
+/* the i-th key of type t (shared ones first), or NULL */
+static const struct cfg_key *type_key(const struct cfg_type *t, int i)
+{
+	if (i < t->n_shared)
+		return &t->shared[i];
+	i -= t->n_shared;
+	return i < t->n_keys ? &t->keys[i] : NULL;
+}
+
 /* a section kind's reference: its common keys, then each key of its types once, with the types that take it */
 static void print_kind(FILE *out, int sect, const struct cfg_type *(*type)(int i))
 {
@@ -1721,25 +1730,27 @@ static void print_kind(FILE *out, int sect, const struct cfg_type *(*type)(int i
 
 		print_key(out, k, "all", type && !strcmp(k->name, "type") ? doc : NULL);
 	}
-	for (int t = 0; type && type(t); t++)
-		for (int i = 0; i < type(t)->n_keys; i++) {
-			const struct cfg_key *k = &type(t)->keys[i];
+	for (int t = 0; type && type(t); t++) {
+		const struct cfg_key *k, *o;
+
+		for (int i = 0; (k = type_key(type(t), i)); i++) {
 			bool printed = false;
 
 			for (int u = 0; u < t && !printed; u++)
-				for (int j = 0; j < type(u)->n_keys && !printed; j++)
-					printed = same_key(k, &type(u)->keys[j]);
+				for (int j = 0; (o = type_key(type(u), j)) && !printed; j++)
+					printed = same_key(k, o);
 			if (printed)
 				continue;
 			n = 0;
 			types[0] = '\0';
 			for (int u = t; type(u); u++)
-				for (int j = 0; j < type(u)->n_keys; j++)
-					if (same_key(k, &type(u)->keys[j]) && n < sizeof(types))
+				for (int j = 0; (o = type_key(type(u), j)); j++)
+					if (same_key(k, o) && n < sizeof(types))
 						n += (size_t)snprintf(types + n, sizeof(types) - n, "%s%s",
 								      n ? " " : "", type(u)->name);
 			print_key(out, k, types, NULL);
 		}
+	}
 }
 
 void config_print_reference(FILE *out)

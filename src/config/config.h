@@ -126,6 +126,9 @@ struct cfg_type {
 	const char *doc; /* one line: what it is */
 	const struct cfg_key *keys;
 	int n_keys;
+	/* keys it shares with other types whose options start alike (read before its own), or NULL */
+	const struct cfg_key *shared;
+	int n_shared;
 	size_t opt_size; /* its options struct, allocated and filled by the configuration */
 	bool built;	 /* false: known, but its library was missing at build time */
 	/*

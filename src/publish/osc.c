@@ -25,6 +25,7 @@
  */
 #include "publish/output.h"
 #include "publish/osc.h"
+#include "ik/dq.h"
 #include "base/clock.h"
 #include "publish/snapshot.h"
 
@@ -38,20 +39,14 @@
 #include <string.h>
 #include <time.h>
 
-static const struct cfg_key vmc_keys[] = {
+/* the keys its types share (read before each type's own) */
+static const struct cfg_key osc_shared_keys[] = {
 	{ .name = "address",
 	  .kind = CFG_STR,
 	  CFG_AT(struct osc_opts, address),
 	  .def = "127.0.0.1",
 	  .doc = "vmc, vrchat: destination host; websocket: listen address (any other address shows the viewer to "
 		 "the network)" },
-	{ .name = "port",
-	  .kind = CFG_INT,
-	  CFG_AT(struct osc_opts, port),
-	  .min = 1,
-	  .max = 65535,
-	  .def = "39539",
-	  .doc = "UDP destination port of the VMC marionette" },
 	{ .name = "rate",
 	  .kind = CFG_DOUBLE,
 	  CFG_AT(struct osc_opts, rate),
@@ -60,6 +55,16 @@ static const struct cfg_key vmc_keys[] = {
 	  .def = "60",
 	  .unit = "Hz",
 	  .doc = "OSC bundles per second (the newest frame each time)" },
+};
+
+static const struct cfg_key vmc_keys[] = {
+	{ .name = "port",
+	  .kind = CFG_INT,
+	  CFG_AT(struct osc_opts, port),
+	  .min = 1,
+	  .max = 65535,
+	  .def = "39539",
+	  .doc = "UDP destination port of the VMC marionette" },
 	{ .name = "torso",
 	  .kind = CFG_DOUBLE,
 	  CFG_AT(struct osc_opts, torso),
@@ -71,12 +76,6 @@ static const struct cfg_key vmc_keys[] = {
 };
 
 static const struct cfg_key vrchat_keys[] = {
-	{ .name = "address",
-	  .kind = CFG_STR,
-	  CFG_AT(struct osc_opts, address),
-	  .def = "127.0.0.1",
-	  .doc = "vmc, vrchat: destination host; websocket: listen address (any other address shows the viewer to "
-		 "the network)" },
 	{ .name = "port",
 	  .kind = CFG_INT,
 	  CFG_AT(struct osc_opts, port),
@@ -84,14 +83,6 @@ static const struct cfg_key vrchat_keys[] = {
 	  .max = 65535,
 	  .def = "9000",
 	  .doc = "UDP port VRChat listens on for OSC" },
-	{ .name = "rate",
-	  .kind = CFG_DOUBLE,
-	  CFG_AT(struct osc_opts, rate),
-	  .min = 1,
-	  .max = 240,
-	  .def = "60",
-	  .unit = "Hz",
-	  .doc = "OSC bundles per second (the newest frame each time)" },
 	{ .name = "head",
 	  .kind = CFG_BOOL,
 	  CFG_AT(struct osc_opts, head),
@@ -119,68 +110,63 @@ static const struct osc_opts *opts_of(const struct cfg_output *c)
 	return c->opt;
 }
 
-struct qd {
-	double w, x, y, z;
-};
-
-struct v3 {
-	double x, y, z;
-};
-
-static struct qd q_mul(struct qd a, struct qd b)
+/* the IK core's quaternions (double build), by value */
+static struct quat q_mul(struct quat a, struct quat b)
 {
-	return (struct qd){ a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z,
-			    a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-			    a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
-			    a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w };
+	struct quat o;
+
+	quat_mul(&a, &b, &o);
+	return o;
 }
 
-static struct qd q_conj(struct qd q)
+static struct quat q_conj(struct quat q)
 {
-	return (struct qd){ q.w, -q.x, -q.y, -q.z };
+	struct quat o;
+
+	quat_conj(&q, &o);
+	return o;
 }
 
-static struct qd q_axis(double x, double y, double z, double angle)
+static struct quat q_axis(double x, double y, double z, double angle)
 {
-	double s = sin(angle / 2);
+	struct vec3 axis = { x, y, z };
+	struct quat o;
 
-	return (struct qd){ cos(angle / 2), x * s, y * s, z * s };
+	quat_from_axis_angle(&axis, angle, &o);
+	return o;
 }
 
-static struct v3 q_rot(struct qd q, struct v3 v)
+static struct vec3 q_rot(struct quat q, struct vec3 v)
 {
-	/* v + 2 u x (u x v + w v), u the vector part */
-	struct v3 u = { q.x, q.y, q.z };
-	struct v3 t = { u.y * v.z - u.z * v.y + q.w * v.x, u.z * v.x - u.x * v.z + q.w * v.y,
-			u.x * v.y - u.y * v.x + q.w * v.z };
+	struct vec3 o;
 
-	return (struct v3){ v.x + 2 * (u.y * t.z - u.z * t.y), v.y + 2 * (u.z * t.x - u.x * t.z),
-			    v.z + 2 * (u.x * t.y - u.y * t.x) };
+	quat_rotate(&q, &v, &o);
+	return o;
 }
 
-static struct v3 v_sub(struct v3 a, struct v3 b)
+static struct vec3 v_sub(struct vec3 a, struct vec3 b)
 {
-	return (struct v3){ a.x - b.x, a.y - b.y, a.z - b.z };
+	return (struct vec3){ a.x - b.x, a.y - b.y, a.z - b.z };
 }
 
-static struct v3 unity_p(struct v3 p)
+static struct vec3 unity_p(struct vec3 p)
 {
-	return (struct v3){ p.x, p.z, p.y };
+	return (struct vec3){ p.x, p.z, p.y };
 }
 
-static struct qd unity_q(struct qd q)
+static struct quat unity_q(struct quat q)
 {
-	return (struct qd){ q.w, -q.x, -q.z, -q.y };
+	return (struct quat){ q.w, -q.x, -q.z, -q.y };
 }
 
-static struct v3 pose_p(const struct wire_pose *p)
+static struct vec3 pose_p(const struct wire_pose *p)
 {
-	return (struct v3){ p->p[0], p->p[1], p->p[2] };
+	return (struct vec3){ p->p[0], p->p[1], p->p[2] };
 }
 
-static struct qd pose_q(const struct wire_pose *p)
+static struct quat pose_q(const struct wire_pose *p)
 {
-	return (struct qd){ p->q[0], p->q[1], p->q[2], p->q[3] };
+	return (struct quat){ p->q[0], p->q[1], p->q[2], p->q[3] };
 }
 
 static bool pose_ok(const struct wire_pose *p)
@@ -198,7 +184,7 @@ static bool pose_ok(const struct wire_pose *p)
  * Unity's Quaternion.Euler(x, y, z) turns about z, then x, then y (fixed
  * axes): R = Ry Rx Rz. Its angles back from a rotation, degrees.
  */
-static struct v3 unity_euler(struct qd q)
+static struct vec3 unity_euler(struct quat q)
 {
 	double m02 = 2 * (q.x * q.z + q.w * q.y), m12 = 2 * (q.y * q.z - q.w * q.x),
 	       m22 = 1 - 2 * (q.x * q.x + q.y * q.y);
@@ -213,9 +199,9 @@ static struct v3 unity_euler(struct qd q)
 		/* looking straight up or down: y and z turn about the same axis, put it all in y */
 		double m00 = 1 - 2 * (q.y * q.y + q.z * q.z), m20 = 2 * (q.x * q.z - q.w * q.y);
 
-		return (struct v3){ asin(s) * deg, atan2(-m20, m00) * deg, 0 };
+		return (struct vec3){ asin(s) * deg, atan2(-m20, m00) * deg, 0 };
 	}
-	return (struct v3){ asin(s) * deg, atan2(m02, m22) * deg, atan2(m10, m11) * deg };
+	return (struct vec3){ asin(s) * deg, atan2(m02, m22) * deg, atan2(m10, m11) * deg };
 }
 
 /* ---- the skeleton in Unity's terms --------------------------------------------------- */
@@ -250,18 +236,18 @@ static const int bone_parent[B_COUNT] = {
 };
 
 struct body {
-	struct v3 root_p;
-	struct qd root_q;
-	struct v3 p[B_COUNT]; /* Unity world */
-	struct qd q[B_COUNT];
+	struct vec3 root_p;
+	struct quat root_q;
+	struct vec3 p[B_COUNT]; /* Unity world */
+	struct quat q[B_COUNT];
 };
 
 /* the bones of a frame, in Unity's world frame; false if it has no posture */
 static bool body_of(const struct wire_frame *f, double torso, struct body *b)
 {
 	const double h = M_PI / 2;
-	struct v3 p[B_COUNT], c, zc;
-	struct qd q[B_COUNT], qc, qy;
+	struct vec3 p[B_COUNT], c, zc;
+	struct quat q[B_COUNT], qc, qy;
 	/* the segment, then the correction that makes the T-pose the identity */
 	static const struct {
 		int bone, seg;
@@ -285,19 +271,19 @@ static bool body_of(const struct wire_frame *f, double torso, struct body *b)
 		/* the chest's heading alone (its twist about z): a bow leaves the hips upright */
 		double n = sqrt(qc.w * qc.w + qc.z * qc.z);
 
-		qy = n > 1e-9 ? (struct qd){ qc.w / n, 0, 0, qc.z / n } : (struct qd){ 1, 0, 0, 0 };
+		qy = n > 1e-9 ? (struct quat){ qc.w / n, 0, 0, qc.z / n } : (struct quat){ 1, 0, 0, 0 };
 	}
 	/*
 	 * The trunk: the hips a torso down the chest's own axis (below it when
 	 * upright, behind it in a bow), upright and turned by the chest's yaw;
 	 * the spine bones evenly between, turned as the chest.
 	 */
-	zc = q_rot(qc, (struct v3){ 0, 0, 1 });
+	zc = q_rot(qc, (struct vec3){ 0, 0, 1 });
 	for (int k = B_HIPS; k <= B_NECK; k++) {
 		double frac = (double)(k - B_HIPS) / (B_NECK - B_HIPS);
 
-		p[k] = (struct v3){ c.x - torso * (1 - frac) * zc.x, c.y - torso * (1 - frac) * zc.y,
-				    c.z - torso * (1 - frac) * zc.z };
+		p[k] = (struct vec3){ c.x - torso * (1 - frac) * zc.x, c.y - torso * (1 - frac) * zc.y,
+				      c.z - torso * (1 - frac) * zc.z };
 		q[k] = k == B_HIPS ? qy : qc;
 	}
 	if (pose_ok(&f->segment[WIRE_SEG_HEAD])) {
@@ -317,7 +303,7 @@ static bool body_of(const struct wire_frame *f, double torso, struct body *b)
 				       q_axis(arm[i].ax, arm[i].ay, arm[i].az, arm[i].angle * h));
 	}
 	/* the root stands on the floor (z = 0) under the hips, facing the chest's way */
-	b->root_p = unity_p((struct v3){ p[B_HIPS].x, p[B_HIPS].y, 0 });
+	b->root_p = unity_p((struct vec3){ p[B_HIPS].x, p[B_HIPS].y, 0 });
 	b->root_q = unity_q(qy);
 	for (int k = 0; k < B_COUNT; k++) {
 		b->p[k] = unity_p(p[k]);
@@ -354,7 +340,7 @@ static void count(struct output *o, struct osc *s, int rc)
 			      memory_order_relaxed);
 }
 
-static lo_message pose_message(const char *name, struct v3 p, struct qd q)
+static lo_message pose_message(const char *name, struct vec3 p, struct quat q)
 {
 	lo_message m = lo_message_new();
 
@@ -389,9 +375,9 @@ static void send_vmc(struct output *o, struct osc *s, const struct snap_entry *e
 	ok &= m && !lo_bundle_add_message(bundle, "/VMC/Ext/Root/Pos", m);
 	for (int k = 0; k < B_COUNT; k++) {
 		int par = bone_parent[k];
-		struct v3 pp = par == B_ROOT ? b.root_p : b.p[par];
-		struct qd pq = par == B_ROOT ? b.root_q : b.q[par];
-		struct qd inv = q_conj(pq);
+		struct vec3 pp = par == B_ROOT ? b.root_p : b.p[par];
+		struct quat pq = par == B_ROOT ? b.root_q : b.q[par];
+		struct quat inv = q_conj(pq);
 
 		m = pose_message(bone_names[k], q_rot(inv, v_sub(b.p[k], pp)), q_mul(inv, b.q[k]));
 		ok &= m && !lo_bundle_add_message(bundle, "/VMC/Ext/Bone/Pos", m);
@@ -414,7 +400,7 @@ static void send_vmc(struct output *o, struct osc *s, const struct snap_entry *e
 	lo_bundle_free_recursive(bundle);
 }
 
-static void send_vec(struct output *o, struct osc *s, const char *path, struct v3 v)
+static void send_vec(struct output *o, struct osc *s, const char *path, struct vec3 v)
 {
 	lo_message m = lo_message_new();
 
@@ -429,7 +415,7 @@ static void send_vec(struct output *o, struct osc *s, const char *path, struct v
 	lo_message_free(m);
 }
 
-static void send_tracker(struct output *o, struct osc *s, const char *id, struct v3 p, struct qd q)
+static void send_tracker(struct output *o, struct osc *s, const char *id, struct vec3 p, struct quat q)
 {
 	char path[64];
 
@@ -602,6 +588,8 @@ const struct output_ops vmc_output_ops = {
 		.name = "vmc",
 		.doc = "the VMC protocol over OSC (VSeeFace, EVMC4U, VMC4UE)",
 		.keys = vmc_keys,
+		.shared = osc_shared_keys,
+		.n_shared = CFG_N(osc_shared_keys),
 		.check = osc_check,
 		.n_keys = CFG_N(vmc_keys),
 		.opt_size = sizeof(struct osc_opts),
@@ -618,6 +606,8 @@ const struct output_ops vrchat_output_ops = {
 		.name = "vrchat",
 		.doc = "VRChat's OSC trackers",
 		.keys = vrchat_keys,
+		.shared = osc_shared_keys,
+		.n_shared = CFG_N(osc_shared_keys),
 		.check = osc_check,
 		.n_keys = CFG_N(vrchat_keys),
 		.opt_size = sizeof(struct osc_opts),

@@ -29,20 +29,8 @@
 #include <sys/un.h>
 #include <unistd.h>
 
-static const struct cfg_key tcp_keys[] = {
-	{ .name = "address",
-	  .kind = CFG_STR,
-	  CFG_AT(struct stream_opts, address),
-	  .def = "127.0.0.1",
-	  .doc = "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: "
-		 "listen address" },
-	{ .name = "port",
-	  .kind = CFG_INT,
-	  CFG_AT(struct stream_opts, port),
-	  .min = 1,
-	  .max = 65535,
-	  .def = "7770",
-	  .doc = "UDP destination port or TCP listening port (modbus: required)" },
+/* the keys its types share (read before each type's own) */
+static const struct cfg_key stream_shared_keys[] = {
 	{ .name = "max_clients",
 	  .kind = CFG_INT,
 	  CFG_AT(struct stream_opts, max_clients),
@@ -60,27 +48,28 @@ static const struct cfg_key tcp_keys[] = {
 	  .doc = "per-subscriber buffer; messages that do not fit are dropped and counted" },
 };
 
+static const struct cfg_key tcp_keys[] = {
+	{ .name = "address",
+	  .kind = CFG_STR,
+	  CFG_AT(struct stream_opts, address),
+	  .def = "127.0.0.1",
+	  .doc = "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: "
+		 "listen address" },
+	{ .name = "port",
+	  .kind = CFG_INT,
+	  CFG_AT(struct stream_opts, port),
+	  .min = 1,
+	  .max = 65535,
+	  .def = "7770",
+	  .doc = "UDP destination port or TCP listening port (modbus: required)" },
+};
+
 static const struct cfg_key unix_keys[] = {
 	{ .name = "path",
 	  .kind = CFG_PATH,
 	  CFG_AT(struct stream_opts, path),
 	  .def = "/run/avatargw/stream",
 	  .doc = "Unix socket path to listen on" },
-	{ .name = "max_clients",
-	  .kind = CFG_INT,
-	  CFG_AT(struct stream_opts, max_clients),
-	  .min = 1,
-	  .max = 256,
-	  .def = "8",
-	  .doc = "stream subscribers (Modbus, VRPN, WebSocket clients) at most; more are refused" },
-	{ .name = "client_buffer",
-	  .kind = CFG_INT,
-	  CFG_AT(struct stream_opts, client_buffer),
-	  .min = 4096,
-	  .max = 16777216,
-	  .def = "65536",
-	  .unit = "bytes",
-	  .doc = "per-subscriber buffer; messages that do not fit are dropped and counted" },
 };
 
 static const struct stream_opts *opts_of(const struct cfg_output *c)
@@ -319,6 +308,8 @@ const struct output_ops tcp_output_ops = {
 		.name = "tcp",
 		.doc = "TCP server, each message after a u32 length",
 		.keys = tcp_keys,
+		.shared = stream_shared_keys,
+		.n_shared = CFG_N(stream_shared_keys),
 		.n_keys = CFG_N(tcp_keys),
 		.opt_size = sizeof(struct stream_opts),
 		.built = true,
@@ -335,6 +326,8 @@ const struct output_ops unix_output_ops = {
 		.name = "unix",
 		.doc = "Unix stream socket server, each message after a u32 length",
 		.keys = unix_keys,
+		.shared = stream_shared_keys,
+		.n_shared = CFG_N(stream_shared_keys),
 		.n_keys = CFG_N(unix_keys),
 		.opt_size = sizeof(struct stream_opts),
 		.built = true,

@@ -33,13 +33,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-static const struct cfg_key udp_keys[] = {
-	{ .name = "address",
-	  .kind = CFG_STR,
-	  CFG_AT(struct udp_opts, address),
-	  .def = "127.0.0.1",
-	  .doc = "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: "
-		 "listen address" },
+/* the keys its types share (read before each type's own) */
+static const struct cfg_key udp_shared_keys[] = {
 	{ .name = "port",
 	  .kind = CFG_INT,
 	  CFG_AT(struct udp_opts, port),
@@ -55,6 +50,15 @@ static const struct cfg_key udp_keys[] = {
 		 "off by itself where refused" },
 };
 
+static const struct cfg_key udp_keys[] = {
+	{ .name = "address",
+	  .kind = CFG_STR,
+	  CFG_AT(struct udp_opts, address),
+	  .def = "127.0.0.1",
+	  .doc = "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: "
+		 "listen address" },
+};
+
 static const struct cfg_key multicast_keys[] = {
 	{ .name = "address",
 	  .kind = CFG_STR,
@@ -62,13 +66,6 @@ static const struct cfg_key multicast_keys[] = {
 	  .missing = "a multicast group",
 	  .doc = "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: "
 		 "listen address" },
-	{ .name = "port",
-	  .kind = CFG_INT,
-	  CFG_AT(struct udp_opts, port),
-	  .min = 1,
-	  .max = 65535,
-	  .def = "7770",
-	  .doc = "UDP destination port or TCP listening port (modbus: required)" },
 	{ .name = "interface",
 	  .kind = CFG_STR,
 	  CFG_AT(struct udp_opts, interface),
@@ -87,12 +84,6 @@ static const struct cfg_key multicast_keys[] = {
 	  CFG_AT(struct udp_opts, mcast_loop),
 	  .def = "yes",
 	  .doc = "deliver multicast to listeners on this host too" },
-	{ .name = "gso",
-	  .kind = CFG_BOOL,
-	  CFG_AT(struct udp_opts, gso),
-	  .def = "yes",
-	  .doc = "send runs of equal-length messages as one buffer the kernel cuts into datagrams (UDP_SEGMENT); "
-		 "off by itself where refused" },
 };
 
 static const struct udp_opts *opts_of(const struct cfg_output *c)
@@ -360,6 +351,8 @@ const struct output_ops udp_output_ops = {
 		.name = "udp",
 		.doc = "UDP datagrams to one address (protocol v1)",
 		.keys = udp_keys,
+		.shared = udp_shared_keys,
+		.n_shared = CFG_N(udp_shared_keys),
 		.n_keys = CFG_N(udp_keys),
 		.opt_size = sizeof(struct udp_opts),
 		.built = true,
@@ -375,6 +368,8 @@ const struct output_ops multicast_output_ops = {
 		.name = "multicast",
 		.doc = "UDP datagrams to a multicast group (a CAVE cluster)",
 		.keys = multicast_keys,
+		.shared = udp_shared_keys,
+		.n_shared = CFG_N(udp_shared_keys),
 		.n_keys = CFG_N(multicast_keys),
 		.opt_size = sizeof(struct udp_opts),
 		.built = true,

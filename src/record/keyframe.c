@@ -5,6 +5,8 @@
  */
 #include "record/keyframe.h"
 
+#include "ik/dq.h"
+
 #include <math.h>
 #include <string.h>
 
@@ -30,15 +32,16 @@ static double qdot(const double a[4], const double b[4])
 	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
 }
 
+/* the IK core's product (double build), on arrays */
 static void qmul(const double a[4], const double b[4], double o[4])
 {
-	double r[4];
+	struct quat x = { a[0], a[1], a[2], a[3] }, y = { b[0], b[1], b[2], b[3] }, r;
 
-	r[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
-	r[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
-	r[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
-	r[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
-	memcpy(o, r, sizeof(r));
+	quat_mul(&x, &y, &r);
+	o[0] = r.w;
+	o[1] = r.x;
+	o[2] = r.y;
+	o[3] = r.z;
 }
 
 static bool qunit(double q[4])

@@ -26,6 +26,42 @@
 #define DEVICE_FRESH 4u
 #define DEVICE_IDX 3u
 
+/* the keys of every device source (struct device_opts starts its options) */
+const struct cfg_key device_keys[DEVICE_N_KEYS] = {
+	{ .name = "speed",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct device_opts, speed),
+	  .min = 0.01,
+	  .max = 100,
+	  .def = "1",
+	  .doc = "playback speed of the recording or capture, 1 = real time" },
+	{ .name = "loop",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct device_opts, loop),
+	  .def = "yes",
+	  .doc = "start the recording or capture again at its end; otherwise the source ENDS and its sensors go "
+		 "STALE" },
+	{ .name = "device",
+	  .kind = CFG_STR,
+	  CFG_AT(struct device_opts, device),
+	  .def = "auto",
+	  .doc = "which device: auto (the first found); hydra: a hidraw node of its motion interface "
+		 "(/dev/hidraw3, or a udev symlink) or its USB port; polhemus: its USB port; a USB port is "
+		 "BUS-PORT[.PORT...] as avatargw --list-devices shows it" },
+	{ .name = "capture",
+	  .kind = CFG_PATH,
+	  CFG_AT(struct device_opts, capture),
+	  .def = "",
+	  .doc = "play this capture of raw reports (hex, one report per line) instead of reading the device; "
+		 "relative to this file's directory; empty = the device" },
+	{ .name = "record",
+	  .kind = CFG_PATH,
+	  CFG_AT(struct device_opts, record),
+	  .def = "",
+	  .doc = "write every raw report read from the device to this capture file, with timestamps (for a bug "
+		 "report or a test; avatargw-decode reads it); relative to this file's directory; empty = none" },
+};
+
 const struct device_codec *device_codec_find(const char *name)
 {
 	static const struct device_codec *const all[] = {

@@ -48,6 +48,10 @@ struct device_opts {
 	bool loop;		    /* play the capture again at its end */
 };
 
+/* their keys: shared by the device drivers' types (cfg_type.shared) */
+#define DEVICE_N_KEYS 5
+extern const struct cfg_key device_keys[DEVICE_N_KEYS];
+
 /* one decoded sample, in the tracker's frame (z up, metres, unit quaternion) */
 struct device_sample {
 	struct dq pose;

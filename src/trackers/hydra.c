@@ -55,38 +55,6 @@
 #include <wchar.h>
 
 static const struct cfg_key hydra_keys[] = {
-	{ .name = "speed",
-	  .kind = CFG_DOUBLE,
-	  CFG_AT(struct hydra_opts, dev.speed),
-	  .min = 0.01,
-	  .max = 100,
-	  .def = "1",
-	  .doc = "playback speed of the recording or capture, 1 = real time" },
-	{ .name = "loop",
-	  .kind = CFG_BOOL,
-	  CFG_AT(struct hydra_opts, dev.loop),
-	  .def = "yes",
-	  .doc = "start the recording or capture again at its end; otherwise the source ENDS and its sensors go "
-		 "STALE" },
-	{ .name = "device",
-	  .kind = CFG_STR,
-	  CFG_AT(struct hydra_opts, dev.device),
-	  .def = "auto",
-	  .doc = "which device: auto (the first found); hydra: a hidraw node of its motion interface "
-		 "(/dev/hidraw3, or a udev symlink) or its USB port; polhemus: its USB port; a USB port is "
-		 "BUS-PORT[.PORT...] as avatargw --list-devices shows it" },
-	{ .name = "capture",
-	  .kind = CFG_PATH,
-	  CFG_AT(struct hydra_opts, dev.capture),
-	  .def = "",
-	  .doc = "play this capture of raw reports (hex, one report per line) instead of reading the device; "
-		 "relative to this file's directory; empty = the device" },
-	{ .name = "record",
-	  .kind = CFG_PATH,
-	  CFG_AT(struct hydra_opts, dev.record),
-	  .def = "",
-	  .doc = "write every raw report read from the device to this capture file, with timestamps (for a bug "
-		 "report or a test; avatargw-decode reads it); relative to this file's directory; empty = none" },
 	{ .name = "interface",
 	  .kind = CFG_INT,
 	  CFG_AT(struct hydra_opts, hid_interface),
@@ -884,6 +852,8 @@ const struct tracker_driver hydra_driver = {
 		.name = "hydra",
 		.doc = "Razer Hydra over hidapi (hidraw): two wands, buttons, joysticks, triggers",
 		.keys = hydra_keys,
+		.shared = device_keys,
+		.n_shared = DEVICE_N_KEYS,
 		.n_keys = CFG_N(hydra_keys),
 		.opt_size = sizeof(struct hydra_opts),
 		.built = true,

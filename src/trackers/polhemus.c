@@ -51,38 +51,6 @@
 static const char *const e_model[] = { "auto", "liberty", "liberty_hs", "patriot", "patriot_hs", NULL };
 
 static const struct cfg_key polhemus_keys[] = {
-	{ .name = "speed",
-	  .kind = CFG_DOUBLE,
-	  CFG_AT(struct polhemus_opts, dev.speed),
-	  .min = 0.01,
-	  .max = 100,
-	  .def = "1",
-	  .doc = "playback speed of the recording or capture, 1 = real time" },
-	{ .name = "loop",
-	  .kind = CFG_BOOL,
-	  CFG_AT(struct polhemus_opts, dev.loop),
-	  .def = "yes",
-	  .doc = "start the recording or capture again at its end; otherwise the source ENDS and its sensors go "
-		 "STALE" },
-	{ .name = "device",
-	  .kind = CFG_STR,
-	  CFG_AT(struct polhemus_opts, dev.device),
-	  .def = "auto",
-	  .doc = "which device: auto (the first found); hydra: a hidraw node of its motion interface "
-		 "(/dev/hidraw3, or a udev symlink) or its USB port; polhemus: its USB port; a USB port is "
-		 "BUS-PORT[.PORT...] as avatargw --list-devices shows it" },
-	{ .name = "capture",
-	  .kind = CFG_PATH,
-	  CFG_AT(struct polhemus_opts, dev.capture),
-	  .def = "",
-	  .doc = "play this capture of raw reports (hex, one report per line) instead of reading the device; "
-		 "relative to this file's directory; empty = the device" },
-	{ .name = "record",
-	  .kind = CFG_PATH,
-	  CFG_AT(struct polhemus_opts, dev.record),
-	  .def = "",
-	  .doc = "write every raw report read from the device to this capture file, with timestamps (for a bug "
-		 "report or a test; avatargw-decode reads it); relative to this file's directory; empty = none" },
 	{ .name = "model",
 	  .kind = CFG_ENUM,
 	  CFG_AT(struct polhemus_opts, model),
@@ -1006,6 +974,8 @@ const struct tracker_driver polhemus_driver = {
 		.name = "polhemus",
 		.doc = "Polhemus Liberty, Liberty HS (Latus), Patriot over libusb bulk endpoints",
 		.keys = polhemus_keys,
+		.shared = device_keys,
+		.n_shared = DEVICE_N_KEYS,
 		.n_keys = CFG_N(polhemus_keys),
 		.opt_size = sizeof(struct polhemus_opts),
 		.built = true,

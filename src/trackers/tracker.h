@@ -96,7 +96,7 @@ struct tracker {
 	struct dq *mount;    /* per sensor: the tracked point in the sensor's frame (mount_SENSOR) */
 	bool *mounted;	     /* per sensor: mount is not the identity */
 	struct tracker_stats st;
-	void *priv;	      /* the driver's state */
+	void *priv; /* the driver's state */
 	/*
 	 * A tap on every sample stored (recording: the gateway sets it), or
 	 * NULL. Called by tracker_put in the loop with the slot just updated.

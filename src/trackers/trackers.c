@@ -6,7 +6,6 @@
  */
 #include "trackers/tracker.h"
 
-
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
