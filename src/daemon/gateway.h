@@ -51,8 +51,8 @@ struct gw_avatar {
 	uint32_t seq, dseq;
 	uint32_t describe_rev;
 	uint64_t next_describe_ns;
-	uint64_t pose_arrival_ns; /* arrival of the newest sample of the frame just queued, 0: none */
-	uint8_t *describe_msg;	      /* WIRE_MAX_MSG bytes in the gateway's describe arena */
+	uint64_t pose_arrival_ns;	/* arrival of the newest sample of the frame just queued, 0: none */
+	uint8_t *describe_msg;		/* WIRE_MAX_MSG bytes in the gateway's describe arena */
 	struct wire_describe *describe; /* its values (made at start-up; seq and revision change) */
 	struct gw_avatar_stats st;
 };
@@ -99,8 +99,8 @@ struct gateway {
 	struct avatar *bodies; /* the distinct bodies the avatars point to */
 	int n_bodies;
 	struct out_msg *msgs;
-	struct pose_frame *frames;  /* per avatar, the frame of this cycle */
-	struct wire_frame *wframes; /* per avatar, what its FRAME of this cycle says (the outputs read it) */
+	struct pose_frame *frames;	 /* per avatar, the frame of this cycle */
+	struct wire_frame *wframes;	 /* per avatar, what its FRAME of this cycle says (the outputs read it) */
 	struct wire_describe *describes; /* per avatar */
 	uint32_t source_id;
 	uint64_t stale_ns;
