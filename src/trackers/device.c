@@ -62,6 +62,21 @@ const struct cfg_key device_keys[DEVICE_N_KEYS] = {
 		 "report or a test; avatargw-decode reads it); relative to this file's directory; empty = none" },
 };
 
+int device_check(const struct config *c __attribute__((unused)), const void *section, const char **key, char *err,
+		 size_t errlen)
+{
+	const struct device_opts *o = ((const struct cfg_source *)section)->opt;
+	struct capture cap;
+
+	*key = "capture"; /* what a failure blames */
+	if (!o->capture[0])
+		return 0;
+	if (capture_load(&cap, o->capture, err, errlen))
+		return -1;
+	capture_free(&cap);
+	return 0;
+}
+
 const struct device_codec *device_codec_find(const char *name)
 {
 	static const struct device_codec *const all[] = {

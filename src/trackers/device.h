@@ -52,6 +52,9 @@ struct device_opts {
 #define DEVICE_N_KEYS 5
 extern const struct cfg_key device_keys[DEVICE_N_KEYS];
 
+/* the configuration check of every device source (cfg_type.check): a capture it names must load */
+int device_check(const struct config *c, const void *section, const char **key, char *err, size_t errlen);
+
 /* one decoded sample, in the tracker's frame (z up, metres, unit quaternion) */
 struct device_sample {
 	struct dq pose;

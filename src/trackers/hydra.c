@@ -756,22 +756,6 @@ static void hydra_sensor_name(const struct cfg_source *cfg, int i, char *buf, si
 	snprintf(buf, len, "%s", hydra_sensors[i]);
 }
 
-static int hydra_check(const struct config *c __attribute__((unused)), const void *section, const char **key, char *err,
-		       size_t errlen)
-{
-	const struct cfg_source *cfg = section;
-
-	*key = "capture"; /* what a failure blames */
-	struct capture cap;
-
-	if (!opts_of(cfg)->dev.capture[0])
-		return 0;
-	if (capture_load(&cap, opts_of(cfg)->dev.capture, err, errlen))
-		return -1;
-	capture_free(&cap);
-	return 0;
-}
-
 static int hydra_open(struct tracker *t, char *err, size_t errlen)
 {
 	struct hydra *h = calloc(1, sizeof(*h));
@@ -857,7 +841,7 @@ const struct tracker_driver hydra_driver = {
 		.n_keys = CFG_N(hydra_keys),
 		.opt_size = sizeof(struct hydra_opts),
 		.built = true,
-		.check = hydra_check,
+		.check = device_check,
 		.sensor_count = hydra_sensor_count,
 		.sensor_name = hydra_sensor_name,
 	},

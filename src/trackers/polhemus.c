@@ -856,22 +856,6 @@ static void polhemus_run(struct device *d)
 
 /* ---- the driver ------------------------------------------------------------------------ */
 
-static int polhemus_check(const struct config *c __attribute__((unused)), const void *section, const char **key,
-			  char *err, size_t errlen)
-{
-	const struct cfg_source *cfg = section;
-
-	*key = "capture"; /* what a failure blames */
-	struct capture cap;
-
-	if (!opts_of(cfg)->dev.capture[0])
-		return 0;
-	if (capture_load(&cap, opts_of(cfg)->dev.capture, err, errlen))
-		return -1;
-	capture_free(&cap);
-	return 0;
-}
-
 static int polhemus_open(struct tracker *t, char *err, size_t errlen)
 {
 	struct polhemus *p = calloc(1, sizeof(*p));
@@ -979,7 +963,7 @@ const struct tracker_driver polhemus_driver = {
 		.n_keys = CFG_N(polhemus_keys),
 		.opt_size = sizeof(struct polhemus_opts),
 		.built = true,
-		.check = polhemus_check,
+		.check = device_check,
 		.sensor_count = polhemus_sensor_count,
 		.sensor_name = polhemus_sensor_name,
 	},

@@ -664,11 +664,10 @@ static int replay_check(const struct config *c __attribute__((unused)), const vo
 			char *err, size_t errlen)
 {
 	const struct cfg_source *cfg = section;
-
-	*key = "file"; /* what a failure blames */
 	struct replay *rp = calloc(1, sizeof(*rp));
 	int rc;
 
+	*key = "file"; /* what a failure blames */
 	if (!rp) {
 		snprintf(err, errlen, "file: out of memory");
 		return -1;
