@@ -185,6 +185,9 @@ const char *wire_strerror(int err);
  * FRAME is WIRE_FRAME_LEN bytes, WIRE_FRAME_LEN + WIRE_INPUTS_LEN with an
  * input block (h.flags & WIRE_F_INPUTS).
  */
+/* every number of the pose is finite (a pose the frame does not know is NaN) */
+bool wire_pose_finite(const struct wire_pose *p);
+
 size_t wire_encode_frame(const struct wire_frame *f, uint8_t *buf);
 size_t wire_encode_describe(const struct wire_describe *d, uint8_t *buf);
 

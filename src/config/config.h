@@ -142,6 +142,12 @@ struct cfg_type {
 	void (*sensor_name)(const struct cfg_source *s, int i, char *buf, size_t len);
 };
 
+/* a built type's name, doc, keys and options struct, inside its designated initializer */
+#define CFG_TYPE(nm, what, k, opts)                                                                                    \
+	.name = nm, .doc = what, .keys = k, .n_keys = CFG_N(k), .opt_size = sizeof(opts), .built = true
+/* ... and the keys it shares with other types */
+#define CFG_SHARED(k) .shared = k, .n_shared = CFG_N(k)
+
 const struct cfg_type *cfg_source_type(int i);
 const struct cfg_type *cfg_output_type(int i);
 

@@ -364,15 +364,8 @@ static void can_out_report(struct output *o, FILE *out, bool json)
 }
 
 const struct output_ops can_output_ops = {
-	.type = {
-		.name = "can",
-		.doc = "joint angles as SocketCAN frames",
-		.keys = can_keys,
-		.check = can_out_check,
-		.n_keys = CFG_N(can_keys),
-		.opt_size = sizeof(struct can_out_opts),
-		.built = true,
-	},
+	.type = { CFG_TYPE("can", "joint angles as SocketCAN frames", can_keys, struct can_out_opts),
+		  .check = can_out_check },
 	.open = can_out_open,
 	.close = can_out_close,
 	.send = can_out_send,

@@ -685,15 +685,9 @@ static void modbus_server_report(struct output *o, FILE *out, bool json)
 }
 
 const struct output_ops modbus_output_ops = {
-	.type = {
-		.name = "modbus",
-		.doc = "Modbus TCP server: frame, states and joint angles as input registers",
-		.keys = modbus_keys,
-		.check = modbus_server_check,
-		.n_keys = CFG_N(modbus_keys),
-		.opt_size = sizeof(struct modbus_out_opts),
-		.built = true,
-	},
+	.type = { CFG_TYPE("modbus", "Modbus TCP server: frame, states and joint angles as input registers",
+			   modbus_keys, struct modbus_out_opts),
+		  .check = modbus_server_check },
 	.quiet_accept = true,
 	.open = modbus_server_open,
 	.close = modbus_server_close,

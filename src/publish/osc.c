@@ -169,17 +169,6 @@ static struct quat pose_q(const struct wire_pose *p)
 	return (struct quat){ p->q[0], p->q[1], p->q[2], p->q[3] };
 }
 
-static bool pose_ok(const struct wire_pose *p)
-{
-	for (int i = 0; i < 3; i++)
-		if (!isfinite(p->p[i]))
-			return false;
-	for (int i = 0; i < 4; i++)
-		if (!isfinite(p->q[i]))
-			return false;
-	return true;
-}
-
 /*
  * Unity's Quaternion.Euler(x, y, z) turns about z, then x, then y (fixed
  * axes): R = Ry Rx Rz. Its angles back from a rotation, degrees.
@@ -258,10 +247,10 @@ static bool body_of(const struct wire_frame *f, double torso, struct body *b)
 		{ B_L_LOWER_ARM, WIRE_SEG_L_ELBOW, 0, 0, 1, -1 },   { B_L_HAND, WIRE_SEG_L_WRIST, 0, 0, 1, -1 },
 	};
 
-	if (!pose_ok(&f->segment[WIRE_SEG_CHEST]))
+	if (!wire_pose_finite(&f->segment[WIRE_SEG_CHEST]))
 		return false;
 	for (int s = WIRE_SEG_R_SHOULDER; s <= WIRE_SEG_L_HAND; s++)
-		if (!pose_ok(&f->segment[s]))
+		if (!wire_pose_finite(&f->segment[s]))
 			return false;
 	if (!isfinite(f->joint[1]) || !isfinite(f->joint[9]))
 		return false;
@@ -286,7 +275,7 @@ static bool body_of(const struct wire_frame *f, double torso, struct body *b)
 				      c.z - torso * (1 - frac) * zc.z };
 		q[k] = k == B_HIPS ? qy : qc;
 	}
-	if (pose_ok(&f->segment[WIRE_SEG_HEAD])) {
+	if (wire_pose_finite(&f->segment[WIRE_SEG_HEAD])) {
 		p[B_HEAD] = pose_p(&f->segment[WIRE_SEG_HEAD]);
 		q[B_HEAD] = pose_q(&f->segment[WIRE_SEG_HEAD]);
 	} else {
@@ -439,7 +428,7 @@ static void send_vrchat(struct output *o, struct osc *s, const struct snap_entry
 	send_tracker(o, s, "1", b.p[B_NECK], b.q[B_NECK]);
 	send_tracker(o, s, "2", b.p[B_L_LOWER_ARM], b.q[B_L_UPPER_ARM]);
 	send_tracker(o, s, "3", b.p[B_R_LOWER_ARM], b.q[B_R_UPPER_ARM]);
-	if (s->head && pose_ok(&e->f.segment[WIRE_SEG_HEAD]))
+	if (s->head && wire_pose_finite(&e->f.segment[WIRE_SEG_HEAD]))
 		send_tracker(o, s, "head", b.p[B_HEAD], b.q[B_HEAD]);
 }
 
@@ -584,17 +573,8 @@ static void osc_service(struct output *o)
 }
 
 const struct output_ops vmc_output_ops = {
-	.type = {
-		.name = "vmc",
-		.doc = "the VMC protocol over OSC (VSeeFace, EVMC4U, VMC4UE)",
-		.keys = vmc_keys,
-		.shared = osc_shared_keys,
-		.n_shared = CFG_N(osc_shared_keys),
-		.check = osc_check,
-		.n_keys = CFG_N(vmc_keys),
-		.opt_size = sizeof(struct osc_opts),
-		.built = true,
-	},
+	.type = { CFG_TYPE("vmc", "the VMC protocol over OSC (VSeeFace, EVMC4U, VMC4UE)", vmc_keys, struct osc_opts),
+		  CFG_SHARED(osc_shared_keys), .check = osc_check },
 	.open = osc_open,
 	.close = osc_close,
 	.send = osc_send,
@@ -602,17 +582,8 @@ const struct output_ops vmc_output_ops = {
 };
 
 const struct output_ops vrchat_output_ops = {
-	.type = {
-		.name = "vrchat",
-		.doc = "VRChat's OSC trackers",
-		.keys = vrchat_keys,
-		.shared = osc_shared_keys,
-		.n_shared = CFG_N(osc_shared_keys),
-		.check = osc_check,
-		.n_keys = CFG_N(vrchat_keys),
-		.opt_size = sizeof(struct osc_opts),
-		.built = true,
-	},
+	.type = { CFG_TYPE("vrchat", "VRChat's OSC trackers", vrchat_keys, struct osc_opts),
+		  CFG_SHARED(osc_shared_keys), .check = osc_check },
 	.open = osc_open,
 	.close = osc_close,
 	.send = osc_send,

@@ -304,16 +304,8 @@ static bool stream_adopt(struct output *o, struct output *old)
 }
 
 const struct output_ops tcp_output_ops = {
-	.type = {
-		.name = "tcp",
-		.doc = "TCP server, each message after a u32 length",
-		.keys = tcp_keys,
-		.shared = stream_shared_keys,
-		.n_shared = CFG_N(stream_shared_keys),
-		.n_keys = CFG_N(tcp_keys),
-		.opt_size = sizeof(struct stream_opts),
-		.built = true,
-	},
+	.type = { CFG_TYPE("tcp", "TCP server, each message after a u32 length", tcp_keys, struct stream_opts),
+		  CFG_SHARED(stream_shared_keys) },
 	.open = stream_open,
 	.close = stream_close,
 	.send = stream_send,
@@ -322,16 +314,9 @@ const struct output_ops tcp_output_ops = {
 };
 
 const struct output_ops unix_output_ops = {
-	.type = {
-		.name = "unix",
-		.doc = "Unix stream socket server, each message after a u32 length",
-		.keys = unix_keys,
-		.shared = stream_shared_keys,
-		.n_shared = CFG_N(stream_shared_keys),
-		.n_keys = CFG_N(unix_keys),
-		.opt_size = sizeof(struct stream_opts),
-		.built = true,
-	},
+	.type = { CFG_TYPE("unix", "Unix stream socket server, each message after a u32 length", unix_keys,
+			   struct stream_opts),
+		  CFG_SHARED(stream_shared_keys) },
 	.open = stream_open,
 	.close = stream_close,
 	.send = stream_send,

@@ -347,16 +347,8 @@ static void udp_service(struct output *o)
 }
 
 const struct output_ops udp_output_ops = {
-	.type = {
-		.name = "udp",
-		.doc = "UDP datagrams to one address (protocol v1)",
-		.keys = udp_keys,
-		.shared = udp_shared_keys,
-		.n_shared = CFG_N(udp_shared_keys),
-		.n_keys = CFG_N(udp_keys),
-		.opt_size = sizeof(struct udp_opts),
-		.built = true,
-	},
+	.type = { CFG_TYPE("udp", "UDP datagrams to one address (protocol v1)", udp_keys, struct udp_opts),
+		  CFG_SHARED(udp_shared_keys) },
 	.open = udp_open,
 	.close = udp_close,
 	.send = udp_send,
@@ -364,16 +356,9 @@ const struct output_ops udp_output_ops = {
 };
 
 const struct output_ops multicast_output_ops = {
-	.type = {
-		.name = "multicast",
-		.doc = "UDP datagrams to a multicast group (a CAVE cluster)",
-		.keys = multicast_keys,
-		.shared = udp_shared_keys,
-		.n_shared = CFG_N(udp_shared_keys),
-		.n_keys = CFG_N(multicast_keys),
-		.opt_size = sizeof(struct udp_opts),
-		.built = true,
-	},
+	.type = { CFG_TYPE("multicast", "UDP datagrams to a multicast group (a CAVE cluster)", multicast_keys,
+			   struct udp_opts),
+		  CFG_SHARED(udp_shared_keys) },
 	.open = udp_open,
 	.close = udp_close,
 	.send = udp_send,

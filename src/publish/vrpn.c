@@ -265,17 +265,6 @@ static size_t msg_states(uint8_t *p, int32_t sender, const uint32_t buttons[FRAM
 	return MSG_LEN(STATES_LEN);
 }
 
-static bool pose_finite(const struct wire_pose *p)
-{
-	for (int i = 0; i < 3; i++)
-		if (!isfinite(p->p[i]))
-			return false;
-	for (int i = 0; i < 4; i++)
-		if (!isfinite(p->q[i]))
-			return false;
-	return true;
-}
-
 /* the tracker and analog reports of one frame; returns their length */
 static size_t encode_low(uint8_t *p, int32_t sender, const struct wire_frame *f)
 {
@@ -288,7 +277,7 @@ static size_t encode_low(uint8_t *p, int32_t sender, const struct wire_frame *f)
 		uint8_t *q;
 
 		/* an unknown pose is not sent: VRPN has no way to say unknown, and NaN is never published */
-		if (!pose_finite(pose))
+		if (!wire_pose_finite(pose))
 			continue;
 		q = msg_header(p + n, T_POS_QUAT, sender, t, POS_QUAT_LEN);
 		put32(q, (uint32_t)s);
@@ -1086,14 +1075,8 @@ static void vrpn_send(struct output *o, const struct out_msg *msgs, int n)
 }
 
 const struct output_ops vrpn_output_ops = {
-	.type = {
-		.name = "vrpn",
-		.doc = "VRPN server: a tracker, an analog and buttons per avatar",
-		.keys = vrpn_keys,
-		.n_keys = CFG_N(vrpn_keys),
-		.opt_size = sizeof(struct vrpn_opts),
-		.built = true,
-	},
+	.type = { CFG_TYPE("vrpn", "VRPN server: a tracker, an analog and buttons per avatar", vrpn_keys,
+			   struct vrpn_opts) },
 	.open = vrpn_open,
 	.close = vrpn_close,
 	.send = vrpn_send,

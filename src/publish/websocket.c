@@ -667,14 +667,8 @@ static void ws_service(struct output *o)
 }
 
 const struct output_ops websocket_output_ops = {
-	.type = {
-		.name = "websocket",
-		.doc = "JSON frames and the browser viewer (HTTP and WebSocket)",
-		.keys = websocket_keys,
-		.n_keys = CFG_N(websocket_keys),
-		.opt_size = sizeof(struct websocket_opts),
-		.built = true,
-	},
+	.type = { CFG_TYPE("websocket", "JSON frames and the browser viewer (HTTP and WebSocket)", websocket_keys,
+			   struct websocket_opts) },
 	.open = ws_open,
 	.close = ws_close,
 	.send = ws_send,

@@ -305,17 +305,9 @@ static void can_in_report(struct tracker *t, FILE *out, bool json)
 }
 
 const struct tracker_driver can_driver = {
-	.type = {
-		.name = "can",
-		.doc = "sensor orientations (int16 quaternions) and positions from SocketCAN frames",
-		.keys = can_keys,
-		.n_keys = CFG_N(can_keys),
-		.opt_size = sizeof(struct can_in_opts),
-		.built = true,
-		.check = can_in_check,
-		.sensor_count = can_in_sensor_count,
-		.sensor_name = can_in_sensor_name,
-	},
+	.type = { CFG_TYPE("can", "sensor orientations (int16 quaternions) and positions from SocketCAN frames",
+			   can_keys, struct can_in_opts),
+		  .check = can_in_check, .sensor_count = can_in_sensor_count, .sensor_name = can_in_sensor_name },
 	.open = can_in_open,
 	.close = can_in_close,
 	.poll = can_in_poll,

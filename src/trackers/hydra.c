@@ -832,19 +832,10 @@ static int hydra_list(FILE *out)
 }
 
 const struct tracker_driver hydra_driver = {
-	.type = {
-		.name = "hydra",
-		.doc = "Razer Hydra over hidapi (hidraw): two wands, buttons, joysticks, triggers",
-		.keys = hydra_keys,
-		.shared = device_keys,
-		.n_shared = DEVICE_N_KEYS,
-		.n_keys = CFG_N(hydra_keys),
-		.opt_size = sizeof(struct hydra_opts),
-		.built = true,
-		.check = device_check,
-		.sensor_count = hydra_sensor_count,
-		.sensor_name = hydra_sensor_name,
-	},
+	.type = { CFG_TYPE("hydra", "Razer Hydra over hidapi (hidraw): two wands, buttons, joysticks, triggers",
+			   hydra_keys, struct hydra_opts),
+		  CFG_SHARED(device_keys), .check = device_check, .sensor_count = hydra_sensor_count,
+		  .sensor_name = hydra_sensor_name },
 	.open = hydra_open,
 	.close = hydra_close,
 	.poll = device_drv_poll,

@@ -700,17 +700,10 @@ static void modbus_in_report(struct tracker *t, FILE *out, bool json)
 }
 
 const struct tracker_driver modbus_driver = {
-	.type = {
-		.name = "modbus",
-		.doc = "poses polled from a Modbus TCP device (robot tool pose, laser tracker)",
-		.keys = modbus_keys,
-		.n_keys = CFG_N(modbus_keys),
-		.opt_size = sizeof(struct modbus_in_opts),
-		.built = true,
-		.check = modbus_in_check,
-		.sensor_count = modbus_in_sensor_count,
-		.sensor_name = modbus_in_sensor_name,
-	},
+	.type = { CFG_TYPE("modbus", "poses polled from a Modbus TCP device (robot tool pose, laser tracker)",
+			   modbus_keys, struct modbus_in_opts),
+		  .check = modbus_in_check, .sensor_count = modbus_in_sensor_count,
+		  .sensor_name = modbus_in_sensor_name },
 	.open = modbus_in_open,
 	.close = modbus_in_close,
 	.poll = modbus_in_poll,

@@ -954,19 +954,10 @@ static int polhemus_list(FILE *out)
 }
 
 const struct tracker_driver polhemus_driver = {
-	.type = {
-		.name = "polhemus",
-		.doc = "Polhemus Liberty, Liberty HS (Latus), Patriot over libusb bulk endpoints",
-		.keys = polhemus_keys,
-		.shared = device_keys,
-		.n_shared = DEVICE_N_KEYS,
-		.n_keys = CFG_N(polhemus_keys),
-		.opt_size = sizeof(struct polhemus_opts),
-		.built = true,
-		.check = device_check,
-		.sensor_count = polhemus_sensor_count,
-		.sensor_name = polhemus_sensor_name,
-	},
+	.type = { CFG_TYPE("polhemus", "Polhemus Liberty, Liberty HS (Latus), Patriot over libusb bulk endpoints",
+			   polhemus_keys, struct polhemus_opts),
+		  CFG_SHARED(device_keys), .check = device_check, .sensor_count = polhemus_sensor_count,
+		  .sensor_name = polhemus_sensor_name },
 	.open = polhemus_open,
 	.close = polhemus_close,
 	.poll = device_drv_poll,

@@ -965,18 +965,12 @@ int replay_malformed_line(const struct tracker *t)
 }
 
 const struct tracker_driver replay_driver = {
-	.type = {
-		.name = "replay",
-		.doc = "plays a recording of the daemon or a sensor CSV (../shared/mocap/csv format): real time, faster, "
-		   "stepped, or rebuilt from keyframes",
-		.keys = replay_keys,
-		.n_keys = CFG_N(replay_keys),
-		.opt_size = sizeof(struct replay_opts),
-		.built = true,
-		.check = replay_check,
-		.sensor_count = replay_sensor_count,
-		.sensor_name = replay_sensor_name,
-	},
+	.type = { CFG_TYPE("replay",
+			   "plays a recording of the daemon or a sensor CSV (../shared/mocap/csv format): real time, "
+			   "faster, "
+			   "stepped, or rebuilt from keyframes",
+			   replay_keys, struct replay_opts),
+		  .check = replay_check, .sensor_count = replay_sensor_count, .sensor_name = replay_sensor_name },
 	.open = replay_open,
 	.close = replay_close,
 	.poll = replay_poll,

@@ -260,16 +260,9 @@ static int sim_fd(struct tracker *t)
 }
 
 const struct tracker_driver sim_driver = {
-	.type = {
-		.name = "sim",
-		.doc = "synthetic human-like head and hand motion, any number of people",
-		.keys = sim_keys,
-		.n_keys = CFG_N(sim_keys),
-		.opt_size = sizeof(struct sim_opts),
-		.built = true,
-		.sensor_count = sim_sensor_count,
-		.sensor_name = sim_sensor_name,
-	},
+	.type = { CFG_TYPE("sim", "synthetic human-like head and hand motion, any number of people", sim_keys,
+			   struct sim_opts),
+		  .sensor_count = sim_sensor_count, .sensor_name = sim_sensor_name },
 	.open = sim_open,
 	.close = sim_close,
 	.poll = sim_poll,

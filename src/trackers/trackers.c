@@ -68,6 +68,16 @@ const struct cfg_type *cfg_source_type(int i)
 	return i < (int)(sizeof(not_built) / sizeof(not_built[0])) - 1 ? &not_built[i] : NULL;
 }
 
+static void free_slots(struct tracker *t)
+{
+	free(t->slot);
+	free(t->mount);
+	free(t->mounted);
+	t->slot = NULL;
+	t->mount = NULL;
+	t->mounted = NULL;
+}
+
 int tracker_open(struct tracker *t, const struct cfg_source *cfg, char *err, size_t errlen)
 {
 	struct quat r = { cos(cfg->yaw / 2), 0, 0, sin(cfg->yaw / 2) };
@@ -108,12 +118,7 @@ int tracker_open(struct tracker *t, const struct cfg_source *cfg, char *err, siz
 	if (!rc)
 		return 0;
 fail:
-	free(t->slot);
-	free(t->mount);
-	free(t->mounted);
-	t->slot = NULL;
-	t->mount = NULL;
-	t->mounted = NULL;
+	free_slots(t);
 	return rc;
 }
 
@@ -121,12 +126,7 @@ void tracker_close(struct tracker *t)
 {
 	if (t->drv && t->slot)
 		t->drv->close(t);
-	free(t->slot);
-	free(t->mount);
-	free(t->mounted);
-	t->slot = NULL;
-	t->mount = NULL;
-	t->mounted = NULL;
+	free_slots(t);
 	t->drv = NULL;
 }
 

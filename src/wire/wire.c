@@ -6,6 +6,7 @@
  */
 #include "avatargw/wire.h"
 
+#include <math.h>
 #include <string.h>
 
 const char *const wire_joint_names[WIRE_JOINTS] = {
@@ -460,4 +461,15 @@ void wire_put_len(uint8_t out[4], uint32_t len)
 uint32_t wire_get_len(const uint8_t in[4])
 {
 	return (uint32_t)in[0] | (uint32_t)in[1] << 8 | (uint32_t)in[2] << 16 | (uint32_t)in[3] << 24;
+}
+
+bool wire_pose_finite(const struct wire_pose *p)
+{
+	for (int i = 0; i < 3; i++)
+		if (!isfinite(p->p[i]))
+			return false;
+	for (int i = 0; i < 4; i++)
+		if (!isfinite(p->q[i]))
+			return false;
+	return true;
 }
