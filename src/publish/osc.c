@@ -10,6 +10,13 @@
  * sent is not sent again; a destination that is not there costs nothing
  * but the datagram.
  *
+ * Neither protocol can say that a pose is old, so when the person stops
+ * (every sensor of the avatar STALE or MISSING: a replay that ended,
+ * trackers switched off) the messages stop too, although the loop keeps
+ * publishing frames that repeat the last posture; VMC gets one last bundle
+ * whose /VMC/Ext/OK says tracking 0. They resume with the first frame that
+ * has a sensor OK again.
+ *
  * Both speak Unity's frame: left-handed, y up, z forward, metres. From
  * avatargw's world (right-handed, z up; a person facing +y has +x to the
  * right) a point (x, y, z) is Unity's (x, z, y), and a rotation with
@@ -304,7 +311,8 @@ static bool body_of(const struct wire_frame *f, double torso, struct body *b)
 /* ---- the output ---------------------------------------------------------------------- */
 
 struct osc {
-	bool vmc; /* the VMC protocol, else VRChat's */
+	bool vmc;     /* the VMC protocol, else VRChat's */
+	bool stopped; /* the thread's: every sensor was stale or missing at the last fresh frame */
 	lo_address addr;
 	struct snap snap;
 	int avatar; /* the one avatar (index) */
@@ -432,6 +440,15 @@ static void send_vrchat(struct output *o, struct osc *s, const struct snap_entry
 		send_tracker(o, s, "head", b.p[B_HEAD], b.q[B_HEAD]);
 }
 
+/* the person stopped: no sensor of the frame is OK (the protocols have no word for a stale pose) */
+static bool all_stale(const struct wire_frame *f)
+{
+	for (int i = 0; i < WIRE_SENSORS; i++)
+		if (f->sensor[i].state == WIRE_SENSOR_OK)
+			return false;
+	return true;
+}
+
 static void *osc_main(void *arg)
 {
 	struct output *o = arg;
@@ -454,9 +471,13 @@ static void *osc_main(void *arg)
 		pthread_mutex_unlock(&s->mu);
 		e = snap_take(&s->snap, s->avatar, &fresh);
 		if (e && fresh) {
-			if (s->vmc)
+			bool was = s->stopped;
+
+			/* once stopped, nothing new to say (VMC's last bundle said tracking 0) */
+			s->stopped = all_stale(&e->f);
+			if (s->vmc && (!s->stopped || !was))
 				send_vmc(o, s, e, (double)(mono_ns() - (uint64_t)s->t0) * 1e-9);
-			else
+			else if (!s->vmc && !s->stopped)
 				send_vrchat(o, s, e);
 		}
 		pthread_mutex_lock(&s->mu);

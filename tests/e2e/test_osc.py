@@ -8,15 +8,18 @@ arm bone at its child as a T-pose-normalised rig expects.
 Run from the repository root: python3 -m unittest tests/e2e/test_osc.py"""
 import math
 import os
+import shutil
+import socket
 import struct
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_daemon import BUILD, Daemon, free_port  # noqa: E402
+from test_daemon import BUILD, CTL, Daemon, free_port  # noqa: E402
 from wireframe import UdpListener  # noqa: E402
 
 RECV = os.path.join(BUILD, "tests", "osc-recv")
@@ -256,6 +259,125 @@ class OscTest(unittest.TestCase):
         self.assertGreater(outs["vmc"]["sent"], 50)
         self.assertGreater(outs["vrchat"]["sent"], 8 * 40)
         self.assertEqual(outs["vmc"]["errors"], 0)
+
+
+class OscDump:
+    """oscdump (Debian liblo-tools) on a UDP port: every line it prints, with the monotonic time it
+    was read at (oscdump -L flushes each line)"""
+
+    def __init__(self, port):
+        self.proc = subprocess.Popen(["oscdump", "-L", str(port)], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                                     text=True)
+        self.lines = []
+        self.lock = threading.Lock()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self):
+        for line in self.proc.stdout:
+            with self.lock:
+                self.lines.append((time.monotonic(), line.split()))
+
+    def snapshot(self, path=None):
+        with self.lock:
+            return [(t, f) for t, f in self.lines if path is None or (len(f) > 1 and f[1] == path)]
+
+    def close(self):
+        self.proc.terminate()
+        self.proc.wait(timeout=5)
+        self.thread.join(timeout=5)
+
+
+def wait_until(cond, timeout, what):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        v = cond()
+        if v:
+            return v
+        time.sleep(0.05)
+    raise AssertionError("%s: not within %g s" % (what, timeout))
+
+
+@unittest.skipUnless(shutil.which("oscdump"), "oscdump is not installed (Debian: liblo-tools)")
+class OscStopTest(unittest.TestCase):
+    """a replay that ends: the OSC outputs stop within a second (VMC after one bundle saying tracking 0),
+    though the loop goes on publishing stale frames; a reload plays it again and they resume"""
+
+    CONF = """
+[daemon]
+rate = 120
+[source clip]
+type = replay
+file = builtin:cmu_141_16.csv
+speed = 8
+loop = no
+[avatar ended]
+person = clip
+[output udp]
+type = udp
+address = 127.0.0.1
+port = {uport}
+[output vmc]
+type = vmc
+port = {vmc}
+rate = 30
+[output vrchat]
+type = vrchat
+port = {vrc}
+rate = 30
+"""
+
+    def test_stop_and_resume(self):
+        uport, vmc_port, vrc_port = free_port(), free_port(), free_port()
+        vmc, vrc, udp = OscDump(vmc_port), OscDump(vrc_port), UdpListener(uport)
+        with tempfile.TemporaryDirectory() as tmp:
+            try:
+                # oscdump is listening once it answers a datagram: poke it until it prints
+                poke = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+                for port, dump in ((vmc_port, vmc), (vrc_port, vrc)):
+                    wait_until(lambda: poke.sendto(b"/ready\0\0,\0\0\0", ("127.0.0.1", port)) and dump.snapshot(),
+                               10, "oscdump on port %d" % port)
+                poke.close()
+                d = Daemon(tmp, self.CONF.format(uport=uport, vmc=vmc_port, vrc=vrc_port))
+                try:
+                    def ended():
+                        fr = udp.snapshot()
+                        live = [f for f in fr if any(s["state"] == 0 for s in f["sensors"])]
+                        # the clip has ended when frames with every sensor stale have come for 1.5 s
+                        if live and fr[-1]["rx"] - live[-1]["rx"] > 1.5:
+                            return live[-1]["rx"]
+                        return None
+                    end = wait_until(ended, 30, "the replay's end")
+                    oks = vmc.snapshot("/VMC/Ext/OK")
+                    trackers = vrc.snapshot("/tracking/trackers/1/position")
+                    self.assertGreater(len(oks), 5, "VMC sent hardly anything before the end")
+                    self.assertGreater(len(trackers), 5, "VRChat got hardly anything before the end")
+                    self.assertEqual(oks[0][1][-1], "1")
+                    # the last bundle says tracking 0 and came within a second of the last live frame
+                    self.assertEqual(oks[-1][1][-1], "0", "the last VMC bundle does not say tracking 0")
+                    self.assertTrue(all(f[-1] == "1" for _, f in oks[:-1]))
+                    last_vmc = vmc.snapshot()[-1][0]
+                    last_vrc = vrc.snapshot()[-1][0]
+                    self.assertLess(last_vmc - end, 1.0)
+                    self.assertLess(last_vrc - end, 1.0)
+                    # the loop still publishes (stale) frames, the OSC outputs do not
+                    n_udp = len(udp.snapshot())
+                    n_vmc, n_vrc = len(vmc.snapshot()), len(vrc.snapshot())
+                    wait_until(lambda: len(udp.snapshot()) > n_udp + 60, 10, "stale frames on UDP")
+                    self.assertEqual(len(vmc.snapshot()), n_vmc, "VMC messages after the end")
+                    self.assertEqual(len(vrc.snapshot()), n_vrc, "VRChat messages after the end")
+                    # a reload plays the clip again: both resume by themselves, tracking 1
+                    out = subprocess.run([CTL, "-s", d.ctl, "reload"], capture_output=True, text=True, timeout=10)
+                    self.assertEqual(out.returncode, 0, out.stderr)
+                    wait_until(lambda: len(vmc.snapshot("/VMC/Ext/OK")) > len(oks) + 5, 10, "VMC resuming")
+                    wait_until(lambda: len(vrc.snapshot()) > n_vrc + 40, 10, "VRChat resuming")
+                    self.assertEqual(vmc.snapshot("/VMC/Ext/OK")[len(oks)][1][-1], "1")
+                finally:
+                    self.assertEqual(d.stop(), 0)
+            finally:
+                vmc.close()
+                vrc.close()
+                udp.close()
 
 
 if __name__ == "__main__":
