@@ -89,12 +89,18 @@ static const struct websocket_opts *opts_of(const struct cfg_output *c)
 
 #define WS_PROTOCOL "avatargw-json"
 #define WS_AVATAR_JSON 4096 /* bytes of one avatar's record, at most */
+#define WS_BODY 7	    /* DESCRIBE's dims (shoulder, upper arm, forearm, hand) and head_offset */
 
 struct ws_view {
 	const struct output *owner;
 	bool *wants; /* a copy: the owner's goes when it closes, maybe before the thread notices */
 	struct snap snap;
 	uint32_t *sent; /* per avatar: records sent with a new frame (the page measures loss from gaps) */
+	/*
+	 * Per avatar: its body from the newest DESCRIBE (NaN until one came), written by the loop and
+	 * read by the thread value by value: a change caught halfway draws one picture of mixed sizes.
+	 */
+	_Atomic float (*body)[WS_BODY];
 };
 
 struct ws_srv {
@@ -193,7 +199,8 @@ static void jname(struct jbuf *b, const char *s)
 	jprintf(b, "\"");
 }
 
-static void json_avatar(struct jbuf *b, const struct snap_entry *e, uint32_t sent, uint64_t now_real, uint64_t now_mono)
+static void json_avatar(struct jbuf *b, const struct snap_entry *e, _Atomic float *body, uint32_t sent,
+			uint64_t now_real, uint64_t now_mono)
 {
 	const struct wire_frame *f = &e->f;
 
@@ -222,6 +229,12 @@ static void json_avatar(struct jbuf *b, const struct snap_entry *e, uint32_t sen
 	jprintf(b, "],\"ik\":[%u,%u],\"ik_err\":[", f->arm[0].ik_flags, f->arm[1].ik_flags);
 	jnum(b, "", f->arm[0].pos_err);
 	jnum(b, ",", f->arm[1].pos_err);
+	jprintf(b, "],\"dims\":[");
+	for (int i = 0; i < 4; i++)
+		jnum(b, i ? "," : "", atomic_load_explicit(&body[i], memory_order_relaxed));
+	jprintf(b, "],\"head_offset\":[");
+	for (int i = 4; i < WS_BODY; i++)
+		jnum(b, i > 4 ? "," : "", atomic_load_explicit(&body[i], memory_order_relaxed));
 	jprintf(b, "]}");
 }
 
@@ -246,7 +259,7 @@ static bool ws_compose(struct ws_srv *w, struct ws_view *v)
 			continue;
 		if (n)
 			jprintf(&b, ",");
-		json_avatar(&b, e, ++v->sent[i], now_real, now_mono);
+		json_avatar(&b, e, v->body[i], ++v->sent[i], now_real, now_mono);
 		if (b.full) {
 			/* cannot happen with the room reserved per avatar; never send a cut text */
 			b.len = mark;
@@ -477,12 +490,17 @@ static int view_init(struct ws_view *v, const struct output *o)
 	v->owner = o;
 	v->sent = calloc((size_t)o->n_avatars + 1, sizeof(*v->sent));
 	v->wants = calloc((size_t)o->n_avatars + 1, sizeof(*v->wants));
-	if (!v->sent || !v->wants || snap_init(&v->snap, o->n_avatars)) {
+	v->body = calloc((size_t)o->n_avatars + 1, sizeof(*v->body));
+	if (!v->sent || !v->wants || !v->body || snap_init(&v->snap, o->n_avatars)) {
 		free(v->sent);
 		free(v->wants);
+		free(v->body);
 		memset(v, 0, sizeof(*v));
 		return -ENOMEM;
 	}
+	for (int i = 0; i < o->n_avatars; i++)
+		for (int k = 0; k < WS_BODY; k++)
+			atomic_init(&v->body[i][k], NAN);
 	memcpy(v->wants, o->wants, (size_t)o->n_avatars * sizeof(*v->wants));
 	return 0;
 }
@@ -492,6 +510,7 @@ static void view_free(struct ws_view *v)
 	snap_free(&v->snap);
 	free(v->sent);
 	free(v->wants);
+	free(v->body);
 	memset(v, 0, sizeof(*v));
 }
 
@@ -647,6 +666,18 @@ static bool ws_adopt(struct output *o, struct output *old)
 	return true;
 }
 
+/* the loop: an avatar's body lengths from its DESCRIBE (once a second: decoding it is cheap enough) */
+static void ws_describe(struct ws_view *v, const struct out_msg *m)
+{
+	struct wire_describe d;
+
+	if (wire_decode_describe(m->data, m->len, &d))
+		return;
+	for (int k = 0; k < WS_BODY; k++)
+		atomic_store_explicit(&v->body[m->avatar][k], k < 4 ? d.dims[k] : d.head_offset[k - 4],
+				      memory_order_relaxed);
+}
+
 static void ws_send(struct output *o, const struct out_msg *m, int n)
 {
 	struct ws_srv *w = o->priv;
@@ -654,6 +685,9 @@ static void ws_send(struct output *o, const struct out_msg *m, int n)
 	struct timespec ts;
 
 	o->cycle++;
+	for (int j = 0; j < n; j++)
+		if (m[j].data[5] == WIRE_DESCRIBE && m[j].avatar < o->n_avatars && o->wants[m[j].avatar])
+			ws_describe(&w->view[k], &m[j]);
 	clock_gettime(CLOCK_MONOTONIC, &ts);
 	snap_put_batch(&w->view[k].snap, o->wants, m, n, (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec);
 	/* the first frames of a new configuration: the thread reads this output's snapshot from now on */

@@ -2,13 +2,29 @@
 """Headless Chromium driven over the DevTools protocol, with the standard
 library only: --remote-debugging-pipe gives the protocol on file descriptors
 3 (to the browser) and 4 (from it), one JSON message per NUL-terminated
-record, so no WebSocket client is needed."""
+record, so no WebSocket client is needed.
+
+WebGL comes from SwiftShader (--use-angle=swiftshader
+--enable-unsafe-swiftshader), so it works without a GPU; webgl=False starts
+the browser with WebGL disabled. The console's errors and warnings, uncaught
+exceptions and failed loads are kept in .console.
+
+Also a command that reads the viewer's state as a test does (docs/VIEWER.md):
+
+    python3 tests/e2e/headless.py http://127.0.0.1:7780/ [--wait 'window.avatargwStats.frames > 30']
+        [--eval EXPRESSION] [--screenshot FILE.png] [--no-webgl]
+
+prints the JSON of the expression (by default #stats) once the wait
+expression is true (by default: frames received and pictures drawn)."""
+import argparse
 import base64
 import json
 import os
 import shutil
 import struct
 import subprocess
+import sys
+import tempfile
 import time
 
 
@@ -21,7 +37,8 @@ def chromium_path():
 
 
 class Chromium:
-    def __init__(self, profile_dir, width=1280, height=800):
+    def __init__(self, profile_dir, width=1280, height=800, webgl=True, args=()):
+        """webgl: True (SwiftShader), False (disabled) or None (as args say)"""
         exe = chromium_path()
         if not exe:
             raise RuntimeError("chromium is not installed (Debian: apt install chromium)")
@@ -36,9 +53,16 @@ class Chromium:
             os.dup2(a2, 3)
             os.dup2(b2, 4)
 
-        args = [exe, "--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run",
+        if webgl is None:
+            gl = []  # whatever the flags in args say
+        elif webgl:
+            gl = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
+        else:
+            gl = ["--disable-webgl", "--disable-3d-apis"]
+        args = [exe, "--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--no-first-run",
                 "--no-default-browser-check", "--disable-extensions", "--remote-debugging-pipe",
-                "--user-data-dir=" + profile_dir, "--window-size=%d,%d" % (width, height), "about:blank"]
+                "--user-data-dir=" + profile_dir, "--window-size=%d,%d" % (width, height)] + gl + list(args) + ["about:blank"]
+        self.console = []  # (kind, text): console errors and warnings, exceptions, failed loads
         self.proc = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                                      stderr=subprocess.DEVNULL, preexec_fn=child_fds, pass_fds=(3, 4))
         os.close(to_r)
@@ -51,6 +75,7 @@ class Chromium:
         self.session = self.call("Target.attachToTarget", targetId=page["targetId"], flatten=True)["sessionId"]
         self.call("Page.enable")
         self.call("Runtime.enable")
+        self.call("Log.enable")
 
     def _read_message(self, deadline):
         while b"\0" not in self.buf:
@@ -72,10 +97,32 @@ class Chromium:
         deadline = time.time() + timeout
         while True:
             m = self._read_message(deadline)
+            self._event(m)
             if m.get("id") == self.next_id:
                 if "error" in m:
                     raise RuntimeError("%s: %s" % (method, m["error"]))
                 return m.get("result", {})
+
+    def _event(self, m):
+        method, p = m.get("method"), m.get("params", {})
+        if method == "Runtime.consoleAPICalled" and p.get("type") in ("error", "warning", "assert"):
+            text = " ".join(str(a.get("value", a.get("description", ""))) for a in p.get("args", []))
+            self.console.append(("console." + p["type"], text))
+        elif method == "Runtime.exceptionThrown":
+            d = p.get("exceptionDetails", {})
+            self.console.append(("exception", d.get("exception", {}).get("description") or d.get("text", "")))
+        elif method == "Log.entryAdded" and p.get("entry", {}).get("level") in ("error", "warning"):
+            e = p["entry"]
+            self.console.append(("log." + e["level"], "%s %s" % (e.get("text", ""), e.get("url", ""))))
+
+    def pump(self, seconds=0.05):
+        """reads the events that came meanwhile (call() reads them too)"""
+        self.call("Runtime.evaluate", expression="0", timeout=max(5, seconds))
+
+    def errors(self):
+        """what the console, the page's exceptions and failed loads said, warnings left out"""
+        self.pump()
+        return [c for c in self.console if c[0] in ("console.error", "console.assert", "exception", "log.error")]
 
     def evaluate(self, expression):
         r = self.call("Runtime.evaluate", expression=expression, returnByValue=True)
@@ -143,3 +190,39 @@ def png_rgb(path):
         rows.append([tuple(line[x * bpp:x * bpp + 3]) for x in range(w)])
         prev = line
     return w, h, rows
+
+
+def main():
+    ap = argparse.ArgumentParser(description="read the avatargw viewer's state in headless Chromium")
+    ap.add_argument("url")
+    ap.add_argument("--wait", default="window.avatargwStats && avatargwStats.frames > 10 && avatargwStats.renders > 10",
+                    help="a JavaScript expression to wait for (default: frames received and drawn)")
+    ap.add_argument("--eval", default="document.getElementById('stats').textContent",
+                    help="what to print (default: #stats, the JSON of window.avatargwStats)")
+    ap.add_argument("--timeout", type=float, default=20)
+    ap.add_argument("--screenshot")
+    ap.add_argument("--no-webgl", action="store_true")
+    a = ap.parse_args()
+    with tempfile.TemporaryDirectory() as profile:
+        b = Chromium(profile, webgl=not a.no_webgl)
+        try:
+            b.call("Page.navigate", url=a.url)
+            deadline = time.time() + a.timeout
+            while not b.evaluate("!!(%s)" % a.wait):
+                if time.time() > deadline:
+                    print("headless: not true within %g s: %s" % (a.timeout, a.wait), file=sys.stderr)
+                    return 1
+                time.sleep(0.2)
+            if a.screenshot:
+                b.screenshot(a.screenshot)
+            v = b.evaluate(a.eval)
+            print(v if isinstance(v, str) else json.dumps(v))
+            for kind, text in b.errors():
+                print("headless: %s: %s" % (kind, text), file=sys.stderr)
+        finally:
+            b.close()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,10 +1,13 @@
 # SPDX-License-Identifier: MIT
 """The websocket output and the browser viewer, on the embedded demo: the
-page and Debian's three.js over HTTP, the JSON frames checked against the
-UDP stream of the same daemon, a stalled browser that loses frames without
-slowing anyone, and the page itself in headless Chromium, which must draw
-the avatar (a screenshot is kept under the build directory) and turn it
-grey when its trackers go stale.
+page, its icon and Debian's three.js over HTTP, the JSON frames checked
+against the UDP stream of the same daemon, a stalled browser that loses
+frames without slowing anyone, and the page itself in headless Chromium
+(SwiftShader's WebGL, over the DevTools protocol), which must draw the body
+with no console error (screenshots are kept in build/artefacts/), show two
+avatars when there are two and follow the one clicked, turn a stopped
+replay grey, survive a restart of the daemon, and say so when it has no
+WebGL.
 
 Run from the repository root: python3 -m unittest tests/e2e/test_viewer.py"""
 import json
@@ -12,6 +15,7 @@ import signal
 import math
 import os
 import socket
+import subprocess
 import sys
 import tempfile
 import time
@@ -35,7 +39,12 @@ def close_to(a, b):
     return abs(a - b) <= 1e-6 * max(1.0, abs(b))
 
 
-def wait_for(browser, cond, timeout):
+ARTEFACTS = os.path.join(BUILD, "artefacts")
+# a loaded 2-core host draws a few pictures a second with SwiftShader: the waits are long, and end early
+PAGE_TIMEOUT = 40
+
+
+def wait_for(browser, cond, timeout=PAGE_TIMEOUT):
     deadline = time.time() + timeout
     st = None
     while time.time() < deadline:
@@ -46,9 +55,23 @@ def wait_for(browser, cond, timeout):
     raise AssertionError("the page did not get there in %g s: %s" % (timeout, st))
 
 
+def artefact(name):
+    os.makedirs(ARTEFACTS, exist_ok=True)
+    return os.path.join(ARTEFACTS, name)
+
+
+def no_errors(test, browser, allow=()):
+    """the page's console said no error, no exception was thrown, no load failed (allow: substrings of
+    errors that are expected, such as the failed connections while the daemon is down)"""
+    errs = [e for e in browser.errors() if not any(a in e[1] for a in allow)]
+    test.assertEqual(errs, [], "the page's console: %s" % errs)
+    test.assertEqual(browser.evaluate("window.avatargwStats.errors"), [])
+
+
 def avatar_pixels(path):
-    _, _, rows = png_rgb(path)
-    return sum(1 for r in rows for p in r if all(abs(c - w) < 40 for c, w in zip(p, AVATAR_RGB)))
+    """pixels of the first avatar's colour in the 3D view (the panel of cards, 360 px on the right, left out)"""
+    w, _, rows = png_rgb(path)
+    return sum(1 for r in rows for p in r[:w - 360] if all(abs(c - a) < 40 for c, a in zip(p, AVATAR_RGB)))
 
 
 class ViewerTest(unittest.TestCase):
@@ -91,6 +114,11 @@ class ViewerTest(unittest.TestCase):
             self.assertEqual(body, f.read())
         st, ct, body = self.get("/three/examples/jsm/controls/OrbitControls.js")
         self.assertIn(b'from "../../../build/three.module.js"', body)
+        # the icon every browser asks for
+        st, ct, body = self.get("/favicon.ico")
+        self.assertEqual(st, 200)
+        self.assertIn("icon", ct)
+        self.assertEqual(body[:4], b"\0\0\1\0")  # an ICO file
         with self.assertRaises(urllib.error.HTTPError) as e:
             self.get("/no-such-file.js")
         self.assertEqual(e.exception.code, 404)
@@ -142,6 +170,11 @@ class ViewerTest(unittest.TestCase):
                     self.assertTrue(close_to(x, y))
             for x, y in zip(a["joints"], f["joints"]):
                 self.assertTrue(close_to(x, y))
+            # the body's lengths from the DESCRIBE: the demo's shoulder, upper arm and forearm
+            self.assertEqual(len(a["dims"]), 4)
+            self.assertEqual(len(a["head_offset"]), 3)
+            self.assertTrue(0.1 < a["dims"][0] < 0.3 and 0.2 < a["dims"][1] < 0.4 and 0.15 < a["dims"][2] < 0.35,
+                            a["dims"])
             # the daemon's own latency, sample to sending: small on one host
             self.assertGreaterEqual(a["srv_ms"], 0)
             self.assertLess(a["srv_ms"], 200)
@@ -176,23 +209,75 @@ class ViewerTest(unittest.TestCase):
             b = Chromium(profile)
             try:
                 b.call("Page.navigate", url=self.base + "/")
-                st = wait_for(b, lambda s: s["frames"] >= 15 and s["renders"] >= 10, 10)
-                shot = os.path.join(BUILD, "viewer-demo.png")
+                st = wait_for(b, lambda s: s["frames"] >= 15 and s["renders"] >= 10 and s["bodies"] == 1
+                              and s["list"] and s["list"][0]["columns"] >= 4)
+                shot = artefact("viewer.png")
                 b.screenshot(shot)
-                table = b.evaluate("document.getElementById('avatars').innerText")
+                cards = b.evaluate("document.getElementById('avatars').innerText")
                 dom = b.evaluate("document.getElementById('stats').textContent")
+                status = b.evaluate("document.getElementById('status').textContent")
+                no_errors(self, b)
             finally:
                 b.close()
         self.assertTrue(st["connected"])
-        self.assertTrue(st["webgl"], "no WebGL in headless Chromium")
+        self.assertTrue(st["webgl"], "no WebGL in headless Chromium with SwiftShader")
+        self.assertIsNone(st["webglError"])
         self.assertEqual(st["avatars"], 1)
-        self.assertEqual(st["bonesDrawn"], 9)   # chest-head, two shoulders, two arms of 3
+        # the body: neck, and per arm the clavicle, upper arm, forearm and hand; a head, a trunk, joints, legs
+        self.assertEqual(st["bonesDrawn"], 9)
+        self.assertGreaterEqual(st["meshes"], 20)
         self.assertEqual(st["sensorsDrawn"], 3)
         self.assertEqual(st["staleAvatars"], 0)
-        self.assertIn("demo", table)
-        self.assertIn('"avatars":1', dom)      # the same numbers in the page, for --dump-dom
-        # the figure is on the picture, in its colour
-        self.assertGreater(avatar_pixels(shot), 100, "the avatar is not on %s" % shot)
+        self.assertEqual(st["offSensors"], 0)  # the demo's hands are where their sensors are
+        av = st["list"][0]
+        self.assertEqual((av["name"], av["grey"], av["sensors"]), ("demo", False, ["OK"] * 3))
+        # the daemon publishes at 240 Hz, the output sends 30 texts a second, the page draws no more than that
+        self.assertGreater(av["rate"], 200)
+        self.assertLess(av["outRate"], 33)
+        self.assertLessEqual(av["shown"], av["outRate"])
+        self.assertGreater(av["shown"], 0)
+        self.assertIn("demo", cards)
+        self.assertIn("connected to", status)
+        self.assertIn('"avatars":1', dom)      # the same numbers in the page's #stats
+        # the body is on the picture, in its colour
+        self.assertGreater(avatar_pixels(shot), 500, "the avatar is not on %s" % shot)
+
+    def test_page_without_webgl(self):
+        """a browser without WebGL: the page says so (and the connection does not overwrite it)"""
+        with tempfile.TemporaryDirectory() as profile:
+            b = Chromium(profile, webgl=False)
+            try:
+                b.call("Page.navigate", url=self.base + "/")
+                st = wait_for(b, lambda s: s["frames"] >= 10 and s["connected"] and s["list"])
+                b.screenshot(artefact("viewer-nogl.png"))
+                gl = b.evaluate("document.getElementById('glstatus').textContent")
+                banner = b.evaluate("getComputedStyle(document.getElementById('nogl')).display + ' ' + "
+                                    "document.getElementById('nogl').textContent")
+                status = b.evaluate("document.getElementById('status').textContent")
+                dom = json.loads(b.evaluate("document.getElementById('stats').textContent"))
+                cards = b.evaluate("document.getElementById('avatars').innerText")
+                no_errors(self, b)
+            finally:
+                b.close()
+        self.assertFalse(st["webgl"])
+        self.assertIn("WebGL is not available", st["webglError"])
+        self.assertIn("no 3D view", gl)
+        self.assertTrue(banner.startswith("block No 3D view"), banner)
+        self.assertIn("connected to", status)
+        self.assertEqual((dom["webgl"], dom["webglError"]), (False, st["webglError"]))
+        self.assertEqual(st["renders"], 0)
+        self.assertIn("demo", cards)  # the numbers still come
+
+    def test_stats_from_the_command_line(self):
+        """docs/VIEWER.md's way of reading #stats from a shell (chromium --dump-dom reads it too early)"""
+        out = subprocess.run([sys.executable, os.path.join(os.path.dirname(__file__), "headless.py"),
+                              self.base + "/", "--timeout", str(PAGE_TIMEOUT)],
+                             capture_output=True, text=True, timeout=PAGE_TIMEOUT + 30)
+        self.assertEqual(out.returncode, 0, out.stderr)
+        st = json.loads(out.stdout)
+        self.assertGreater(st["frames"], 10)
+        self.assertTrue(st["connected"])
+        self.assertEqual(out.stderr, "")  # no console error either
 
 
 class ViewerStaleTest(unittest.TestCase):
@@ -223,18 +308,139 @@ rate = 20
                 b = Chromium(profile)
                 try:
                     b.call("Page.navigate", url="http://127.0.0.1:%d/" % port)
-                    st = wait_for(b, lambda s: s["frames"] >= 5 and s["staleAvatars"] == 1 and s["renders"] >= 5, 10)
-                    shot = os.path.join(BUILD, "viewer-stale.png")
+                    st = wait_for(b, lambda s: s["frames"] >= 5 and s["staleAvatars"] == 1 and s["renders"] >= 5
+                                  and s["bodies"] == 1 and s["list"] and s["list"][0]["columns"] >= 2)
+                    shot = artefact("viewer-stale.png")
                     b.screenshot(shot)
-                    table = b.evaluate("document.getElementById('avatars').innerText")
+                    cards = b.evaluate("document.getElementById('avatars').innerText")
+                    no_errors(self, b)
                 finally:
                     b.close()
             finally:
                 self.assertEqual(d.stop(), 0)
         self.assertEqual(st["greySensors"], 3)
         self.assertEqual(st["bonesDrawn"], 9)
-        self.assertIn("stale", table)
+        av = st["list"][0]
+        self.assertTrue(av["grey"])
+        self.assertEqual(av["sensors"], ["STALE"] * 3)
+        self.assertIn("stale", cards)
         self.assertEqual(avatar_pixels(shot), 0, "a stale avatar is drawn in colour")
+
+
+class ViewerTwoTest(unittest.TestCase):
+    """two people: two bodies side by side with their names, and a click on one follows it"""
+
+    CONF = """
+[daemon]
+rate = 120
+[source sim]
+type = sim
+people = 2
+spacing = 1.2
+[avatar alice]
+person = sim/p0
+[avatar bob]
+person = sim/p1
+[output viewer]
+type = websocket
+address = 127.0.0.1
+port = {port}
+"""
+
+    def test_two_avatars_and_follow(self):
+        with tempfile.TemporaryDirectory() as tmp, tempfile.TemporaryDirectory() as profile:
+            port = free_port(socket.SOCK_STREAM)
+            d = Daemon(tmp, self.CONF.format(port=port))
+            try:
+                b = Chromium(profile)
+                try:
+                    b.call("Page.navigate", url="http://127.0.0.1:%d/" % port)
+                    st = wait_for(b, lambda s: s["avatars"] == 2 and s["bodies"] == 2 and s["renders"] >= 10
+                                  and len(s["list"]) == 2 and all(a["name"] for a in s["list"]))
+                    b.screenshot(artefact("viewer-two.png"))
+                    cards = b.evaluate("document.getElementById('avatars').innerText")
+                    ids = {a["name"]: a["id"] for a in st["list"]}
+                    # both are on the picture, apart
+                    pa = b.evaluate("window.avatargwProject(%d)" % ids["alice"])
+                    pb = b.evaluate("window.avatargwProject(%d)" % ids["bob"])
+                    # a click on bob's body follows bob; a click on alice's card follows her
+                    for kind in ("mousePressed", "mouseReleased"):
+                        b.call("Input.dispatchMouseEvent", type=kind, x=pb[0], y=pb[1], button="left", clickCount=1)
+                    followed_bob = wait_for(b, lambda s: s["following"] is not None, 10)["following"]
+                    b.evaluate("document.querySelectorAll('#avatars .card')[%d].click()"
+                               % [a["name"] for a in st["list"]].index("alice"))
+                    followed_alice = wait_for(b, lambda s: s["following"] == ids["alice"], 10)["following"]
+                    b.evaluate("document.getElementById('frameall').click()")
+                    unfollowed = wait_for(b, lambda s: s["following"] is None, 10)
+                    no_errors(self, b)
+                finally:
+                    b.close()
+            finally:
+                self.assertEqual(d.stop(), 0)
+        self.assertEqual(sorted(ids), ["alice", "bob"])
+        self.assertIn("alice", cards)
+        self.assertIn("bob", cards)
+        self.assertEqual(st["bonesDrawn"], 18)
+        self.assertEqual(st["sensorsDrawn"], 6)
+        self.assertEqual(st["staleAvatars"], 0)
+        self.assertIsNotNone(pa)
+        self.assertIsNotNone(pb)
+        self.assertGreater(math.dist(pa, pb), 100, "the two bodies are not apart on the picture: %s %s" % (pa, pb))
+        for p in (pa, pb):
+            self.assertTrue(0 < p[0] < 1280 and 0 < p[1] < 800, "a body out of the picture at %s" % (p,))
+        self.assertEqual(followed_bob, ids["bob"])
+        self.assertEqual(followed_alice, ids["alice"])
+        self.assertIsNone(unfollowed["following"])
+
+
+class ViewerRestartTest(unittest.TestCase):
+    """the daemon stops and starts again on the same port: the page says the connection is lost,
+    greys the body, reconnects by itself and draws the new daemon's frames"""
+
+    CONF = """
+[daemon]
+rate = 120
+[source sim]
+type = sim
+[avatar solo]
+person = sim/p0
+[output viewer]
+type = websocket
+address = 127.0.0.1
+port = {port}
+"""
+
+    def test_restart_is_survived(self):
+        with tempfile.TemporaryDirectory() as tmp, tempfile.TemporaryDirectory() as profile:
+            port = free_port(socket.SOCK_STREAM)
+            conf = self.CONF.format(port=port)
+            d = Daemon(tmp, conf)
+            b = Chromium(profile)
+            try:
+                b.call("Page.navigate", url="http://127.0.0.1:%d/" % port)
+                wait_for(b, lambda s: s["connected"] and s["frames"] >= 10 and s["bodies"] == 1
+                         and s["staleAvatars"] == 0)
+                self.assertEqual(d.stop(), 0)
+                d = None
+                lost = wait_for(b, lambda s: not s["connected"] and s["staleAvatars"] == 1
+                                and s["list"][0]["noFrames"])
+                status = b.evaluate("document.getElementById('status').textContent")
+                self.assertIn("connection lost", status)
+                frames = lost["frames"]
+                d = Daemon(tmp, conf)
+                back = wait_for(b, lambda s: s["connected"] and s["connections"] >= 2 and s["frames"] > frames + 10
+                                and s["staleAvatars"] == 0 and s["list"][0]["rate"] is not None)
+                status = b.evaluate("document.getElementById('status').textContent")
+                # while the daemon was down, Chromium logged the refused connections: nothing else
+                no_errors(self, b, allow=("WebSocket connection to",))
+            finally:
+                b.close()
+                if d:
+                    self.assertEqual(d.stop(), 0)
+        self.assertEqual(lost["disconnects"], 1)
+        self.assertIn("connected to", status)
+        self.assertEqual(back["avatars"], 1)
+        self.assertGreater(back["list"][0]["rate"], 100)  # the windows started afresh: no nonsense rate
 
 
 class ViewerReloadTest(unittest.TestCase):
