@@ -629,11 +629,15 @@ function plot(av, now) {
 		const max = Math.max(row.min, ...vals) * 1.1;
 		g.fillStyle = '#1d2127';
 		g.fillRect(L, y0, pw, rowH - 4);
-		g.fillStyle = '#99a';
+		// the name, the newest value in the line's colour, and the scale's top inside the plot
+		const cur = av.buckets.length ? av.buckets[av.buckets.length - 1][row.key] : null;
 		g.textAlign = 'left';
+		g.fillStyle = '#99a';
 		g.fillText(row.name, 2, y0 + 7);
+		g.fillStyle = row.color;
+		g.fillText(fmt(cur, cur !== null && cur < 10 ? 1 : 0), 2, y0 + 18);
 		g.fillStyle = '#667';
-		g.fillText(fmt(max, max < 10 ? 1 : 0), 2, y0 + 18);
+		g.fillText(fmt(max, max < 10 ? 1 : 0), L + 2, y0 + 6);
 		g.strokeStyle = row.color;
 		g.lineWidth = 1.2;
 		g.beginPath();
@@ -764,6 +768,7 @@ function frame() {
 		if (!av.rec)
 			continue;
 		const d = draw(av, now);
+		av.off = d.off;
 		if (renderer && av.rec.seq !== av.drawnSeq) {
 			av.drawnSeq = av.rec.seq;
 			av.drawn.push(now); // a new frame of this avatar on the picture
@@ -812,7 +817,8 @@ function frame() {
 			updateCard(av, now, st, grey);
 			stats.list.push({ id: av.id, name: av.name, site: av.site, grey, noFrames,
 				sensors: av.rec.sensors.map((s) => STATE_NAMES[s.state]), rate: st.rate, outRate: st.outRate,
-				received: st.received, shown: st.shown, loss: st.loss, latency: av.latency, columns: av.buckets.length });
+				received: st.received, shown: st.shown, loss: st.loss, latency: av.latency, off: av.off || 0,
+				columns: av.buckets.length, strip: av.buckets.length ? av.buckets[av.buckets.length - 1].states : null });
 		}
 		$('stats').textContent = JSON.stringify(stats);
 	}

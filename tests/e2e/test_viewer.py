@@ -235,6 +235,7 @@ class ViewerTest(unittest.TestCase):
         self.assertGreater(av["rate"], 200)
         self.assertLess(av["outRate"], 33)
         self.assertLessEqual(av["shown"], av["outRate"])
+        self.assertLessEqual(av["shown"], 30 * 1.05)
         self.assertGreater(av["shown"], 0)
         self.assertIn("demo", cards)
         self.assertIn("connected to", status)
@@ -323,12 +324,14 @@ rate = 20
         av = st["list"][0]
         self.assertTrue(av["grey"])
         self.assertEqual(av["sensors"], ["STALE"] * 3)
+        self.assertEqual(av["strip"], [1, 1, 1])  # the plots' newest column: three amber sensors
         self.assertIn("stale", cards)
         self.assertEqual(avatar_pixels(shot), 0, "a stale avatar is drawn in colour")
 
 
 class ViewerTwoTest(unittest.TestCase):
-    """two people: two bodies side by side with their names, and a click on one follows it"""
+    """two people: two bodies side by side with their names, and a click on one follows it; bob's
+    arms are too short for his sensors, and his hands are drawn off them"""
 
     CONF = """
 [daemon]
@@ -341,6 +344,8 @@ spacing = 1.2
 person = sim/p0
 [avatar bob]
 person = sim/p1
+upper_arm = 0.12
+forearm = 0.1
 [output viewer]
 type = websocket
 address = 127.0.0.1
@@ -356,7 +361,8 @@ port = {port}
                 try:
                     b.call("Page.navigate", url="http://127.0.0.1:%d/" % port)
                     st = wait_for(b, lambda s: s["avatars"] == 2 and s["bodies"] == 2 and s["renders"] >= 10
-                                  and len(s["list"]) == 2 and all(a["name"] for a in s["list"]))
+                                  and len(s["list"]) == 2 and all(a["name"] for a in s["list"])
+                                  and s["offSensors"] == 2)
                     b.screenshot(artefact("viewer-two.png"))
                     cards = b.evaluate("document.getElementById('avatars').innerText")
                     ids = {a["name"]: a["id"] for a in st["list"]}
@@ -378,6 +384,7 @@ port = {port}
             finally:
                 self.assertEqual(d.stop(), 0)
         self.assertEqual(sorted(ids), ["alice", "bob"])
+        self.assertEqual({a["name"]: a["off"] for a in st["list"]}, {"alice": 0, "bob": 2})
         self.assertIn("alice", cards)
         self.assertIn("bob", cards)
         self.assertEqual(st["bonesDrawn"], 18)
