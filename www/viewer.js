@@ -42,6 +42,7 @@ const stats = {
 	disconnects: 0,   // connections lost
 	webgl: false,
 	webglError: null, // why there is no 3D view
+	glRenderer: '',   // the WebGL renderer's name
 	following: null,  // the id of the avatar the camera follows
 	errors: [],       // uncaught errors of this page
 	list: [],         // per avatar, as in its card
@@ -70,8 +71,13 @@ let renderer = null;
 		stats.webglError = e.message;
 	}
 	if (gl) {
+		// a software renderer (SwiftShader, llvmpipe) draws without multisampling: 4 times fewer pixels
+		const info = gl.getExtension('WEBGL_debug_renderer_info');
+		const name = info ? String(gl.getParameter(info.UNMASKED_RENDERER_WEBGL)) : '';
+		stats.glRenderer = name;
+		const soft = /swiftshader|llvmpipe|software/i.test(name);
 		try {
-			renderer = new THREE.WebGLRenderer({ antialias: true });
+			renderer = new THREE.WebGLRenderer({ antialias: !soft });
 			renderer.setPixelRatio(window.devicePixelRatio);
 			view.appendChild(renderer.domElement);
 			stats.webgl = true;
@@ -113,12 +119,17 @@ scene.add(sun);
 }
 let controls = null;
 let autoFrame = true; // the camera frames the people present until the user moves it
+let dirty = true;     // the camera moved, or the window changed: draw a picture
+let moving = false;   // the page itself moves the camera
 if (renderer) {
 	controls = new OrbitControls(camera, renderer.domElement); // built after camera.up: orbits about z
 	controls.target.set(0, 0, 1);
 	controls.enableDamping = false;
 	controls.addEventListener('start', () => {
 		autoFrame = false;
+	});
+	controls.addEventListener('change', () => {
+		dirty = dirty || !moving; // the user's move; the page's own (framing, following) is drawn already
 	});
 }
 function resize() {
@@ -128,6 +139,7 @@ function resize() {
 	camera.updateProjectionMatrix();
 	if (renderer)
 		renderer.setSize(w, h);
+	dirty = true;
 }
 window.addEventListener('resize', resize);
 resize();
@@ -429,7 +441,9 @@ function frameAll(now, snap) {
 	const k = snap ? 1 : 0.08;
 	controls.target.lerp(want, k);
 	camera.position.lerp(wantCam, k);
+	moving = true;
 	controls.update();
+	moving = false;
 }
 
 function follow(now) {
@@ -451,7 +465,9 @@ function follow(now) {
 		camera.position.copy(p).add(off);
 	}
 	followPrev = p;
+	moving = true;
 	controls.update();
+	moving = false;
 	void now;
 }
 
@@ -538,9 +554,15 @@ function windowStats(av, now) {
 // one column of the plots per BUCKET_MS: rate, loss, latency, IK error, the worst state of each sensor
 function bucketTick(av, now, st) {
 	const b = av.bucket || { n: 0, lat: null, ik: null, states: [-1, -1, -1] };
+	const prev = av.buckets.length ? av.buckets[av.buckets.length - 1] : null;
 	b.t = now;
-	b.rate = b.n ? st.rate : null;
-	b.loss = b.n ? st.loss : null;
+	// live: frames are coming (a quarter second without one, in a burst of a starved browser, is not
+	// a dropout: the sensors keep the states they had); a dropout breaks the lines and darkens the strip
+	b.live = now - av.rx <= STALE_MS;
+	b.rate = b.live ? st.rate : null;
+	b.loss = b.live ? st.loss : null;
+	if (!b.n && b.live && prev)
+		b.states = prev.states.slice();
 	av.buckets.push(b);
 	while (av.buckets.length && now - av.buckets[0].t > HISTORY_MS)
 		av.buckets.shift();
@@ -644,10 +666,10 @@ function plot(av, now) {
 		let pen = false;
 		for (const b of av.buckets) {
 			const v = b[row.key];
-			if (v === null || !Number.isFinite(v)) {
+			if (!b.live)
 				pen = false;
+			if (v === null || !Number.isFinite(v))
 				continue;
-			}
 			const px = x(b.t);
 			const py = y0 + (rowH - 5) * (1 - Math.min(v, max) / max) + 0.5;
 			if (pen)
@@ -757,31 +779,39 @@ function connect() {
 connect();
 
 // ---- the picture ----------------------------------------------------------------------------
+// A picture is drawn when there is something new to show: a frame, a moved camera, or a quarter
+// second gone by (an avatar turning grey); a software renderer is not kept busy drawing the same.
 let lastHud = 0;
 let lastBucket = performance.now();
+let lastRender = 0;
 let framed = false;
 function frame() {
 	requestAnimationFrame(frame);
 	const now = performance.now();
-	const tot = { bones: 0, sensors: 0, stale: 0, grey: 0, off: 0, meshes: 0, bodies: 0 };
-	for (const av of avatars.values()) {
-		if (!av.rec)
-			continue;
-		const d = draw(av, now);
-		av.off = d.off;
-		if (renderer && av.rec.seq !== av.drawnSeq) {
-			av.drawnSeq = av.rec.seq;
-			av.drawn.push(now); // a new frame of this avatar on the picture
+	let fresh = false;
+	for (const av of avatars.values())
+		fresh = fresh || (av.rec && av.rec.seq !== av.drawnSeq);
+	if (renderer && (fresh || dirty || now - lastRender >= 250)) {
+		dirty = false;
+		lastRender = now;
+		const tot = { bones: 0, sensors: 0, stale: 0, grey: 0, off: 0, meshes: 0, bodies: 0 };
+		for (const av of avatars.values()) {
+			if (!av.rec)
+				continue;
+			const d = draw(av, now);
+			av.off = d.off;
+			if (av.rec.seq !== av.drawnSeq) {
+				av.drawnSeq = av.rec.seq;
+				av.drawn.push(now); // a new frame of this avatar on the picture
+			}
+			tot.bones += d.bones;
+			tot.sensors += d.sensors;
+			tot.stale += d.stale ? 1 : 0;
+			tot.grey += d.grey;
+			tot.off += d.off;
+			tot.meshes += d.meshes;
+			tot.bodies += d.body ? 1 : 0;
 		}
-		tot.bones += d.bones;
-		tot.sensors += d.sensors;
-		tot.stale += d.stale ? 1 : 0;
-		tot.grey += d.grey;
-		tot.off += d.off;
-		tot.meshes += d.meshes;
-		tot.bodies += d.body ? 1 : 0;
-	}
-	if (renderer) {
 		if (following)
 			follow(now);
 		else if (autoFrame && avatars.size) {
@@ -797,8 +827,9 @@ function frame() {
 		stats.offSensors = tot.off;
 		stats.meshes = tot.meshes;
 		stats.bodies = tot.bodies;
-	} else {
-		stats.staleAvatars = tot.stale;
+	} else if (!renderer) {
+		stats.staleAvatars = [...avatars.values()].filter((av) => av.rec &&
+			(now - av.rx > STALE_MS || (av.rec.flags & F_STALE) !== 0)).length;
 	}
 	const tick = now - lastBucket >= BUCKET_MS;
 	if (tick)
@@ -815,10 +846,11 @@ function frame() {
 			const noFrames = now - av.rx > STALE_MS;
 			const grey = noFrames || (av.rec.flags & F_STALE) !== 0;
 			updateCard(av, now, st, grey);
+			const seen = av.buckets.filter((b) => b.n);
 			stats.list.push({ id: av.id, name: av.name, site: av.site, grey, noFrames,
-				sensors: av.rec.sensors.map((s) => STATE_NAMES[s.state]), rate: st.rate, outRate: st.outRate,
+				sensors: av.rec.sensors.map((x) => STATE_NAMES[x.state]), rate: st.rate, outRate: st.outRate,
 				received: st.received, shown: st.shown, loss: st.loss, latency: av.latency, off: av.off || 0,
-				columns: av.buckets.length, strip: av.buckets.length ? av.buckets[av.buckets.length - 1].states : null });
+				columns: av.buckets.length, strip: seen.length ? seen[seen.length - 1].states : null });
 		}
 		$('stats').textContent = JSON.stringify(stats);
 	}

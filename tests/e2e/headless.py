@@ -20,6 +20,7 @@ import argparse
 import base64
 import json
 import os
+import select
 import shutil
 import struct
 import subprocess
@@ -79,7 +80,8 @@ class Chromium:
 
     def _read_message(self, deadline):
         while b"\0" not in self.buf:
-            if time.time() > deadline:
+            left = deadline - time.time()
+            if left <= 0 or not select.select([self.from_r], [], [], left)[0]:
                 raise TimeoutError("no answer from chromium")
             chunk = os.read(self.from_r, 65536)
             if not chunk:
@@ -124,8 +126,8 @@ class Chromium:
         self.pump()
         return [c for c in self.console if c[0] in ("console.error", "console.assert", "exception", "log.error")]
 
-    def evaluate(self, expression):
-        r = self.call("Runtime.evaluate", expression=expression, returnByValue=True)
+    def evaluate(self, expression, timeout=20):
+        r = self.call("Runtime.evaluate", timeout=timeout, expression=expression, returnByValue=True)
         if "exceptionDetails" in r:
             raise RuntimeError("page error: %s" % r["exceptionDetails"])
         return r["result"].get("value")

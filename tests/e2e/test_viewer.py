@@ -48,7 +48,10 @@ def wait_for(browser, cond, timeout=PAGE_TIMEOUT):
     deadline = time.time() + timeout
     st = None
     while time.time() < deadline:
-        st = json.loads(browser.evaluate("JSON.stringify(window.avatargwStats || null)") or "null")
+        try:
+            st = json.loads(browser.evaluate("JSON.stringify(window.avatargwStats || null)") or "null")
+        except TimeoutError:
+            continue  # a starved browser answers late: ask again until the deadline
         if st and cond(st):
             return st
         time.sleep(0.2)
