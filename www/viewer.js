@@ -471,6 +471,16 @@ function follow(now) {
 	void now;
 }
 
+function forget(av) {
+	if (following === av)
+		setFollowing(null);
+	scene.remove(av.group);
+	av.tag.material.map.dispose();
+	av.card.el.remove();
+	avatars.delete(av.id);
+	stats.avatars = avatars.size;
+}
+
 function setFollowing(av) {
 	following = av;
 	followPrev = null;
@@ -723,6 +733,8 @@ function onFrames(msg) {
 			av.name = rec.name || av.name;
 			av.site = rec.site || '';
 			av.group.remove(av.tag);
+			av.tag.material.map.dispose();
+			av.tag.material.dispose();
 			av.tag = label(title(av));
 			av.group.add(av.tag);
 		}
@@ -837,9 +849,14 @@ function frame() {
 	if (tick || now - lastHud > 250) {
 		lastHud = now;
 		stats.list = [];
-		for (const av of avatars.values()) {
+		for (const av of [...avatars.values()]) {
 			if (!av.rec)
 				continue;
+			// connected, and no frame of it for a minute: the daemon no longer has it (a reload)
+			if (stats.connected && now - av.rx > HISTORY_MS) {
+				forget(av);
+				continue;
+			}
 			const st = windowStats(av, now);
 			if (tick)
 				bucketTick(av, now, st);
