@@ -373,7 +373,7 @@ function draw(av, now) {
 			return;
 		vec(p, a.position);
 		quat(p, a.quaternion);
-		const dim = stale || s.state !== 0;
+		const dim = noFrames || s.state !== 0; // the sensor that dropped out, not its fellows
 		const vc = dim ? THREE.NoColors : THREE.VertexColors;
 		if (a.material.vertexColors !== vc) {
 			a.material.vertexColors = vc;
@@ -658,7 +658,7 @@ function plot(av, now) {
 	let y0 = 2;
 	for (const row of rows) {
 		const vals = av.buckets.map((b) => b[row.key]).filter((v) => v !== null && Number.isFinite(v));
-		const max = Math.max(row.min, ...vals) * 1.1;
+		const max = Math.max(row.min, ...vals) * 1.25;
 		g.fillStyle = '#1d2127';
 		g.fillRect(L, y0, pw, rowH - 4);
 		// the name, the newest value in the line's colour, and the scale's top inside the plot
@@ -699,10 +699,13 @@ function plot(av, now) {
 		g.fillText(SENSOR_SHORT[i], 2, y0 + sh / 2);
 		g.fillStyle = SC[-1];
 		g.fillRect(L, y0, pw, sh - 1);
+		let t0 = null;
 		for (const b of av.buckets) {
+			// from the column before (a starved browser ticks later than every BUCKET_MS) to this one
+			const x0 = Math.max(L, x(t0 === null || b.t - t0 > 4 * BUCKET_MS ? b.t - BUCKET_MS : t0));
 			g.fillStyle = SC[b.states[i]];
-			const x1 = x(b.t);
-			g.fillRect(x1 - pw * BUCKET_MS / HISTORY_MS, y0, pw * BUCKET_MS / HISTORY_MS + 0.6, sh - 1);
+			g.fillRect(x0, y0, x(b.t) - x0 + 0.6, sh - 1);
+			t0 = b.t;
 		}
 		y0 += sh;
 	}

@@ -332,6 +332,56 @@ rate = 20
         self.assertEqual(avatar_pixels(shot), 0, "a stale avatar is drawn in colour")
 
 
+class ViewerDropoutTest(unittest.TestCase):
+    """the hands' tracker stops, the head's goes on: the card says which sensors are stale, and the
+    plots' strip shows the head OK and the hands STALE since they stopped"""
+
+    CONF = """
+[daemon]
+rate = 120
+[source headclip]
+type = replay
+file = builtin:cmu_141_16.csv
+speed = 2
+[source handclip]
+type = replay
+file = builtin:cmu_141_16.csv
+speed = 2
+loop = no
+[avatar dropout]
+head = headclip/head
+left_hand = handclip/left_hand
+right_hand = handclip/right_hand
+[output viewer]
+type = websocket
+address = 127.0.0.1
+port = {port}
+"""
+
+    def test_hands_drop_out(self):
+        with tempfile.TemporaryDirectory() as tmp, tempfile.TemporaryDirectory() as profile:
+            port = free_port(socket.SOCK_STREAM)
+            d = Daemon(tmp, self.CONF.format(port=port))
+            try:
+                b = Chromium(profile)
+                try:
+                    b.call("Page.navigate", url="http://127.0.0.1:%d/" % port)
+                    st = wait_for(b, lambda s: s["list"] and s["list"][0]["sensors"] == ["OK", "STALE", "STALE"]
+                                  and s["list"][0]["strip"] == [0, 1, 1] and s["bodies"] == 1, PAGE_TIMEOUT + 20)
+                    # a second more of the dropout on the strip, for the picture
+                    wait_for(b, lambda s: s["list"][0]["columns"] >= st["list"][0]["columns"] + 4)
+                    b.screenshot(artefact("viewer-dropout.png"))
+                    card = b.evaluate("document.querySelector('#avatars .card .state').textContent")
+                    no_errors(self, b)
+                finally:
+                    b.close()
+            finally:
+                self.assertEqual(d.stop(), 0)
+        self.assertEqual(card, "stale: L hand, R hand")
+        self.assertEqual(st["greySensors"], 2)
+        self.assertEqual(st["staleAvatars"], 1)
+
+
 class ViewerTwoTest(unittest.TestCase):
     """two people: two bodies side by side with their names, and a click on one follows it; bob's
     arms are too short for his sensors, and his hands are drawn off them"""
