@@ -666,15 +666,13 @@ static bool ws_adopt(struct output *o, struct output *old)
 	return true;
 }
 
-/* the loop: an avatar's body lengths from its DESCRIBE (once a second: decoding it is cheap enough) */
+/* the loop: an avatar's body lengths from its DESCRIBE */
 static void ws_describe(struct ws_view *v, const struct out_msg *m)
 {
-	struct wire_describe d;
+	const struct wire_describe *d = m->describe;
 
-	if (wire_decode_describe(m->data, m->len, &d))
-		return;
 	for (int k = 0; k < WS_BODY; k++)
-		atomic_store_explicit(&v->body[m->avatar][k], k < 4 ? d.dims[k] : d.head_offset[k - 4],
+		atomic_store_explicit(&v->body[m->avatar][k], k < 4 ? d->dims[k] : d->head_offset[k - 4],
 				      memory_order_relaxed);
 }
 
@@ -686,7 +684,7 @@ static void ws_send(struct output *o, const struct out_msg *m, int n)
 
 	o->cycle++;
 	for (int j = 0; j < n; j++)
-		if (m[j].data[5] == WIRE_DESCRIBE && m[j].avatar < o->n_avatars && o->wants[m[j].avatar])
+		if (m[j].type == WIRE_DESCRIBE && m[j].describe && m[j].avatar < o->n_avatars && o->wants[m[j].avatar])
 			ws_describe(&w->view[k], &m[j]);
 	clock_gettime(CLOCK_MONOTONIC, &ts);
 	snap_put_batch(&w->view[k].snap, o->wants, m, n, (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec);
