@@ -397,8 +397,8 @@ spacing = 1.2
 person = sim/p0
 [avatar bob]
 person = sim/p1
-upper_arm = 0.12
-forearm = 0.1
+upper_arm = 0.06
+forearm = 0.05
 [output viewer]
 type = websocket
 address = 127.0.0.1
@@ -415,7 +415,7 @@ port = {port}
                     b.call("Page.navigate", url="http://127.0.0.1:%d/" % port)
                     st = wait_for(b, lambda s: s["avatars"] == 2 and s["bodies"] == 2 and s["renders"] >= 10
                                   and len(s["list"]) == 2 and all(a["name"] for a in s["list"])
-                                  and s["offSensors"] == 2)
+                                  and s["offSensors"] == 2 and sorted(a["off"] for a in s["list"]) == [0, 2])
                     b.screenshot(artefact("viewer-two.png"))
                     cards = b.evaluate("document.getElementById('avatars').innerText")
                     ids = {a["name"]: a["id"] for a in st["list"]}
