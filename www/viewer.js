@@ -36,6 +36,7 @@ const stats = {
 	staleAvatars: 0,  // avatars drawn grey in the last picture
 	greySensors: 0,   // sensor axes drawn grey (stale or missing, or no frames)
 	offSensors: 0,    // hands drawn off their sensor (red) in the last picture
+	boneMismatch: 0,  // m: how far an arm bone sized from the DESCRIBE ends from the next joint
 	renders: 0,       // pictures drawn
 	connected: false,
 	connections: 0,   // WebSocket connections opened
@@ -286,7 +287,7 @@ function draw(av, now) {
 	const noFrames = now - av.rx > STALE_MS;
 	const stale = noFrames || (rec.flags & F_STALE) !== 0;
 	const dims = finite(rec.dims) ? rec.dims : null;
-	const out = { bones: 0, sensors: 0, stale, grey: 0, off: 0, meshes: 0, body: false };
+	const out = { bones: 0, sensors: 0, stale, grey: 0, off: 0, meshes: 0, body: false, mismatch: 0 };
 	setGrey(av, stale);
 	const ok = finite(seg[0]) && [2, 3, 4, 6, 7, 8].every((i) => finite(seg[i]));
 	for (const m of av.group.children)
@@ -346,6 +347,8 @@ function draw(av, now) {
 			place(B.clav[side], chest, pS, LIMB_R[1] * 0.9);
 			const eEnd = dims ? along(seg[sh], AX_UPPER, dims[1], new THREE.Vector3()) : pE;
 			const wEnd = dims ? along(seg[el], AX_FORE, dims[2], new THREE.Vector3()) : pW;
+			// the DESCRIBE's lengths along the segments' axes end where the next joints are
+			out.mismatch = Math.max(out.mismatch, eEnd.distanceTo(pE), wEnd.distanceTo(pW));
 			place(B.upper[side], pS, eEnd, LIMB_R[0]);
 			place(B.fore[side], pE, wEnd, LIMB_R[1]);
 			[pS, pE, pW].forEach((p, k) => {
@@ -446,7 +449,7 @@ function frameAll(now, snap) {
 	moving = false;
 }
 
-function follow(now) {
+function follow() {
 	const av = following;
 	if (!av.rec || !finite(av.rec.segments[0]))
 		return;
@@ -468,7 +471,6 @@ function follow(now) {
 	moving = true;
 	controls.update();
 	moving = false;
-	void now;
 }
 
 function forget(av) {
@@ -809,12 +811,13 @@ function frame() {
 	if (renderer && (fresh || dirty || now - lastRender >= 250)) {
 		dirty = false;
 		lastRender = now;
-		const tot = { bones: 0, sensors: 0, stale: 0, grey: 0, off: 0, meshes: 0, bodies: 0 };
+		const tot = { bones: 0, sensors: 0, stale: 0, grey: 0, off: 0, meshes: 0, bodies: 0, mismatch: 0 };
 		for (const av of avatars.values()) {
 			if (!av.rec)
 				continue;
 			const d = draw(av, now);
 			av.off = d.off;
+			tot.mismatch = Math.max(tot.mismatch, d.mismatch);
 			if (av.rec.seq !== av.drawnSeq) {
 				av.drawnSeq = av.rec.seq;
 				av.drawn.push(now); // a new frame of this avatar on the picture
@@ -828,7 +831,7 @@ function frame() {
 			tot.bodies += d.body ? 1 : 0;
 		}
 		if (following)
-			follow(now);
+			follow();
 		else if (autoFrame && avatars.size) {
 			frameAll(now, !framed);
 			framed = true;
@@ -842,6 +845,7 @@ function frame() {
 		stats.offSensors = tot.off;
 		stats.meshes = tot.meshes;
 		stats.bodies = tot.bodies;
+		stats.boneMismatch = tot.mismatch;
 	} else if (!renderer) {
 		stats.staleAvatars = [...avatars.values()].filter((av) => av.rec &&
 			(now - av.rx > STALE_MS || (av.rec.flags & F_STALE) !== 0)).length;

@@ -232,6 +232,8 @@ class ViewerTest(unittest.TestCase):
         self.assertEqual(st["sensorsDrawn"], 3)
         self.assertEqual(st["staleAvatars"], 0)
         self.assertEqual(st["offSensors"], 0)  # the demo's hands are where their sensors are
+        # the arm bones, drawn from the DESCRIBE's lengths along their segments' axes, meet the next joints
+        self.assertLess(st["boneMismatch"], 0.002)
         av = st["list"][0]
         self.assertEqual((av["name"], av["grey"], av["sensors"]), ("demo", False, ["OK"] * 3))
         # the daemon publishes at 240 Hz, the output sends 30 texts a second, the page draws no more than that
@@ -447,6 +449,7 @@ port = {port}
                 self.assertEqual(d.stop(), 0)
         self.assertEqual(sorted(ids), ["alice", "bob"])
         self.assertEqual({a["name"]: a["off"] for a in st["list"]}, {"alice": 0, "bob": 2})
+        self.assertLess(st["boneMismatch"], 0.002)  # bob's short bones too
         self.assertIn("alice", cards)
         self.assertIn("bob", cards)
         self.assertEqual(st["bonesDrawn"], 18)
