@@ -300,6 +300,47 @@ static void test_reports_buttons_and_analog(void **state)
 	close_output(&fx);
 }
 
+/* a person whose sensors are all STALE or MISSING gets no new reports, and gets them again when one is OK */
+static void test_stopped_person_sends_nothing(void **state)
+{
+	struct fixture fx;
+	struct peer p;
+	uint8_t frame[WIRE_MAX_MSG];
+	struct wire_frame f;
+	struct out_msg m;
+	struct vmsg msg;
+	size_t pos = 0;
+	int poses = 0;
+
+	(void)state;
+	open_output(&fx, "Avatar%d", NULL);
+	m = make_frame(&f, frame, 3, 0);
+	peer_connect(&p, fx.port);
+	for (int i = 0; i < 3; i++)
+		cycle(&fx.o, &m, 1); /* the handshake, then reports */
+	peer_read(&p);
+	while (peer_next(&p, &msg, &pos))
+		poses += is(&p, &msg, "vrpn_Tracker Pos_Quat");
+	assert_true(poses > 0);
+	poses = 0;
+	for (int s = 0; s < WIRE_SENSORS; s++)
+		f.sensor[s].state = s ? WIRE_SENSOR_STALE : WIRE_SENSOR_MISSING;
+	for (int i = 0; i < 5; i++)
+		cycle(&fx.o, &m, 1);
+	peer_read(&p);
+	while (peer_next(&p, &msg, &pos))
+		poses += is(&p, &msg, "vrpn_Tracker Pos_Quat");
+	assert_int_equal(poses, 0);
+	f.sensor[WIRE_S_LEFT_HAND].state = WIRE_SENSOR_OK;
+	cycle(&fx.o, &m, 1);
+	peer_read(&p);
+	while (peer_next(&p, &msg, &pos))
+		poses += is(&p, &msg, "vrpn_Tracker Pos_Quat");
+	assert_int_equal(poses, 11);
+	close(p.fd);
+	close_output(&fx);
+}
+
 static void test_reload_keeps_or_drops_clients(void **state)
 {
 	struct fixture a, b, c;
@@ -401,6 +442,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_reports_buttons_and_analog),
+		cmocka_unit_test(test_stopped_person_sends_nothing),
 		cmocka_unit_test(test_reload_keeps_or_drops_clients),
 		cmocka_unit_test(test_device_names),
 	};

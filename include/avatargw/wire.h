@@ -185,6 +185,8 @@ const char *wire_strerror(int err);
  * FRAME is WIRE_FRAME_LEN bytes, WIRE_FRAME_LEN + WIRE_INPUTS_LEN with an
  * input block (h.flags & WIRE_F_INPUTS).
  */
+/* the person stopped: no sensor of the frame is OK (every one STALE or MISSING) */
+bool wire_frame_stopped(const struct wire_frame *f);
 /* every number of the pose is finite (a pose the frame does not know is NaN) */
 bool wire_pose_finite(const struct wire_pose *p);
 

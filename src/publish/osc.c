@@ -440,15 +440,6 @@ static void send_vrchat(struct output *o, struct osc *s, const struct snap_entry
 		send_tracker(o, s, "head", b.p[B_HEAD], b.q[B_HEAD]);
 }
 
-/* the person stopped: no sensor of the frame is OK (the protocols have no word for a stale pose) */
-static bool all_stale(const struct wire_frame *f)
-{
-	for (int i = 0; i < WIRE_SENSORS; i++)
-		if (f->sensor[i].state == WIRE_SENSOR_OK)
-			return false;
-	return true;
-}
-
 static void *osc_main(void *arg)
 {
 	struct output *o = arg;
@@ -474,7 +465,7 @@ static void *osc_main(void *arg)
 			bool was = s->stopped;
 
 			/* once stopped, nothing new to say (VMC's last bundle said tracking 0) */
-			s->stopped = all_stale(&e->f);
+			s->stopped = wire_frame_stopped(&e->f); /* the protocols have no word for a stale pose */
 			if (s->vmc && (!s->stopped || !was))
 				send_vmc(o, s, e, (double)(mono_ns() - (uint64_t)s->t0) * 1e-9);
 			else if (!s->vmc && !s->stopped)

@@ -1022,7 +1022,8 @@ static void vrpn_send(struct output *o, const struct out_msg *msgs, int n)
 		size_t low, rel;
 		int a = msg->avatar;
 
-		if (msg->type != WIRE_FRAME || a >= m->n || !m->wants[a])
+		/* VRPN has no word for a stale pose: a person who stopped gets no new reports */
+		if (msg->type != WIRE_FRAME || a >= m->n || !m->wants[a] || wire_frame_stopped(f))
 			continue;
 		/* button changes are never decimated away: they are events */
 		rel = encode_buttons(v->rel, m, a, &f->in, f->h.sample_time_ns ? f->h.sample_time_ns : real_ns());

@@ -473,3 +473,11 @@ bool wire_pose_finite(const struct wire_pose *p)
 			return false;
 	return true;
 }
+
+bool wire_frame_stopped(const struct wire_frame *f)
+{
+	for (int i = 0; i < WIRE_SENSORS; i++)
+		if (f->sensor[i].state == WIRE_SENSOR_OK)
+			return false;
+	return true;
+}
