@@ -2,13 +2,18 @@
 # avatargw - plain, non-recursive Makefile.
 #
 #   make            build everything into $(BUILD)
-#   make test       build and run every test (add SAN=1 for ASan + UBSan)
-#   make bench      run the IK benchmark on ../shared/bench
+#   make check      the unit tests only: the cmocka binaries and the checks that need no running
+#                   daemon (format, config and man page against the key table); under a minute
+#   make test       build and run every test: make check's, the end-to-end tests on the real
+#                   daemon, the embedded self-test, the service files (add SAN=1 for ASan + UBSan)
+#   make bench      the IK benchmark on ../shared/bench, the cycle's instructions and CPU time,
+#                   the daemon's latency and capacity; prints each goal met / not met, never fails
 #   make eval       score the avatar against ../shared/mocap (docs/FIDELITY.md)
 #   make embedded   cross-build the IK core's self-test (Cortex-M, aarch64); embedded-report: docs/EMBEDDED.md's numbers
 #   make install    install under $(DESTDIR)$(PREFIX)
 #   make clean
 
+.DEFAULT_GOAL := all
 PREFIX ?= /usr/local
 DESTDIR ?=
 SHARED ?= ../shared
@@ -46,19 +51,28 @@ CORE_SRC_q = $(filter-out src/ik/calib.c,$(CORE_SRC))
 CORE_OBJ = $(foreach t,$(CORE_TYPES),$(patsubst src/%.c,$(BUILD)/obj/%.$(t).o,$(or $(CORE_SRC_$(t)),$(CORE_SRC))))
 LIBIK = $(BUILD)/libavatargw-ik.a
 
+# The scalar types: an object NAME.T.o is its source built with SC_T. qs is the fixed-point
+# build counting its saturations, for test_fixq (suffix _qs: links beside the q build).
 SC_d = -DSC_TYPE=SC_DOUBLE
 SC_f = -DSC_TYPE=SC_FLOAT
 SC_q = -DSC_TYPE=SC_FIXQ
+SC_qs = -DSC_TYPE=SC_FIXQ -DSC_FIXQ_STATS -DSC_SUFFIX=_qs
+SC_TYPES = d f q qs
 
-$(BUILD)/obj/ik/%.d.o: src/ik/%.c
-	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) $(CORE_CFLAGS) $(SC_d) -c $< -o $@
-$(BUILD)/obj/ik/%.f.o: src/ik/%.c
-	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) $(CORE_CFLAGS) $(SC_f) -c $< -o $@
-$(BUILD)/obj/ik/%.q.o: src/ik/%.c
-	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) $(CORE_CFLAGS) $(SC_q) -c $< -o $@
+# The directories built once per scalar type, and what each adds to the flags: the core
+# (src/ik), the tools' and the tests' helpers (tools/lib, tests/lib).
+SC_DIRS = src/ik tools/lib tests/lib
+SC_FLAGS_src/ik = $(CORE_CFLAGS)
+SC_FLAGS_tools/lib = -Itools
+SC_FLAGS_tests/lib = -Itests
+# $(BUILD)/obj/D/%.T.o from D/%.c (the core's objects go to obj/ik), for every D and T
+sc_obj_dir = $(BUILD)/obj/$(patsubst src/%,%,$(1))
+define sc_rule
+$(call sc_obj_dir,$(2))/%.$(1).o: $(2)/%.c
+	@mkdir -p $$(dir $$@)
+	$$(CC) $$(ALL_CFLAGS) $$(SC_FLAGS_$(2)) $$(SC_$(1)) -c $$< -o $$@
+endef
+$(foreach t,$(SC_TYPES),$(foreach d,$(SC_DIRS),$(eval $(call sc_rule,$(t),$(d)))))
 
 $(LIBIK): $(CORE_OBJ)
 	@rm -f $@
@@ -142,16 +156,6 @@ $(BUILD)/avatargw-%: $(BUILD)/obj/tools/avatargw-%.o $(LIBGW) $(LIBIK)
 # tools/lib/ikx.c: the core of one scalar type behind a double interface, once per type
 IKX_OBJ = $(foreach t,$(CORE_TYPES),$(BUILD)/obj/tools/lib/ikx.$(t).o)
 
-$(BUILD)/obj/tools/lib/%.d.o: tools/lib/%.c
-	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) $(SC_d) -Itools -c $< -o $@
-$(BUILD)/obj/tools/lib/%.f.o: tools/lib/%.c
-	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) $(SC_f) -Itools -c $< -o $@
-$(BUILD)/obj/tools/lib/%.q.o: tools/lib/%.c
-	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) $(SC_q) -Itools -c $< -o $@
-
 # tools/lib/benchfile.c: benchmark rows, joint limits and helpers of the IK tools
 BENCHFILE_OBJ = $(BUILD)/obj/tools/lib/benchfile.o
 $(BUILD)/obj/tools/avatargw-ikcompare.o $(BUILD)/obj/tools/avatargw-ikbench.o $(BUILD)/obj/tools/avatargw-eval.o: \
@@ -161,6 +165,12 @@ $(BUILD)/avatargw-ikcompare: $(BUILD)/obj/tools/avatargw-ikcompare.o $(IKX_OBJ) 
 $(BUILD)/avatargw-ikbench $(BUILD)/avatargw-eval: $(BUILD)/avatargw-%: $(BUILD)/obj/tools/avatargw-%.o $(BENCHFILE_OBJ) \
 	$(LIBGW) $(LIBIK)
 	$(CC) $(LDFLAGS) -o $@ $^ $(LIBS)
+
+# the cycle's benchmark (make bench; not installed)
+BENCH_CYCLE = $(BUILD)/bench-cycle
+# (its gateway's CLOCK_MONOTONIC follows the cycles it simulates: tools/bench-cycle.c)
+$(BENCH_CYCLE): $(BUILD)/obj/tools/bench-cycle.o $(LIBGW) $(LIBIK)
+	$(CC) $(LDFLAGS) -Wl,--wrap=clock_gettime -o $@ $^ $(LIBS)
 
 $(BUILD)/obj/examples/%.o: tools/examples/%.cpp
 	@mkdir -p $(dir $@)
@@ -178,15 +188,6 @@ TEST_BIN = $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_C)) $(patsubst tests/%.c
 TEST_LIB_SRC = $(wildcard tests/lib/*.c)
 TEST_LIB_OBJ = $(foreach t,$(CORE_TYPES),$(patsubst tests/lib/%.c,$(BUILD)/obj/tests/lib/%.$(t).o,$(TEST_LIB_SRC)))
 
-$(BUILD)/obj/tests/lib/%.d.o: tests/lib/%.c
-	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) $(SC_d) -Itests -c $< -o $@
-$(BUILD)/obj/tests/lib/%.f.o: tests/lib/%.c
-	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) $(SC_f) -Itests -c $< -o $@
-$(BUILD)/obj/tests/lib/%.q.o: tests/lib/%.c
-	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) $(SC_q) -Itests -c $< -o $@
 $(BUILD)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) $(TEST_CFLAGS) -D_GNU_SOURCE -Isrc -Itests -DSHARED_DIR='"$(SHARED)"' -c $< -o $@
@@ -219,15 +220,7 @@ $(BUILD)/tests/test_alloc_renderers: TEST_LDFLAGS = -Wl,--wrap=malloc,--wrap=cal
 # Q5.26 build against the double one through tools/lib/ikx.c, and links a counting
 # build of the fixed core (suffix _qs, SC_FIXQ_STATS: how many results saturated)
 # and the tests' clip reader (tests/fake/clip.c: the avatar on motion capture).
-SC_qs = -DSC_TYPE=SC_FIXQ -DSC_FIXQ_STATS -DSC_SUFFIX=_qs
 QS_OBJ = $(patsubst src/%.c,$(BUILD)/obj/%.qs.o,$(CORE_SRC_q)) $(BUILD)/obj/tools/lib/ikx.qs.o
-
-$(BUILD)/obj/ik/%.qs.o: src/ik/%.c
-	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) $(CORE_CFLAGS) $(SC_qs) -c $< -o $@
-$(BUILD)/obj/tools/lib/%.qs.o: tools/lib/%.c
-	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) $(SC_qs) -Itools -c $< -o $@
 $(BUILD)/obj/tests/test_fixq.o: TEST_CFLAGS = $(SC_q) -Itools
 $(BUILD)/tests/test_fixq: $(BUILD)/obj/tests/test_fixq.o $(QS_OBJ) $(IKX_OBJ) $(BUILD)/obj/tests/fake/clip.o $(BENCHFILE_OBJ) \
 	$(TEST_LIB_OBJ) $(LIBGW) $(LIBIK)
@@ -256,10 +249,17 @@ $(FAKE_TESTS): $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(FAKE_OBJ) $(TEST_LIB_O
 	$(CXX) $(LDFLAGS) $(TEST_LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) $(LIBS)
 $(FAKE_TESTS): TEST_LDFLAGS = $(foreach f,$(FAKE_WRAP),-Wl,--wrap=$(f))
 
+# ---- fragments ----------------------------------------------------------------
+# Parts of the build kept beside what they build, one include each, here: after the
+# variables above (which they may use and add to: TEST_BIN, CHECK_QUICK, CHECK_SCRIPTS,
+# E2E_TESTS, EXTRA_ALL) and before the top-level targets (which take those lists).
+# the core cross-built for microcontrollers and aarch64, and its self-test (docs/EMBEDDED.md)
+include tools/embedded.mk
+
 # ---- top-level targets --------------------------------------------------------
 .SECONDARY:
-.PHONY: all test check-core bench install clean run
-all: $(LIBIK) $(LIBGW) $(DAEMON) $(TOOLS) $(EXAMPLES)
+.PHONY: all check test check-core bench install clean run
+all: $(LIBIK) $(LIBGW) $(DAEMON) $(TOOLS) $(EXAMPLES) $(BENCH_CYCLE) $(EXTRA_ALL)
 
 # The core may reference nothing from libc but memcpy/memset and libm's own functions.
 CORE_ALLOWED = memcpy memset sin cos sincos atan2 sqrt sinf cosf sincosf atan2f sqrtf
@@ -270,18 +270,24 @@ check-core: $(LIBIK)
 	if [ -n "$$bad" ]; then echo "check-core: the IK core references: $$bad"; exit 1; fi; \
 	echo "check-core: the IK core references nothing outside itself but: $$(nm -u $(LIBIK) | awk '/ U /{print $$2}' | sort -u | comm -23 - $(BUILD)/core-defined.txt | grep -v -E '^__(asan|ubsan)' | tr '\n' ' ')"
 
-# the core cross-built for microcontrollers and aarch64, and its self-test (docs/EMBEDDED.md)
-include tools/embedded.mk
-
-# end-to-end tests (the real daemon on loopback) and checks of docs against the code
+# make check: the unit tests and the checks that read the tree and the daemon's key table
+# but run no daemon; make test: those, the end-to-end tests (the real daemon on loopback,
+# with the tools and the C++ example client as its peers: all of `all`), the embedded
+# self-test (tests/check-embedded.sh: the cross images) and the remaining check scripts
+CHECK_QUICK = tests/check-format.sh tests/check-config-doc.sh tools/check-man.sh
 E2E_TESTS = $(wildcard tests/e2e/test_*.py)
-CHECK_SCRIPTS = $(wildcard tests/check-*.sh) tests/service/verify-unit.sh tools/check-man.sh
+CHECK_SCRIPTS = $(filter-out $(CHECK_QUICK),$(wildcard tests/check-*.sh)) tests/service/verify-unit.sh
+
+check: $(TEST_BIN) $(DAEMON) check-core
+	@BUILD=$(BUILD) tests/run.sh $(TEST_BIN) $(CHECK_QUICK)
 
 test: all $(TEST_BIN) $(TEST_HELPERS) check-core $(EMB_IMAGES)
-	@BUILD=$(BUILD) tests/run.sh $(TEST_BIN) $(E2E_TESTS) $(CHECK_SCRIPTS)
+	@BUILD=$(BUILD) tests/run.sh $(TEST_BIN) $(E2E_TESTS) $(CHECK_QUICK) $(CHECK_SCRIPTS)
 
-bench: $(BUILD)/avatargw-ikbench $(DAEMON) $(BUILD)/avatargw-dump $(BUILD)/avatargw-ctl
+# reports and never fails on a goal: each is printed met / not met (docs/MEASUREMENTS.md)
+bench: $(BUILD)/avatargw-ikbench $(DAEMON) $(BUILD)/avatargw-dump $(BUILD)/avatargw-ctl $(BENCH_CYCLE)
 	@tools/bench.sh $(BUILD) $(SHARED)
+	@tools/bench-cycle.sh $(BUILD)
 	@tools/bench-daemon.sh $(BUILD)
 
 # the avatar against the motion capture of $(SHARED)/mocap: writes docs/FIDELITY.md and docs/fidelity/*.png

@@ -38,6 +38,7 @@ qemu-system-arm
 can-utils
 iproute2
 zlib1g-dev
+valgrind
 "
 
 missing=""
