@@ -1,15 +1,20 @@
 #!/bin/sh
 # SPDX-License-Identifier: MIT
 # make bench, second part: the daemon's goals, measured on the real binary.
-#   1. sample arrival -> datagram sent, one avatar at 240 Hz (the daemon's own
-#      histogram, read with avatargw-ctl), p50/p99/p99.9/max, with the loop
-#      sleeping to each deadline (the default) and spinning (busy_wait = yes);
+#   1. sample read -> datagram sent, one avatar at 240 Hz (the daemon's own
+#      histogram, read with avatargw-ctl: a sim sample is read by the cycle's
+#      poll, after the wake-up, so the host's wake-up delay is not in it; that
+#      delay is shown beside it), p50/p99/p99.9/max, with the loop sleeping to
+#      each deadline (the default) and spinning (busy_wait = yes);
 #   2. RSS with one avatar (the embedded demo);
 #   3. avatars one core carries at 240 Hz: the loop (one thread) runs N sim
 #      avatars for a few seconds, three times; a run carries N when no cycle
 #      overran and the cycle's work p99 fits in the period, and N is carried
 #      when two runs of the three carry it.
-# One JSON line per measurement in $BUILD/bench-daemon.jsonl, and a table.
+# One JSON line per measurement in $BUILD/bench-daemon.jsonl, a table, and each
+# goal met / not met (never a failure: wall-clock figures on a shared machine
+# measure the host as much as the daemon; tools/bench-cycle.sh has the figures
+# it does not change).
 set -eu
 BUILD=${1:-build}
 OUT="$BUILD/bench-daemon.jsonl"
@@ -74,8 +79,8 @@ echo "machine: $(uname -srm), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f
 # 1. latency, one avatar at 240 Hz, 10 s: the loop sleeping to each deadline (the default), then spinning
 for bw in no yes; do
 	run 1 10 "$bw" >/dev/null
-	lat=$(json '"%.1f %.1f %.1f %.1f %d" % tuple([d["avatars"][0]["latency_us"][k] for k in ("p50","p99","p999","max")] + [d["avatars"][0]["latency_us"]["n"]])' <"$TMP/s1.json")
-	echo "$lat $bw" | awk '{printf "{\"set\":\"latency\",\"avatars\":1,\"rate_hz\":240,\"p50_us\":%s,\"p99_us\":%s,\"p999_us\":%s,\"max_us\":%s,\"n\":%s,\"busy_wait\":\"%s\"}\n", $1,$2,$3,$4,$5,$6}' >>"$OUT"
+	lat=$(json '"%.1f %.1f %.1f %.1f %d %.1f %.1f" % tuple([d["avatars"][0]["latency_us"][k] for k in ("p50","p99","p999","max")] + [d["avatars"][0]["latency_us"]["n"], d["loop"]["wake_late_us"]["p50"], d["loop"]["wake_late_us"]["p99"]])' <"$TMP/s1.json")
+	echo "$lat $bw" | awk '{printf "{\"set\":\"latency\",\"avatars\":1,\"rate_hz\":240,\"p50_us\":%s,\"p99_us\":%s,\"p999_us\":%s,\"max_us\":%s,\"n\":%s,\"wake_p50_us\":%s,\"wake_p99_us\":%s,\"busy_wait\":\"%s\"}\n", $1,$2,$3,$4,$5,$6,$7,$8}' >>"$OUT"
 done
 
 # 2. RSS of the demo
@@ -109,8 +114,8 @@ import json, sys
 rows = [json.loads(l) for l in open(sys.argv[1])]
 for r in rows:
     if r["set"] == "latency":
-        print("| sample -> datagram, 1 avatar, 240 Hz, busy_wait = %s | p50 %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us (%d frames; goal p99 <= 50 us) |"
-              % (r["busy_wait"], r["p50_us"], r["p99_us"], r["p999_us"], r["max_us"], r["n"]))
+        print("| sample read -> datagram sent, 1 avatar, 240 Hz, busy_wait = %s | p50 %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us (%d frames; goal p99 <= 50 us); the wake-up's lateness apart: p50 %.1f us, p99 %.1f us |"
+              % (r["busy_wait"], r["p50_us"], r["p99_us"], r["p999_us"], r["max_us"], r["n"], r["wake_p50_us"], r["wake_p99_us"]))
     elif r["set"] == "rss":
         print("| RSS, demo (1 avatar) | %d KiB (peak %d KiB; goal <= 8192 KiB) |" % (r["rss_kib"], r["hwm_kib"]))
 best = 0
@@ -132,4 +137,14 @@ for n in sorted(cap):
     print("| %d avatars at 240 Hz | work of 4167 us per cycle: %s; RSS %d KiB; carried in %d of %d runs: %s |"
           % (n, "; ".join(runs), cap[n][-1]["rss_kib"], carried, len(cap[n]), "carried" if ok else "NOT carried"))
 print("| avatars one core carries at 240 Hz (two runs of three) | %d (goal >= 1000) |" % best)
+print()
+def goal(text, ok):
+    print("goal: %s: %s" % (text, "met" if ok else "not met"))
+for r in rows:
+    if r["set"] == "latency":
+        goal("loop latency read -> sent p99 <= 50 us, 1 avatar, busy_wait = %s (%.1f us)" % (r["busy_wait"], r["p99_us"]),
+             r["p99_us"] <= 50)
+    elif r["set"] == "rss":
+        goal("RSS <= 8 MiB, demo (%d KiB)" % r["rss_kib"], r["rss_kib"] <= 8192)
+goal("wall clock: >= 1000 avatars carried by one core at 240 Hz (%d)" % best, best >= 1000)
 EOPY
