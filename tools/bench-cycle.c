@@ -11,10 +11,10 @@
  * full the kernel drops what comes). The clock the cycle sees is simulated:
  * cycle k runs at start + k periods, so every cycle brings each person a new
  * sample, whatever the time the cycle took. The gateway's own reads of
- * CLOCK_MONOTONIC (the time a cycle's datagrams were sent) are that clock
- * moved by the same amount (clock_gettime is wrapped at link time), so that
- * its latency histogram sees the real time from reading the samples to the
- * send. W cycles warm up, then M cycles are measured by bench_measure(), the
+ * CLOCK_MONOTONIC in cycle k (the time its datagrams were sent) read
+ * BENCH_SEND_NS after the cycle's start (clock_gettime is wrapped at link
+ * time), so that its latency histogram takes the same input in every run and
+ * the instructions counted are the same. W cycles warm up, then M cycles are measured by bench_measure(), the
  * function to give callgrind (--toggle-collect=bench_measure: only the
  * measured cycles are counted).
  *
@@ -37,14 +37,15 @@
 #include <time.h>
 #include <unistd.h>
 
+/* what the gateway's clock reads from the start of a cycle to its end */
+#define BENCH_SEND_NS 10000u
+
 /*
- * What the gateway's CLOCK_MONOTONIC is ahead of the real one in this thread
- * (see above), or while frozen the time it reads. Frozen while the gateway
- * is built: the sim takes its start from it, so that cycle k reads sample k
- * of each person and the instructions counted are the same from run to run.
+ * The time the gateway's CLOCK_MONOTONIC reads in this thread (see above), 0:
+ * the real clock. Also set while the gateway is built: the sim takes its
+ * start from it, so that cycle k reads sample k of each person in every run.
  * Other threads (a configuration's own) see the real clock.
  */
-static _Thread_local int64_t mono_shift;
 static _Thread_local uint64_t mono_frozen;
 
 int __real_clock_gettime(clockid_t id, struct timespec *ts);
@@ -57,11 +58,6 @@ int __wrap_clock_gettime(clockid_t id, struct timespec *ts)
 	if (!rc && id == CLOCK_MONOTONIC && mono_frozen) {
 		ts->tv_sec = (time_t)(mono_frozen / 1000000000ull);
 		ts->tv_nsec = (long)(mono_frozen % 1000000000ull);
-	} else if (!rc && id == CLOCK_MONOTONIC && mono_shift) {
-		int64_t ns = (int64_t)ts->tv_sec * 1000000000ll + ts->tv_nsec + mono_shift;
-
-		ts->tv_sec = (time_t)(ns / 1000000000ll);
-		ts->tv_nsec = (long)(ns % 1000000000ll);
 	}
 	return rc;
 }
@@ -104,7 +100,7 @@ __attribute__((noipa)) int bench_measure(struct gateway *g, uint64_t start, uint
 		struct tracker_clock now = { start + (uint64_t)k * period, 0 };
 		uint64_t c0 = clock_of(CLOCK_THREAD_CPUTIME_ID), w0 = clock_of(CLOCK_MONOTONIC), w1;
 
-		mono_shift = (int64_t)(now.mono_ns - w0);
+		mono_frozen = now.mono_ns + BENCH_SEND_NS;
 		frames += gw_cycle(g, &now);
 		w1 = clock_of(CLOCK_MONOTONIC);
 		cpu[k - from] = clock_of(CLOCK_THREAD_CPUTIME_ID) - c0;
@@ -209,11 +205,11 @@ int main(int argc, char **argv)
 	for (int k = 0; k < w; k++) {
 		struct tracker_clock now = { start + (uint64_t)k * period, 0 };
 
-		mono_shift = (int64_t)(now.mono_ns - clock_of(CLOCK_MONOTONIC));
+		mono_frozen = now.mono_ns + BENCH_SEND_NS;
 		gw_cycle(&g, &now);
 	}
 	frames = bench_measure(&g, start, period, w, w + m, cpu, wall);
-	mono_shift = 0;
+	mono_frozen = 0;
 	for (int k = 0; k < m; k++)
 		cpu_sum += cpu[k];
 	qsort(cpu, (size_t)m, sizeof(*cpu), cmp_u64);

@@ -4,10 +4,9 @@
 # does not change (tools/bench-cycle.c runs gw_cycle on a simulated clock).
 #   1. instructions per avatar per cycle, the whole cycle (gw_cycle) and the
 #      IK solve alone (avatar_solve) on the same frames: callgrind, 100 sim
-#      avatars, 240 cycles measured after 240 of warm-up (the same count from
-#      run to run but for the latency histogram's few instructions, whose input
-#      is the real time of the cycle: within 0.1 %); the IK share, and where the
-#      rest goes;
+#      avatars, 240 cycles measured after 240 of warm-up (the same count in
+#      every run: the clock the gateway reads is simulated); the IK share, and
+#      where the rest goes;
 #   2. the loop thread's CPU time per avatar per cycle (CLOCK_THREAD_CPUTIME_ID,
 #      not wall: time others had the CPU is not counted; the median cycle of
 #      240, middle of three runs) with 1000 avatars, and the avatars per core
@@ -22,7 +21,7 @@ BENCH="$BUILD/bench-cycle"
 OUT="$BUILD/bench-cycle.jsonl"
 # instructions per avatar per cycle of the whole cycle on main at 069b9f7 (2026-11-27,
 # docs/MEASUREMENTS.md): the "no slower than today" goal
-BASELINE_IPAC=14634
+BASELINE_IPAC=14578
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 : >"$OUT"
@@ -130,7 +129,7 @@ print("one avatar, cycles back to back, read -> last send returned: p50 %.1f us,
 if i:
     goal("whole cycle <= 1.3 x the IK solve's instructions on the same frames (%.3f x)" % i["ratio"], i["ratio"] <= 1.3)
     goal("instructions per avatar per cycle not above main's %d (%d)" % (i["baseline_per_avatar"], i["cycle_per_avatar"]),
-         i["cycle_per_avatar"] <= i["baseline_per_avatar"] * 1.001)
+         i["cycle_per_avatar"] <= i["baseline_per_avatar"])
 goal("capacity from CPU time >= 2000 avatars per core at 240 Hz (%.0f)" % c["capacity_per_core"],
      c["capacity_per_core"] >= 2000)
 EOPY

@@ -21,7 +21,15 @@ OUT="$BUILD/bench-daemon.jsonl"
 TMP=$(mktemp -d)
 trap 'kill $(jobs -p) 2>/dev/null; rm -rf "$TMP"' EXIT
 : >"$OUT"
-PORT=17900
+# ports that are free now (other benches and tests may run on this machine): UDP for the
+# subscriber, TCP for the demo's stream and viewer
+free_port() { # udp|tcp
+	python3 -c 'import socket, sys
+s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM if sys.argv[1] == "udp" else socket.SOCK_STREAM)
+s.bind(("127.0.0.1", 0))
+print(s.getsockname()[1])' "$1"
+}
+PORT=$(free_port udp)
 
 conf() { # people rate [busy_wait]
 	cat <<EOC
@@ -85,7 +93,7 @@ done
 
 # 2. RSS of the demo
 "$BUILD/avatargw" --demo --set "daemon.control_socket=$TMP/demo.ctl" --set "output local.port=$PORT" \
-	--set "output stream.port=$((PORT + 1))" --set "output viewer.port=$((PORT + 2))" 2>/dev/null &
+	--set "output stream.port=$(free_port tcp)" --set "output viewer.port=$(free_port tcp)" 2>/dev/null &
 d=$!
 sleep 2
 rss=$(awk '/VmRSS/ {print $2}' "/proc/$d/status")
