@@ -9,7 +9,7 @@
 #   make bench      the IK benchmark on ../shared/bench, the cycle's instructions and CPU time,
 #                   the daemon's latency and capacity; prints each goal met / not met, never fails
 #   make eval       score the avatar against ../shared/mocap (docs/FIDELITY.md)
-#   make embedded   cross-build the IK core's self-test (Cortex-M, aarch64); embedded-report: docs/EMBEDDED.md's numbers
+#   make embedded   cross-build the IK core's self-test (Cortex-M, aarch64); embedded-report: its measurements (docs/MEASUREMENTS.md)
 #   make install    install under $(DESTDIR)$(PREFIX)
 #   make clean
 
