@@ -249,10 +249,17 @@ $(FAKE_TESTS): $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(FAKE_OBJ) $(TEST_LIB_O
 	$(CXX) $(LDFLAGS) $(TEST_LDFLAGS) -o $@ $^ $(CMOCKA_LIBS) $(LIBS)
 $(FAKE_TESTS): TEST_LDFLAGS = $(foreach f,$(FAKE_WRAP),-Wl,--wrap=$(f))
 
+# the checks make check runs beside TEST_BIN (they run no daemon, quickly), the end-to-end
+# tests and the other checks of make test
+CHECK_QUICK = tests/check-format.sh tests/check-config-doc.sh tools/check-man.sh
+E2E_TESTS = $(wildcard tests/e2e/test_*.py)
+CHECK_SCRIPTS = $(wildcard tests/check-*.sh) tests/service/verify-unit.sh
+
 # ---- fragments ----------------------------------------------------------------
 # Parts of the build kept beside what they build, one include each, here: after the
 # variables above (which they may use and add to: TEST_BIN, CHECK_QUICK, CHECK_SCRIPTS,
 # E2E_TESTS, EXTRA_ALL) and before the top-level targets (which take those lists).
+
 # the core cross-built for microcontrollers and aarch64, and its self-test (docs/EMBEDDED.md)
 include tools/embedded.mk
 
@@ -274,15 +281,11 @@ check-core: $(LIBIK)
 # but run no daemon; make test: those, the end-to-end tests (the real daemon on loopback,
 # with the tools and the C++ example client as its peers: all of `all`), the embedded
 # self-test (tests/check-embedded.sh: the cross images) and the remaining check scripts
-CHECK_QUICK = tests/check-format.sh tests/check-config-doc.sh tools/check-man.sh
-E2E_TESTS = $(wildcard tests/e2e/test_*.py)
-CHECK_SCRIPTS = $(filter-out $(CHECK_QUICK),$(wildcard tests/check-*.sh)) tests/service/verify-unit.sh
-
 check: $(TEST_BIN) $(DAEMON) check-core
 	@BUILD=$(BUILD) tests/run.sh $(TEST_BIN) $(CHECK_QUICK)
 
 test: all $(TEST_BIN) $(TEST_HELPERS) check-core $(EMB_IMAGES)
-	@BUILD=$(BUILD) tests/run.sh $(TEST_BIN) $(E2E_TESTS) $(CHECK_QUICK) $(CHECK_SCRIPTS)
+	@BUILD=$(BUILD) tests/run.sh $(TEST_BIN) $(E2E_TESTS) $(CHECK_QUICK) $(filter-out $(CHECK_QUICK),$(CHECK_SCRIPTS))
 
 # reports and never fails on a goal: each is printed met / not met (docs/MEASUREMENTS.md)
 bench: $(BUILD)/avatargw-ikbench $(DAEMON) $(BUILD)/avatargw-dump $(BUILD)/avatargw-ctl $(BENCH_CYCLE)
