@@ -3,7 +3,7 @@
 #
 #   make            build everything into $(BUILD)
 #   make check      the unit tests only: the cmocka binaries and the checks that need no running
-#                   daemon (format, config and man page against the key table); under a minute
+#                   daemon (format, layers, config and man page against the key table); under a minute
 #   make test       build and run every test: make check's, the end-to-end tests on the real
 #                   daemon, the embedded self-test, the service files (add SAN=1 for ASan + UBSan)
 #   make bench      the IK benchmark on ../shared/bench, the cycle's instructions and CPU time,
@@ -251,7 +251,7 @@ $(FAKE_TESTS): TEST_LDFLAGS = $(foreach f,$(FAKE_WRAP),-Wl,--wrap=$(f))
 
 # the checks make check runs beside TEST_BIN (they run no daemon, quickly), the end-to-end
 # tests and the other checks of make test
-CHECK_QUICK = tests/check-format.sh tests/check-config-doc.sh tools/check-man.sh
+CHECK_QUICK = tests/check-format.sh tests/check-layers.sh tests/check-config-doc.sh tools/check-man.sh
 E2E_TESTS = $(wildcard tests/e2e/test_*.py)
 CHECK_SCRIPTS = $(wildcard tests/check-*.sh) tests/service/verify-unit.sh
 
