@@ -19,7 +19,7 @@ set -eu
 BUILD=${1:-build}
 OUT="$BUILD/bench-daemon.jsonl"
 TMP=$(mktemp -d)
-trap 'kill $(jobs -p) 2>/dev/null; rm -rf "$TMP"' EXIT
+trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$TMP"' EXIT
 : >"$OUT"
 # ports that are free now (other benches and tests may run on this machine): UDP for the
 # subscriber, TCP for the demo's stream and viewer
