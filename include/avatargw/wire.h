@@ -191,6 +191,8 @@ bool wire_frame_stopped(const struct wire_frame *f);
 bool wire_pose_finite(const struct wire_pose *p);
 
 size_t wire_encode_frame(const struct wire_frame *f, uint8_t *buf);
+/* an encoded message's seq and describe_rev set anew (a DESCRIBE sent again: the rest is the same) */
+void wire_restamp(uint8_t *msg, uint32_t seq, uint32_t describe_rev);
 size_t wire_encode_describe(const struct wire_describe *d, uint8_t *buf);
 
 /* Reads the header; returns its type (> 0) or -WIRE_E*. */

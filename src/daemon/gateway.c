@@ -64,15 +64,15 @@ static void avatar_setup(struct gateway *g, struct gw_avatar *a, const struct cf
 	encode_describe(a->av, c->name, g->cfg.daemon.rate, d);
 	d->h.source_id = g->source_id;
 	d->h.avatar_id = c->id;
+	a->describe_len = (uint16_t)wire_encode_describe(d, describe);
 }
 
 /* the DESCRIBE payloads differ (the header's seq and rev do not count) */
 static bool describe_changed(const struct gw_avatar *a, const struct gw_avatar *b)
 {
-	uint8_t x[WIRE_MAX_MSG], y[WIRE_MAX_MSG];
-	size_t nx = wire_encode_describe(a->describe, x), ny = wire_encode_describe(b->describe, y);
-
-	return nx != ny || memcmp(x + WIRE_HEADER_LEN, y + WIRE_HEADER_LEN, nx - WIRE_HEADER_LEN);
+	return a->describe_len != b->describe_len ||
+	       memcmp(a->describe_msg + WIRE_HEADER_LEN, b->describe_msg + WIRE_HEADER_LEN,
+		      (size_t)a->describe_len - WIRE_HEADER_LEN);
 }
 
 /*
@@ -412,7 +412,6 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 			ctr_add(&a->st.held, 1);
 		}
 		memset(&wf->h, 0, sizeof(wf->h));
-		memset(&wf->in, 0, sizeof(wf->in));
 		encode_frame(&in, wf);
 		frame_inputs(pf, wf); /* buttons and analog values: an input block after the FRAME */
 		if (in.pose && !encode_frame_finite(wf)) {
@@ -436,9 +435,13 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		if (wf->h.flags & WIRE_F_STALE)
 			ctr_add(&a->st.stale_frames, 1);
 		if (now->mono_ns >= a->next_describe_ns) {
-			a->describe->h.seq = a->dseq++;
+			/* encoded at start-up: only its sequence number and revision change */
+			a->describe->h.seq = a->dseq;
 			a->describe->h.describe_rev = a->describe_rev;
-			g->msgs[n++] = out_msg_describe(a->describe, a->describe_msg, (uint16_t)i);
+			wire_restamp(a->describe_msg, a->dseq++, a->describe_rev);
+			g->msgs[n++] =
+				(struct out_msg){ a->describe_msg, a->describe_len, WIRE_DESCRIBE, (uint16_t)i, NULL,
+						  a->describe };
 			/*
 			 * Each avatar keeps its own phase within the period, i/n of it,
 			 * so that the DESCRIBEs of many avatars spread over the second

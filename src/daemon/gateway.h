@@ -51,8 +51,9 @@ struct gw_avatar {
 	uint32_t seq, dseq;
 	uint32_t describe_rev;
 	uint64_t next_describe_ns;
-	uint64_t pose_arrival_ns;	/* arrival of the newest sample of the frame just queued, 0: none */
-	uint8_t *describe_msg;		/* WIRE_MAX_MSG bytes in the gateway's describe arena */
+	uint64_t pose_arrival_ns; /* arrival of the newest sample of the frame just queued, 0: none */
+	uint8_t *describe_msg;	  /* its DESCRIBE, encoded at start-up (WIRE_MAX_MSG bytes in the describe arena) */
+	uint16_t describe_len;
 	struct wire_describe *describe; /* its values (made at start-up; seq and revision change) */
 	struct gw_avatar_stats st;
 };

@@ -4,6 +4,8 @@
  */
 #include "frames/frame.h"
 
+#include <string.h>
+
 #include "avatargw/wire.h"
 
 void frame_gather(struct frame_source *src, uint64_t now_mono, uint64_t stale_ns, struct pose_frame *out)
@@ -47,8 +49,12 @@ void frame_gather(struct frame_source *src, uint64_t now_mono, uint64_t stale_ns
 void frame_inputs(const struct pose_frame *pf, struct wire_frame *wf)
 {
 	_Static_assert(WIRE_ANALOG == SENSOR_ANALOG_MAX, "the input block carries every analog value of a slot");
-	if (!pf->inputs)
+	if (!pf->inputs) {
+		/* none: what the outputs read is zero (cleared once when the inputs went away) */
+		if (wf->in.present)
+			memset(&wf->in, 0, sizeof(wf->in));
 		return;
+	}
 	wf->h.flags |= WIRE_F_INPUTS;
 	wf->in.present = pf->inputs;
 	for (int i = 0; i < FRAME_SENSORS; i++) {

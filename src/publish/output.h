@@ -37,8 +37,15 @@ struct out_msg {
 };
 
 /* a message from its values: encodes them into buf (WIRE_MAX_MSG bytes) and points at both */
-struct out_msg out_msg_frame(const struct wire_frame *f, uint8_t *buf, uint16_t avatar);
-struct out_msg out_msg_describe(const struct wire_describe *d, uint8_t *buf, uint16_t avatar);
+static inline struct out_msg out_msg_frame(const struct wire_frame *f, uint8_t *buf, uint16_t avatar)
+{
+	return (struct out_msg){ buf, (uint16_t)wire_encode_frame(f, buf), WIRE_FRAME, avatar, f, NULL };
+}
+
+static inline struct out_msg out_msg_describe(const struct wire_describe *d, uint8_t *buf, uint16_t avatar)
+{
+	return (struct out_msg){ buf, (uint16_t)wire_encode_describe(d, buf), WIRE_DESCRIBE, avatar, NULL, d };
+}
 
 struct output_stats {
 	_Atomic uint64_t sent;	    /* messages handed to the kernel */

@@ -134,13 +134,3 @@ void output_unadopt(struct output *o, struct output *old)
 	o->priv = NULL;
 	o->adopted = false;
 }
-
-struct out_msg out_msg_frame(const struct wire_frame *f, uint8_t *buf, uint16_t avatar)
-{
-	return (struct out_msg){ buf, (uint16_t)wire_encode_frame(f, buf), WIRE_FRAME, avatar, f, NULL };
-}
-
-struct out_msg out_msg_describe(const struct wire_describe *d, uint8_t *buf, uint16_t avatar)
-{
-	return (struct out_msg){ buf, (uint16_t)wire_encode_describe(d, buf), WIRE_DESCRIBE, avatar, NULL, d };
-}

@@ -239,6 +239,18 @@ static void put_header(struct wbuf *w, const struct wire_header *h, uint8_t type
 	put_u16(w, 0);
 }
 
+/* the header's seq and describe_rev, as put_header lays them out: magic, version, type, lengths, flags, source */
+#define WIRE_SEQ_AT 16
+#define WIRE_REV_AT 20
+
+void wire_restamp(uint8_t *msg, uint32_t seq, uint32_t describe_rev)
+{
+	for (int b = 0; b < 4; b++) {
+		msg[WIRE_SEQ_AT + b] = (uint8_t)(seq >> (8 * b));
+		msg[WIRE_REV_AT + b] = (uint8_t)(describe_rev >> (8 * b));
+	}
+}
+
 static size_t finish(struct wbuf *w)
 {
 	uint16_t pl = (uint16_t)(w->n - WIRE_HEADER_LEN);
