@@ -71,8 +71,9 @@ static void usage(FILE *f)
 		   "       [--keyframes HZ [--interp linear|catmull-rom|natural]]\n"
 		   "       [--person SOURCE/PREFIX] INPUT.csv|INPUT.agwrec\n"
 		   "  --left-arm     the left arm's own lengths (the right's are --dims)\n"
-		   "  --model        paper, default, or names joined by '+': hand-elbow, reach-first,\n"
-		   "                 yaw-hands, reach-chest, neck, bow (the avatar's choices, docs/IK.md)\n"
+		   "  --model        paper, default, or names joined by '+' (or taken away by '-'): hand-elbow,\n"
+		   "                 reach-first, yaw-hands, reach-chest, neck, bow, keep-branch (the avatar's\n"
+		   "                 choices, docs/IK.md), e.g. default-bow\n"
 		   "  --chest-truth  the chest from the CSV's true chest columns (X,Y,Z: the chain origin in\n"
 		   "                 the chest frame); --chest-part: all of it, its heading only, or upright\n");
 }
@@ -429,38 +430,52 @@ static void solve_true_chest(const struct avatar *av, const struct ik_kin *kin, 
 	}
 }
 
-/* "paper", "default", or names joined by '+' */
+/* "paper", "default", or names joined by '+' (added) or '-' (taken away), e.g. default-bow */
 static int parse_model(const char *s)
 {
 	static const struct {
 		const char *name;
 		unsigned bit;
-	} names[] = { { "hand-elbow", AVATAR_HAND_ELBOW },
+	} names[] = { { "paper", AVATAR_PAPER },
+		      { "default", AVATAR_MODEL_DEFAULT },
+		      { "hand-elbow", AVATAR_HAND_ELBOW },
 		      { "reach-first", AVATAR_REACH_FIRST },
 		      { "yaw-hands", AVATAR_YAW_HANDS },
 		      { "reach-chest", AVATAR_REACH_CHEST },
 		      { "neck", AVATAR_NECK },
-		      { "bow", AVATAR_BOW } };
+		      { "bow", AVATAR_BOW },
+		      { "keep-branch", AVATAR_KEEP_BRANCH } };
 	unsigned m = 0;
+	bool add = true;
 
-	if (!strcmp(s, "paper"))
-		return AVATAR_PAPER;
-	if (!strcmp(s, "default"))
-		return AVATAR_MODEL_DEFAULT;
 	while (*s) {
-		size_t n = strcspn(s, "+");
+		size_t n = 0;
 		bool found = false;
 
+		/* a name runs to the next '+', or to a '-' that starts a known name */
+		for (;;) {
+			n += strcspn(s + n, "+-");
+			if (s[n] != '-')
+				break;
+			for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++)
+				if (!strncmp(s + n + 1, names[i].name, strlen(names[i].name)) &&
+				    strchr("+-", s[n + 1 + strlen(names[i].name)]))
+					found = true;
+			if (found)
+				break;
+			n++;
+		}
+		found = false;
 		for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++)
 			if (strlen(names[i].name) == n && !strncmp(s, names[i].name, n)) {
-				m |= names[i].bit;
+				m = add ? m | names[i].bit : m & ~names[i].bit;
 				found = true;
 			}
 		if (!found)
 			return -1;
 		s += n;
-		if (*s == '+')
-			s++;
+		if (*s)
+			add = *s++ == '+';
 	}
 	return (int)m;
 }
@@ -582,8 +597,9 @@ int main(int argc, char **argv)
 		case 'm':
 			model = parse_model(optarg);
 			if (model < 0) {
-				fprintf(stderr, "avatargw-eval: --model paper, default, or names joined by '+': "
-						"hand-elbow, reach-first, yaw-hands, reach-chest, neck, bow\n");
+				fprintf(stderr,
+					"avatargw-eval: --model paper, default, or names joined by '+': "
+					"hand-elbow, reach-first, yaw-hands, reach-chest, neck, bow, keep-branch\n");
 				return 2;
 			}
 			break;

@@ -44,6 +44,10 @@
  *    head sensor; the bow that lays the arms nearest along the trunk and
  *    reaches both hands is kept. The chest is then no longer upright; its
  *    yaw (the twist about world z) is still the published chest_yaw.
+ *  - AVATAR_KEEP_BRANCH: an elbow that moves 10 cm more than its hand in
+ *    one frame (another branch of the arm) is held on the branch it was on
+ *    if the hand stays within 1 mm of its sensor and 20 degrees of the
+ *    jump's orientation.
  */
 #ifndef IK_AVATAR_H
 #define IK_AVATAR_H
@@ -62,8 +66,10 @@ extern "C" {
 #define AVATAR_REACH_CHEST 0x8
 #define AVATAR_NECK 0x10
 #define AVATAR_BOW 0x20
+#define AVATAR_KEEP_BRANCH 0x40
 #define AVATAR_MODEL_DEFAULT                                                                                           \
-	(AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_NECK | AVATAR_BOW)
+	(AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_NECK | AVATAR_BOW |   \
+	 AVATAR_KEEP_BRANCH)
 
 struct avatar_body {
 	struct arm_dims dims;	 /* the right arm (and the left one unless avatar_set_left_arm() says otherwise) */

@@ -879,7 +879,8 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 			}
 		}
 	}
-	if (prev && t->valid && arm_jumped(&prev->seg[side], &out->seg[side])) {
+	if ((av->body.model & AVATAR_KEEP_BRANCH) && prev && t->valid &&
+	    arm_jumped(&prev->seg[side], &out->seg[side])) {
 		/*
 		 * The elbow left the last frame's far faster than the hand: the
 		 * search found another branch of the arm, and the next frame may
