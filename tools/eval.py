@@ -346,7 +346,7 @@ def plot_keyframes(kf, outdir):
 BITS = ["hand-elbow", "reach-first", "yaw-hands", "reach-chest", "neck", "bow", "keep-branch"]
 DEFAULT_BITS = ["hand-elbow", "reach-first", "yaw-hands", "reach-chest", "neck", "bow", "keep-branch"]
 # the avatar's joint limits (avatar_default_limits, degrees) and the benchmark's values it departs from
-AVATAR_LIMITS = [(-30, 30), (-120, 10), (-60, 120), (-90, 90), (-90, 60), (-90, 90), (-30, 30), (-80, 80)]
+AVATAR_LIMITS = [(-30, 30), (-170, 10), (-60, 120), (-90, 90), (-90, 60), (-90, 90), (-30, 30), (-80, 80)]
 LIMIT_RULES = {"j2-overhead": {1: (-90, None)}, "j2-adduction": {1: (None, 30)},
                "wrist-thumb": {6: (-70, 70), 7: (-30, 30)}}
 RULES = [("hand-elbow", "the elbow where the hand's orientation is plausible (hand-elbow cost, gravity pull)"),

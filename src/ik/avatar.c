@@ -9,7 +9,7 @@
 void avatar_default_limits(struct arm_limits *out)
 {
 	arm_default_limits(out);
-	out->lo[1] = SC_C(-2.0943951023931957); /* -120 degrees */
+	out->lo[1] = SC_C(-2.9670597283903604); /* -170 degrees */
 	/* adduction to 10 degrees: the hanging upper arm meets the trunk (across the body is J3's and J1's) */
 	out->hi[1] = SC_C(0.17453292519943295);
 	/* J7 turns the hand about its x axis, across the palm: deviation, -30..30 degrees */
@@ -927,7 +927,7 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
  * Before the solve, so a hand that becomes reachable costs one ordinary
  * solve. Rewrites the targets; returns whether the chest moved.
  */
-#define REACH_SHIFT SC_C(0.08)
+#define REACH_SHIFT SC_C(0.15)
 
 /*
  * goal_init(q1 = 0)'s in_reach, for the common case, from the hand's y axis
@@ -986,10 +986,6 @@ static bool reach_chest(const struct avatar *av, const struct dq *const hand[2],
 			continue;
 		excess = v3_norm(&(struct vec3){ g.w.x - g.s.x, g.w.y - g.s.y, g.w.z - g.s.z }) -
 			 (a->dims.arm + a->dims.forearm) + SC_C(0.001);
-		if ((goal_init(a, &t[side], a->lim.lo[0], &g) && g.in_reach) ||
-		    (goal_init(a, &t[side], a->lim.hi[0], &g) && g.in_reach))
-			continue;
-		goal_init(a, &t[side], SC_C(0), &g);
 		/* the right arm's frame; the left arm's mirrored back */
 		d.x += sc_mul(excess, side == ARM_LEFT ? -g.ax.x : g.ax.x);
 		d.y += sc_mul(excess, g.ax.y);
@@ -1031,6 +1027,24 @@ static const sc_t bow_s[BOW_TRIES] = { SC_C(0.13052619222005157), SC_C(0.2588190
 static bool hand_off(const struct ik_target t[2], const struct avatar_pose *p, int side)
 {
 	return t[side].valid && p->res[side].err.pos > BOW_MISS;
+}
+
+/*
+ * A bow explains hands off their sensors only when they are low: below the
+ * shoulders of the upright chest. A raised hand out of reach (a wave over
+ * the head against a joint limit) is no bow.
+ */
+static bool bow_wanted(const struct ik_target t[2], const struct avatar_pose *p)
+{
+	int side, off = 0;
+
+	for (side = 0; side < 2; side++)
+		if (hand_off(t, p, side)) {
+			if (!(t[side].p.z < 0))
+				return false;
+			off++;
+		}
+	return off > 0;
 }
 
 /*
@@ -1202,7 +1216,7 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 	}
 	for (side = 0; side < 2; side++)
 		flags |= avatar_arm_solve(av, side, kin, o1, &t[side], prev, out);
-	if ((av->body.model & AVATAR_BOW) && (hand_off(t, out, 0) || hand_off(t, out, 1)))
+	if ((av->body.model & AVATAR_BOW) && bow_wanted(t, out))
 		flags = bow(av, kin, o, head, hand, prev, out, flags);
 	return flags;
 }
