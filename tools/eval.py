@@ -343,8 +343,8 @@ def plot_keyframes(kf, outdir):
 # ---- the avatar's rules and the folds ------------------------------------------------------------------------
 
 # model bits as avatargw-eval --model names them (include/ik/avatar.h); DEFAULT_BITS is AVATAR_MODEL_DEFAULT
-BITS = ["hand-elbow", "reach-first", "yaw-hands", "reach-chest", "neck", "bow", "keep-branch"]
-DEFAULT_BITS = ["hand-elbow", "reach-first", "yaw-hands", "reach-chest", "neck", "bow", "keep-branch"]
+BITS = ["hand-elbow", "reach-first", "yaw-hands", "reach-chest", "neck", "bow", "keep-branch", "reach-roll"]
+DEFAULT_BITS = ["hand-elbow", "reach-first", "yaw-hands", "reach-chest", "neck", "bow", "keep-branch", "reach-roll"]
 # the avatar's joint limits (avatar_default_limits, degrees) and the benchmark's values it departs from
 AVATAR_LIMITS = [(-30, 30), (-170, 10), (-60, 120), (-90, 90), (-90, 60), (-90, 90), (-30, 30), (-80, 80)]
 LIMIT_RULES = {"j2-overhead": {1: (-90, None)}, "j2-adduction": {1: (None, 30)},
@@ -356,6 +356,7 @@ RULES = [("hand-elbow", "the elbow where the hand's orientation is plausible (ha
          ("neck", "a neck that bends with half the head's tilt"),
          ("bow", "a bow at the waist when a hand is off its sensor"),
          ("keep-branch", "an arm kept on its branch (no elbow jump)"),
+         ("reach-roll", "with reach-chest, the chest rolled when both hands are beyond reach"),
          ("j2-overhead", "J2 to -120° (arm raised sideways overhead; benchmark -90°)"),
          ("j2-adduction", "J2 adduction to 10° (benchmark 30°)"),
          ("wrist-thumb", "J7 ±30°, J8 ±80° (deviation narrow, flexion wide; benchmark J7 ±70°, J8 ±30°)")]

@@ -44,6 +44,10 @@
  *    head sensor; the bow that lays the arms nearest along the trunk and
  *    reaches both hands is kept. The chest is then no longer upright; its
  *    yaw (the twist about world z) is still the published chest_yaw.
+ *  - AVATAR_REACH_ROLL: with AVATAR_REACH_CHEST, when both hands are
+ *    beyond reach, the chest also rolls about its forward axis (a lateral
+ *    lean: one shoulder up, the other down), by the least move that gives
+ *    both arms what they miss, at most 20 degrees.
  *  - AVATAR_KEEP_BRANCH: an elbow that moves 10 cm more than its hand in
  *    one frame (another branch of the arm) is held on the branch it was on
  *    if the hand stays within 1 mm of its sensor and 20 degrees of the
@@ -67,6 +71,7 @@ extern "C" {
 #define AVATAR_NECK 0x10
 #define AVATAR_BOW 0x20
 #define AVATAR_KEEP_BRANCH 0x40
+#define AVATAR_REACH_ROLL 0x80
 #define AVATAR_MODEL_DEFAULT                                                                                           \
 	(AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_NECK | AVATAR_BOW |   \
 	 AVATAR_KEEP_BRANCH)

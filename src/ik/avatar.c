@@ -950,8 +950,13 @@ static bool wrist_in_reach(const struct arm *a, const struct ik_target *t)
 	return v3_norm(&d) < reach - SC_C(0.001);
 }
 
-/* the chest moved by d (chest frame, capped at REACH_SHIFT), both arms' targets rewritten */
-static void chest_shift(struct vec3 d, const struct dq *const hand[2], struct dq *chest, struct ik_target t[2])
+/*
+ * The chest moved by d (chest frame, capped at REACH_SHIFT) and rolled about
+ * its forward axis by the angle whose sine is sr (the right shoulder down
+ * for sr > 0), both arms' targets rewritten.
+ */
+static void chest_shift(struct vec3 d, sc_t sr, const struct dq *const hand[2], struct dq *chest,
+			struct ik_target t[2])
 {
 	struct vec3 dw, c;
 	struct quat r = chest->r;
@@ -966,34 +971,79 @@ static void chest_shift(struct vec3 d, const struct dq *const hand[2], struct dq
 	quat_rotate(&r, &d, &dw);
 	dq_translation(chest, &c);
 	c = (struct vec3){ c.x + dw.x, c.y + dw.y, c.z + dw.z };
+	if (sr != 0) {
+		/* the half angle: cos = sqrt((1 + cos) / 2), sin = sin / (2 cos(half)) */
+		sc_t ch = sc_sqrt(sc_mul(SC_C(0.5), SC_C(1) + sc_sqrt(SC_C(1) - sc_mul(sr, sr))));
+		struct quat ry = { ch, 0, sc_div(sr, 2 * ch), 0 }, rr;
+
+		quat_mul(&r, &ry, &rr);
+		r = rr;
+	}
 	dq_from_rt(&r, &c, chest);
 	for (side = 0; side < 2; side++)
 		avatar_arm_target(chest, hand[side], &t[side]);
 }
 
+/*
+ * The shoulders' moves that give both arms what they miss, when both hands
+ * are beyond reach: the least move (d, u) of the chest, d its shift and u
+ * the rise of the right shoulder (and fall of the left) by a roll, such
+ * that each shoulder moves toward its hand by that arm's excess:
+ * (d + u ez) . ar = er, (d - u ez) . al = el. The least-norm solution of
+ * these two equations in four unknowns. A lateral lean of the trunk (an arm
+ * raised overhead, the other hanging: one shoulder up, one down), which no
+ * shift of a rigid chest gives. false if the two are nearly one equation.
+ */
+#define ROLL_MAX SC_C(0.3420201433256687) /* sine of 20 degrees */
+
+static bool reach_roll(const struct vec3 *ar, sc_t er, const struct vec3 *al, sc_t el, struct vec3 *d, sc_t *u)
+{
+	sc_t grr = SC_C(1) + sc_mul(ar->z, ar->z), gll = SC_C(1) + sc_mul(al->z, al->z);
+	sc_t grl = v3_dot(ar, al) - sc_mul(ar->z, al->z);
+	sc_t det = sc_mul(grr, gll) - sc_mul(grl, grl), lr, ll;
+
+	if (!(det > SC_C(0.05)))
+		return false;
+	lr = sc_div(sc_mul(gll, er) - sc_mul(grl, el), det);
+	ll = sc_div(sc_mul(grr, el) - sc_mul(grl, er), det);
+	*d = (struct vec3){ sc_mul(lr, ar->x) + sc_mul(ll, al->x), sc_mul(lr, ar->y) + sc_mul(ll, al->y),
+			    sc_mul(lr, ar->z) + sc_mul(ll, al->z) };
+	*u = sc_mul(lr, ar->z) - sc_mul(ll, al->z);
+	return true;
+}
+
 static bool reach_chest(const struct avatar *av, const struct dq *const hand[2], struct dq *chest,
 			struct ik_target t[2])
 {
-	struct vec3 d = { 0, 0, 0 };
-	int side;
+	struct vec3 d = { 0, 0, 0 }, ax[2];
+	sc_t excess[2] = { 0, 0 }, u = 0, sr = 0;
+	int side, n = 0;
 
 	for (side = 0; side < 2; side++) {
 		const struct arm *a = &av->arm[side];
 		struct arm_goal g;
-		sc_t excess;
 
 		if (!t[side].valid || wrist_in_reach(a, &t[side]) || !goal_init(a, &t[side], SC_C(0), &g) || g.in_reach)
 			continue;
-		excess = v3_norm(&(struct vec3){ g.w.x - g.s.x, g.w.y - g.s.y, g.w.z - g.s.z }) -
-			 (a->dims.arm + a->dims.forearm) + SC_C(0.001);
+		excess[side] = v3_norm(&(struct vec3){ g.w.x - g.s.x, g.w.y - g.s.y, g.w.z - g.s.z }) -
+			       (a->dims.arm + a->dims.forearm) + SC_C(0.001);
 		/* the right arm's frame; the left arm's mirrored back */
-		d.x += sc_mul(excess, side == ARM_LEFT ? -g.ax.x : g.ax.x);
-		d.y += sc_mul(excess, g.ax.y);
-		d.z += sc_mul(excess, g.ax.z);
+		ax[side] = (struct vec3){ side == ARM_LEFT ? -g.ax.x : g.ax.x, g.ax.y, g.ax.z };
+		d.x += sc_mul(excess[side], ax[side].x);
+		d.y += sc_mul(excess[side], ax[side].y);
+		d.z += sc_mul(excess[side], ax[side].z);
+		n++;
 	}
-	if (!(v3_norm(&d) > 0))
+	if (!(v3_norm(&d) > 0) && n < 2)
 		return false;
-	chest_shift(d, hand, chest, t);
+	if ((av->body.model & AVATAR_REACH_ROLL) && n == 2 &&
+	    reach_roll(&ax[ARM_RIGHT], excess[ARM_RIGHT], &ax[ARM_LEFT], excess[ARM_LEFT], &d, &u)) {
+		sc_t sh = av->arm[ARM_RIGHT].dims.shoulder;
+
+		/* the right shoulder at (S, 0, 0) rolled by a about y goes to (S cos a, 0, -S sin a): u = -S sin a */
+		sr = sc_clamp(-sc_div(u, sh), -ROLL_MAX, ROLL_MAX);
+	}
+	chest_shift(d, sr, hand, chest, t);
 	return true;
 }
 
