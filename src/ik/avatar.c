@@ -927,7 +927,7 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
  * Before the solve, so a hand that becomes reachable costs one ordinary
  * solve. Rewrites the targets; returns whether the chest moved.
  */
-#define REACH_SHIFT SC_C(0.15)
+#define REACH_SHIFT SC_C(0.08)
 
 /*
  * goal_init(q1 = 0)'s in_reach, for the common case, from the hand's y axis
