@@ -357,7 +357,7 @@ RULES = [("hand-elbow", "the elbow where the hand's orientation is plausible (ha
          ("bow", "a bow at the waist when a hand is off its sensor"),
          ("keep-branch", "an arm kept on its branch (no elbow jump)"),
          ("reach-roll", "with reach-chest, the chest rolled when both hands are beyond reach"),
-         ("j2-overhead", "J2 to -120° (arm raised sideways overhead; benchmark -90°)"),
+         ("j2-overhead", "J2 to -170° (arm raised sideways overhead; benchmark -90°)"),
          ("j2-adduction", "J2 adduction to 10° (benchmark 30°)"),
          ("wrist-thumb", "J7 ±30°, J8 ±80° (deviation narrow, flexion wide; benchmark J7 ±70°, J8 ±30°)")]
 SHIPPED = frozenset(DEFAULT_BITS) | frozenset(LIMIT_RULES)
@@ -472,6 +472,12 @@ def median(xs):
     return pct(xs, 0.5)
 
 
+def off_reachable(r, true_chest):
+    """arm-frames whose hand is off its sensor though the same arm reaches it from the true chest"""
+    return sum(1 for k in range(2) for x, y in zip(r["res"][k], true_chest["res"][k])
+               if x > GOAL_RESID_MM and y <= GOAL_RESID_MM)
+
+
 # ---- one clip ----------------------------------------------------------------------------------------------------
 
 def run_clip(job):
@@ -512,6 +518,7 @@ def run_clip(job):
         best_all += best
     e["elbow"] = pooled(sc)
     e["models"]["default"] = {"elbow": summary(e["elbow"]), "yaw": summary(sc["yaw_err"])}
+    e["true_res"] = s3["res"]
     e["true_chest"] = {"elbow": summary(s3["elbow"]),
                        "arms": {side: summary(s3["elbow"][k::2]) for k, (_, side) in enumerate(SIDES)}}
     e["best_swivel"] = summary(best_all)
@@ -522,12 +529,12 @@ def run_clip(job):
     for cfg in configs:
         key = config_key(cfg)
         if cfg == SHIPPED:
-            r = {"elbow": e["elbow"]}
+            r = {"elbow": e["elbow"], "res": [sc["arms"][side]["resid_mm"] for _, side in SIDES]}
         elif cfg == PAPER:
             r = pap
         else:
             r = light_run(tool, clip_csv, dims, ho, left + config_args(cfg, args.limdir), truth)
-        e["configs"][key] = {"median": median(r["elbow"]), "elbow": r["elbow"] if args.keep_frames else None}
+        e["configs"][key] = {"median": median(r["elbow"]), "elbow": r["elbow"], "off": off_reachable(r, s3)}
     # our calibration and the paper's heuristic, several noisy calibrations pooled
     if args.trials > 0:
         for method in ("poses", "paper-wrist"):
@@ -582,44 +589,68 @@ def toggled(cfg, rule):
 
 
 def rule_effect(results, names, base, rule):
-    """per clip: the median elbow with the rule minus without it (cm; negative: the rule helps)"""
+    """per clip: (the median elbow with the rule minus without it, cm; the same for the hands off their sensors
+    where the true chest reaches them, arm-frames); negative: the rule helps"""
     on = base if rule in base else toggled(base, rule)
     off = toggled(on, rule)
-    return {n: results[n]["configs"][config_key(on)]["median"] - results[n]["configs"][config_key(off)]["median"]
-            for n in names}
+    out = {}
+    for n in names:
+        a, b = results[n]["configs"][config_key(on)], results[n]["configs"][config_key(off)]
+        out[n] = (a["median"] - b["median"], a["off"] - b["off"])
+    return out
 
 
-def rule_kept(deltas):
-    """the rule's test: it helps most of these clips and hurts none by more than HURT_CM"""
-    d = list(deltas)
-    return bool(d) and sum(1 for x in d if x < 0) > len(d) / 2 and max(d) <= HURT_CM
+SAME_CM = 0.05  # a clip whose median moves less than this is unchanged (then its hands decide)
+
+
+def verdict(eff):
+    """+1 helped, -1 hurt, 0 unchanged: the elbow's median first, the hands on their sensors when it is unchanged"""
+    d, off = eff
+    if abs(d) >= SAME_CM:
+        return 1 if d < 0 else -1
+    return 1 if off < 0 else (-1 if off > 0 else 0)
+
+
+def rule_helps(effs):
+    """the rule's test on these clips: more of them helped than hurt, and none hurt by more than HURT_CM"""
+    v = [verdict(e) for e in effs]
+    return sum(1 for x in v if x > 0) > sum(1 for x in v if x < 0) and max(e[0] for e in effs) <= HURT_CM
+
+
+def chooses(effs):
+    """the choice made on some folds: more clips helped than hurt"""
+    v = [verdict(e) for e in effs]
+    return sum(1 for x in v if x > 0) > sum(1 for x in v if x < 0)
+
+
+def decide(results, names, eff, folds):
+    """the whole procedure on some clips: a rule is on if most folds choose it on the others and, each fold held
+    out, it helps most clips and hurts none by more than HURT_CM"""
+    chosen = [f for f in folds if chooses([eff[n] for n in names if results[n]["fold"] != f])]
+    return len(chosen) > len(folds) / 2 and rule_helps([eff[n] for n in names]), chosen
 
 
 def cross_validate(results, names, base):
-    """for each rule and each fold: the choice made on the other folds, and the effect on the fold"""
+    """for each rule: the folds that choose it, its held-out effect, the verdict; and the model each fold would
+    have shipped, the whole procedure run without it"""
     folds = sorted(set(results[n]["fold"] for n in names), key=lambda f: [x for x, _ in FOLDS + [("other", ())]]
                    .index(f))
-    out = {"folds": folds, "rules": {}}
+    out = {"folds": folds, "rules": {}, "fold_model": {f: set() for f in folds}}
     for rule, _ in RULES:
         eff = rule_effect(results, names, base, rule)
-        per = {}
+        keep, chosen = decide(results, names, eff, folds)
+        v = [verdict(e) for e in eff.values()]
+        d = [e[0] for e in eff.values()]
+        out["rules"][rule] = {"effect": eff, "chosen": chosen, "keep": keep,
+                              "helped": sum(1 for x in v if x > 0), "hurt": sum(1 for x in v if x < 0),
+                              "hurt_1cm": sum(1 for x in d if x > HURT_CM), "worst": max(d),
+                              "mean": sum(d) / len(d), "off": sum(e[1] for e in eff.values())}
         for f in folds:
-            train = [eff[n] for n in names if results[n]["fold"] != f]
-            held = [eff[n] for n in names if results[n]["fold"] == f]
-            per[f] = {"chosen": rule_kept(train), "helped": sum(1 for x in held if x < 0),
-                      "hurt": sum(1 for x in held if x > 0), "n": len(held), "worst": max(held),
-                      "mean": sum(held) / len(held)}
-        allv = list(eff.values())
-        chosen = sum(1 for f in folds if per[f]["chosen"])
-        out["rules"][rule] = {"effect": eff, "folds": per, "chosen_in": chosen,
-                              "keep": chosen > len(folds) / 2 and rule_kept(allv),
-                              "helped": sum(1 for x in allv if x < 0), "hurt": sum(1 for x in allv if x > 0),
-                              "hurt_1cm": sum(1 for x in allv if x > HURT_CM), "worst": max(allv),
-                              "mean": sum(allv) / len(allv)}
-    # the model each fold would have shipped, chosen without it
-    out["fold_model"] = {}
-    for f in folds:
-        out["fold_model"][f] = frozenset(r for r, _ in RULES if out["rules"][r]["folds"][f]["chosen"])
+            rest = [n for n in names if results[n]["fold"] != f]
+            if decide(results, rest, eff, [g for g in folds if g != f])[0]:
+                out["fold_model"][f].add(rule)
+    out["fold_model"] = {f: frozenset(m) for f, m in out["fold_model"].items()}
+    out["verdict"] = frozenset(r for r, _ in RULES if out["rules"][r]["keep"])
     return out
 
 
@@ -664,7 +695,6 @@ def main():
         os.makedirs(args.plots, exist_ok=True)
     tmp = tempfile.TemporaryDirectory()
     args.limdir = tmp.name
-    args.keep_frames = True
     configs = sorted(rule_configs(SHIPPED) if not args.no_rules else {SHIPPED, PAPER}, key=config_key)
     jobs = [(args, n, configs) for n in names]
     with multiprocessing.Pool(max(1, args.jobs)) as pool:
@@ -693,7 +723,7 @@ def main():
                 need.setdefault(cfg, []).append(n)
         extra = []
         for cfg, ns in need.items():
-            extra += [(args, n, cfg) for n in ns]
+            extra += [(args, n, cfg, results[n]["true_res"]) for n in ns]
         if extra:
             with multiprocessing.Pool(max(1, args.jobs)) as pool:
                 for n, key, r in pool.map(run_config, extra, chunksize=1):
@@ -705,30 +735,32 @@ def main():
         write_report(args, results, kf_sum, names, cv)
         print("eval.py: wrote " + args.out, file=sys.stderr)
     if args.json:
-        slim = {n: {k: v for k, v in e.items() if k not in ("elbow", "yaw_err", "paper_elbow", "held_out")}
+        slim = {n: {k: v for k, v in e.items() if k not in ("elbow", "yaw_err", "paper_elbow", "held_out", "true_res")}
                 for n, e in results.items()}
         for e in slim.values():
-            e["configs"] = {k: {"median": v["median"]} for k, v in e["configs"].items()}
+            e["configs"] = {k: {"median": v["median"], "off": v["off"]} for k, v in e["configs"].items()}
             for m in e["calib"].values():
                 m.pop("elbow", None)
         with open(args.json, "w") as f:
             json.dump({"clips": slim, "keyframes": {"%s@%d" % k: v for k, v in kf_sum.items()},
                        "summary": summ,
                        "rules": None if cv is None else {
-                           r: {k: v for k, v in d.items() if k != "effect"} for r, d in cv["rules"].items()}},
+                           r: {k: v for k, v in d.items() if k != "effect"} for r, d in cv["rules"].items()},
+                       "verdict": None if cv is None else sorted(cv["verdict"])},
                       f, indent=1)
     tmp.cleanup()
 
 
 def run_config(job):
-    args, name, cfg = job
+    args, name, cfg, true_res = job
     tool = os.path.join(args.build, "avatargw-eval")
     clip_csv = os.path.join(args.mocap, name + ".csv")
     meta = json.load(open(os.path.join(args.mocap, name + ".json")))
     truth = truth_cols(read_csv(clip_csv))
     dims, ho, left = body_args(meta)
     r = light_run(tool, clip_csv, dims, ho, left + config_args(cfg, args.limdir), truth)
-    return name, config_key(cfg), {"median": median(r["elbow"]), "elbow": r["elbow"]}
+    return name, config_key(cfg), {"median": median(r["elbow"]), "elbow": r["elbow"],
+                                   "off": off_reachable(r, {"res": true_res})}
 
 
 # ---- the report ------------------------------------------------------------------------------------------------
@@ -815,13 +847,15 @@ def write_report(args, results, kf, names, cv):
     if cv:
         w("## The rules, decided by cross-validation")
         w("")
-        w("The clips are grouped into %d folds by what the person does: every style and take of one motion is in "
-          "one fold, so a rule is never judged on a variant of a motion it was chosen on. For each fold, a rule is "
-          "chosen on the other folds: on if, there, it lowers the median elbow error of most clips and raises none by "
-          "more than %g cm (each clip's median with the rule against the shipped avatar with the rule toggled). It "
-          "ships on only if most folds chose it and, held out, it still helps most clips and hurts none by more than "
-          "%g cm; otherwise it is an option (`avatargw-eval --model`, `avatar_body.model`, or `--limits`)." % (
-              len(cv["folds"]), HURT_CM, HURT_CM))
+        w("The clips are grouped into %d folds by what the person does (every style and take of one motion in one "
+          "fold), so a rule is never judged on a variant of a motion it was chosen on. Each rule is toggled alone on "
+          "the shipped avatar; a clip is *helped* if its median elbow error falls by %g cm or more, *hurt* if it "
+          "rises as much, and when it moves less, by whether fewer or more of its arm-frames leave a reachable hand "
+          "off its sensor. A fold *chooses* a rule if, on the other folds, more clips are helped than hurt. "
+          "A rule is on if most folds choose it and, over the clips, each held out when "
+          "its fold was left out, more are helped than hurt and none is hurt by more than %g cm; otherwise it is "
+          "an option (`avatar_body.model`, `avatargw-eval --model`, or joint limits: `--limits`, the `j1`..`j8` "
+          "keys)." % (len(cv["folds"]), SAME_CM, HURT_CM))
         w("")
         w("| fold | clips | what |")
         w("|---|---|---|")
@@ -830,23 +864,24 @@ def write_report(args, results, kf, names, cv):
             keys = dict(FOLDS).get(f, ())
             w("| %s | %d | %s |" % (f, len(ns), ", ".join("`%s`" % k.strip("_") for k in keys)))
         w("")
-        w("Held out: each clip's change of median elbow error (cm) from the rule, measured in the fold left out when "
-          "the rule was chosen. Negative helps.")
+        w("Each clip's change (cm of median elbow error; negative helps) and of reachable hands off (arm-frames) "
+          "from the rule.")
         w("")
-        w("| rule | chosen on by folds | held out: clips helped / hurt / hurt > %g cm | mean change | worst | "
-          "shipped |" % HURT_CM)
-        w("|---|---|---|---|---|---|")
+        w("| rule | folds that choose it | clips helped / hurt / hurt > %g cm | mean change | worst | hands off "
+          "| verdict | shipped |" % HURT_CM)
+        w("|---|---|---|---|---|---|---|---|")
         for rule, what in RULES:
             d = cv["rules"][rule]
-            fl = [f for f in cv["folds"] if d["folds"][f]["chosen"]]
-            w("| `%s`: %s | %d of %d%s | %d / %d / %d | %+.2f | %+.1f | %s |" % (
+            fl = d["chosen"]
+            w("| `%s`: %s | %d of %d%s | %d / %d / %d | %+.2f | %+.1f | %+d | %s | %s |" % (
                 rule, what, len(fl), len(cv["folds"]),
                 "" if len(fl) in (0, len(cv["folds"])) else " (%s)" % ", ".join(fl),
-                d["helped"], d["hurt"], d["hurt_1cm"], d["mean"], d["worst"],
-                "on" if rule in SHIPPED else "off"))
+                d["helped"], d["hurt"], d["hurt_1cm"], d["mean"], d["worst"], d["off"],
+                "on" if d["keep"] else "off", "on" if rule in SHIPPED else "off"))
         w("")
-        w("Per fold: the shipped avatar, the paper's, and the avatar each fold would have shipped had the rules been "
-          "chosen without it (elbow median / p95, cm).")
+        w("Per fold (elbow median / p95, cm): the shipped avatar, the paper's, and the avatar the whole procedure "
+          "gives when the fold is left out of it (its rules decided on the other folds only): what the fold sees "
+          "of rules it had no say in.")
         w("")
         w("| fold | shipped | paper | chosen without the fold | rules off in that choice | true chest |")
         w("|---|---|---|---|---|---|")
