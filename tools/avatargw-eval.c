@@ -598,9 +598,9 @@ int main(int argc, char **argv)
 		case 'm':
 			model = parse_model(optarg);
 			if (model < 0) {
-				fprintf(stderr,
-					"avatargw-eval: --model paper, default, or names joined by '+': "
-					"hand-elbow, reach-first, yaw-hands, reach-chest, neck, bow, keep-branch, reach-roll\n");
+				fprintf(stderr, "avatargw-eval: --model paper, default, or names joined by '+': "
+						"hand-elbow, reach-first, yaw-hands, reach-chest, neck, bow, "
+						"keep-branch, reach-roll\n");
 				return 2;
 			}
 			break;

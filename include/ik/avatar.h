@@ -74,7 +74,7 @@ extern "C" {
 #define AVATAR_REACH_ROLL 0x80
 #define AVATAR_MODEL_DEFAULT                                                                                           \
 	(AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_NECK | AVATAR_BOW |   \
-	 AVATAR_KEEP_BRANCH)
+	 AVATAR_KEEP_BRANCH | AVATAR_REACH_ROLL)
 
 struct avatar_body {
 	struct arm_dims dims;	 /* the right arm (and the left one unless avatar_set_left_arm() says otherwise) */

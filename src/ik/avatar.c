@@ -955,8 +955,7 @@ static bool wrist_in_reach(const struct arm *a, const struct ik_target *t)
  * its forward axis by the angle whose sine is sr (the right shoulder down
  * for sr > 0), both arms' targets rewritten.
  */
-static void chest_shift(struct vec3 d, sc_t sr, const struct dq *const hand[2], struct dq *chest,
-			struct ik_target t[2])
+static void chest_shift(struct vec3 d, sc_t sr, const struct dq *const hand[2], struct dq *chest, struct ik_target t[2])
 {
 	struct vec3 dw, c;
 	struct quat r = chest->r;
