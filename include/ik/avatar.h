@@ -73,7 +73,7 @@ extern "C" {
 #define AVATAR_KEEP_BRANCH 0x40
 #define AVATAR_REACH_ROLL 0x80
 #define AVATAR_MODEL_DEFAULT                                                                                           \
-	(AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_NECK | AVATAR_BOW |   \
+	(AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_BOW |                 \
 	 AVATAR_KEEP_BRANCH | AVATAR_REACH_ROLL)
 
 struct avatar_body {
