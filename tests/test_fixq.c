@@ -849,6 +849,89 @@ static void test_avatar_straight_arms(void **state)
 	print_message("straight arms: hands Q5.26 against double %.3g um at most\n", worst * 1e6);
 }
 
+/* a pose x y z qw qx qy qz given in a frame c (x y z qw qx qy qz), in the world */
+static void pose_to_world(const double c[7], const double p[7], double out[7])
+{
+	const double aw = c[3], ax = c[4], ay = c[5], az = c[6], bw = p[3], bx = p[4], by = p[5], bz = p[6];
+
+	chest_to_world(c, p, out);
+	out[3] = aw * bw - ax * bx - ay * by - az * bz;
+	out[4] = aw * bx + ax * bw + ay * bz - az * by;
+	out[5] = aw * by - ax * bz + ay * bw + az * bx;
+	out[6] = aw * bz + ax * by - ay * bx + az * bw;
+}
+
+/*
+ * AVATAR_REACH_ROLL in Q5.26: a trunk leaning sideways from -15 to 15
+ * degrees and back, one arm raised over the head, the other hanging, both
+ * nearly straight (test_avatar's test_reach_roll): each frame needs the
+ * chest rolled to reach both hands. No result may saturate; the hands are
+ * on their sensors in both builds and the Q5.26 avatar lies on the double
+ * one.
+ */
+static void test_avatar_roll(void **state)
+{
+	enum { N = 40 };
+	static const struct ikx_avatar_setup body = { .dims = { 0.18, 0.30, 0.26, 0.08 },
+						      .head_offset = { 0, 0, 0.25 } };
+	const double head[3] = { 0.1, 0.3, 1.6 };
+	const double raised[ARM_DOF] = { 0, -2.9, 0, 0, -1.45, 0, 0, 0 },
+		     hanging[ARM_DOF] = { 0, 0, 0, 0, -1.45, 0, 0, 0 };
+	static struct ikx_avatar_frame in[N];
+	static struct ikx_avatar_out od[N], oq[N];
+	double tol_d, tol_q, rot_d, rot_q, worst = 0, roll_max = 0;
+
+	(void)state;
+	for (int i = 0; i < N; i++) {
+		/* 15 degrees to one side, through upright (no roll needed there), to the other and back */
+		const double lean = 15 * sin(2 * M_PI * i / N) * DEG;
+		const double chest[7] = { head[0], head[1], head[2] - 0.25, cos(lean / 2), 0, sin(lean / 2), 0 };
+
+		memcpy(in[i].head, head, sizeof(head));
+		in[i].head[3] = 1;
+		for (int side = ARM_RIGHT; side <= ARM_LEFT; side++) {
+			const struct ikx_setup arm = { .dims = { 0.18, 0.30, 0.26, 0.08 }, .left = side == ARM_LEFT };
+			double local[7];
+
+			ikx_fk_d(&arm, (side == ARM_RIGHT) == (lean < 0) ? raised : hanging, local);
+			pose_to_world(chest, local, side == ARM_RIGHT ? in[i].rhand : in[i].lhand);
+		}
+	}
+	ikx_tolerances_d(&tol_d, &rot_d);
+	ikx_tolerances_qs(&tol_q, &rot_q);
+	ikx_avatar_run_d(&body, in, N, od);
+	ikx_avatar_run_qs(&body, in, N, oq);
+	for (int i = 0; i < N; i++) {
+		set_ctx("leaning, frame %d", i);
+		if (oq[i].saturations)
+			fail_msg("%s: %lu results saturated in Q5.26", ctx, oq[i].saturations);
+		assert_near(dist3(oq[i].chest, od[i].chest), 0, AV_POS);
+		assert_near(rot_between(oq[i].chest + 3, od[i].chest + 3), 0, AV_ROT);
+		/* the chest's roll: its x axis's rise, 2 (x z - w y) */
+		roll_max =
+			fmax(roll_max, fabs(2 * (od[i].chest[4] * od[i].chest[6] - od[i].chest[3] * od[i].chest[5])));
+		for (int side = ARM_RIGHT; side <= ARM_LEFT; side++) {
+			const double *sensor = side == ARM_RIGHT ? in[i].rhand : in[i].lhand;
+			double hd[3], hq[3], ed[3], eq[3];
+
+			chest_to_world(od[i].chest, od[i].hand[side], hd);
+			chest_to_world(oq[i].chest, oq[i].hand[side], hq);
+			chest_to_world(od[i].chest, od[i].elbow[side], ed);
+			chest_to_world(oq[i].chest, oq[i].elbow[side], eq);
+			assert_near(dist3(hd, sensor), 0, tol_d + AV_HAND_SLACK);
+			assert_near(dist3(hq, sensor), 0, tol_q + AV_HAND_SLACK);
+			assert_near(dist3(hq, hd), 0, AV_POS);
+			assert_near(dist3(eq, ed), 0, AV_POS);
+			worst = fmax(worst, fmax(dist3(hq, hd), dist3(eq, ed)));
+		}
+	}
+	/* the roll did happen: sin 10 degrees at least */
+	assert_true(roll_max > 0.17);
+	print_message(
+		"leaning: chest rolled up to %.1f degrees; hands and elbows Q5.26 against double %.3g um at most\n",
+		asin(roll_max) * RAD2DEG, worst * 1e6);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -859,7 +942,7 @@ int main(void)
 		cmocka_unit_test(test_fk_jacobian),	     cmocka_unit_test(test_lsq),
 		cmocka_unit_test(test_random_reset),	     cmocka_unit_test(test_trajectory_warm),
 		cmocka_unit_test(test_matrix_and_left),	     cmocka_unit_test(test_paper_newton),
-		cmocka_unit_test(test_hopeless_input),
+		cmocka_unit_test(test_hopeless_input),	     cmocka_unit_test(test_avatar_roll),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

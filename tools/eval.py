@@ -728,7 +728,7 @@ def main():
     if args.plots_on and kf_sum:
         plot_keyframes(kf_sum, args.plots)
     cv = None
-    if not args.no_rules:
+    if not args.no_rules and len(set(results[n]["fold"] for n in names)) >= 3:
         cv = cross_validate(results, names, SHIPPED)
         # the held-out figure: each fold run with the model chosen without it
         need = {}
