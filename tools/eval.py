@@ -918,14 +918,17 @@ def write_report(args, results, kf, names, cv):
     w("")
     w("* **Input**: each clip's head and hand sensor poses, frame by frame, as the daemon would receive them; the "
       "avatar tracks from frame to frame (warm start), as in the daemon.")
+    w("")
     w("* **Own lengths**: the clip's JSON: `paper_model_m` for the shoulder half-width and the chain origin, each "
       "arm's median upper arm and forearm (`measured_fk_m`), hand length 0 (the sensors sit at the wrists), and the "
       "head sensor's median place from the chain origin in the chest frame as `head_offset`.")
+    w("")
     w("* **Our calibration**: `calib_poses()` on the three standard poses taken %d times round, as `avatargw-ctl "
       "calibrate` asks, each from its own random frame of the clip with 5° of posing error per segment and 2 mm of "
       "sensor noise (`avatargw-calib --rounds %d`, *noisy*); %d calibrations per clip, each run over the whole clip. "
       "The paper's heuristic (`paper-wrist`) under the same noise for comparison." % (
           CALIB_ROUNDS, CALIB_ROUNDS, args.trials))
+    w("")
     w("* **Elbow error**: distance between the avatar's elbow and the clip's, per frame and arm, cm. **Best "
       "swivel**: the same with the elbow at the best place of its circle about the avatar's shoulder-wrist line: "
       "what no choice of swivel beats with this chest. **True chest**: the chest placed where the clip's was "
@@ -1004,8 +1007,12 @@ def write_report(args, results, kf, names, cv):
         w(p)
         w("")
     w("Settings of this run: %d calibrations per clip, seed %d." % (args.trials, args.seed))
+    text = "\n".join(L) + "\n"
+    for block in text.split("\n\n"):
+        if not block.startswith("|") and len(block) > 1200:
+            raise SystemExit("eval.py: a paragraph over 1200 characters: " + block[:80])
     with open(args.out, "w") as f:
-        f.write("\n".join(L) + "\n")
+        f.write(text)
 
 
 def discussion(results, names, cv, sa, sn):

@@ -34,7 +34,8 @@ class EvalTest(unittest.TestCase):
                            capture_output=True, text=True, timeout=120)
         if p.returncode != 0:
             raise AssertionError("eval.py failed: " + p.stderr)
-        cls.res = json.load(open(out))
+        with open(out) as f:
+            cls.res = json.load(f)
         cls.clip = cls.res["clips"][CLIP]
 
     @classmethod
@@ -109,7 +110,8 @@ class WristTest(unittest.TestCase):
                             "--json", out], capture_output=True, text=True, timeout=300)
         if p.returncode != 0:
             raise AssertionError("eval.py failed: " + p.stderr)
-        cls.res = json.load(open(out))["clips"]
+        with open(out) as f:
+            cls.res = json.load(f)["clips"]
 
     @classmethod
     def tearDownClass(cls):
@@ -134,6 +136,77 @@ class WristTest(unittest.TestCase):
             self.assertEqual(a["resid_reachable"], 0, side)
             self.assertLess(a["elbow"]["median"], 3.0, side)
             self.assertLessEqual(a["elbow"]["median"], a["best_swivel"]["median"] + 1.0, side)
+
+
+FOLD_CLIPS = ["cmu_141_16", "cmu_16_11", "bandai_dataset-1_bow_normal_001", BENT]
+
+
+class FoldsTest(unittest.TestCase):
+    """the pooled summary and the rules decided by folds, on four clips of four folds"""
+
+    @classmethod
+    def setUpClass(cls):
+        missing = [c for c in FOLD_CLIPS if not os.path.exists(os.path.join(MOCAP, c + ".csv"))]
+        if missing:
+            raise AssertionError("%s not found in %s: the shared mocap clips are needed (SHARED=...)" % (
+                ", ".join(missing), MOCAP))
+        cls.tmpd = tempfile.TemporaryDirectory()
+        out, md = os.path.join(cls.tmpd.name, "eval.json"), os.path.join(cls.tmpd.name, "FIDELITY.md")
+        p = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "eval.py"), "--build", BUILD, "--mocap", MOCAP,
+                            "--clips", ",".join(FOLD_CLIPS), "--trials", "1", "--no-plots", "--no-keyframes",
+                            "--out", md, "--json", out], capture_output=True, text=True, timeout=300)
+        if p.returncode != 0:
+            raise AssertionError("eval.py failed: " + p.stderr)
+        with open(out) as f:
+            cls.res = json.load(f)
+        with open(md) as f:
+            cls.md = f.read()
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.tmpd.cleanup()
+
+    def test_summary(self):
+        s = self.res["summary"]
+        self.assertEqual(s["clips"], len(FOLD_CLIPS))
+        self.assertEqual(s["frames"], sum(self.res["clips"][c]["frames"] for c in FOLD_CLIPS))
+        self.assertEqual(s["arm_frames"], 2 * s["frames"])
+        for k in ("elbow", "paper", "held_out", "calib", "yaw"):
+            self.assertTrue(0 < s[k]["median"] <= s[k]["p95"] <= s[k]["max"], k)
+        # the per-clip medians against the paper's decide the count of clips worse than it
+        worse = sum(1 for c in FOLD_CLIPS if self.res["clips"][c]["models"]["default"]["elbow"]["median"] >
+                    self.res["clips"][c]["models"]["paper"]["elbow"]["median"])
+        self.assertEqual(s["worse"], worse)
+        self.assertLessEqual(s["off_reachable"], s["off_any"])
+
+    def test_rules(self):
+        folds = set(self.res["clips"][c]["fold"] for c in FOLD_CLIPS)
+        self.assertEqual(len(folds), 4)
+        rules = self.res["rules"]
+        for r in ("hand-elbow", "reach-first", "yaw-hands", "reach-chest", "neck", "bow", "keep-branch",
+                  "reach-roll", "j2-overhead", "j2-adduction", "wrist-thumb"):
+            self.assertIn(r, rules)
+            d = rules[r]
+            self.assertTrue(set(d["chosen"]) <= folds, r)
+            self.assertLessEqual(d["helped"] + d["hurt"], len(FOLD_CLIPS), r)
+            # on only if most folds chose it
+            if d["keep"]:
+                self.assertGreater(len(d["chosen"]), len(folds) / 2, r)
+            self.assertEqual(r in self.res["verdict"], d["keep"], r)
+        # every clip was run with each rule toggled alone (the shipped avatar's configuration among them)
+        for c in FOLD_CLIPS:
+            self.assertGreaterEqual(len(self.res["clips"][c]["configs"]), len(rules) + 1, c)
+
+    def test_page(self):
+        # tables first: the summary before the rules before the clips; short paragraphs
+        i, j, k = self.md.index("## Summary"), self.md.index("## The rules"), self.md.index("## Per clip")
+        self.assertLess(i, j)
+        self.assertLess(j, k)
+        for para in self.md.split("\n\n"):
+            if not para.startswith("|"):
+                self.assertLessEqual(len(para), 1200, para[:80])
+        for c in FOLD_CLIPS:
+            self.assertIn("`%s`" % c, self.md)
 
 
 if __name__ == "__main__":
