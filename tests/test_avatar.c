@@ -260,7 +260,8 @@ static void test_neck_bends(void **state)
 	(void)state;
 	avatar_init(&av, &dims, &off, NULL);
 	assert_false(av.body.model & AVATAR_NECK);
-	av.body.model |= AVATAR_NECK;
+	/* the neck alone: a head pitched by more than 30 degrees would otherwise bow the chest (test_bow_head) */
+	av.body.model = (av.body.model | AVATAR_NECK) & ~(unsigned)AVATAR_BOW_HEAD;
 	for (size_t i = 0; i < sizeof(tilts) / sizeof(tilts[0]); i++) {
 		struct quat yaw, pitch, roll, tilt, r, bend;
 		struct vec3 hu, hv, axis, bent, expect, co;
@@ -448,6 +449,47 @@ static void test_reach_roll(void **state)
 		/* rolled the way the trunk leans (the right shoulder up for a lean to the left: x rises) */
 		quat_rotate(&p.chest.r, &(struct vec3){ 1, 0, 0 }, &x);
 		assert_true(x.z * -lean[i] > 0);
+	}
+}
+
+/*
+ * AVATAR_BOW_HEAD: a head pitched forward by more than the neck's 30
+ * degrees pitches the chest by the rest, about the head
+ * sensor; less, and the chest stays upright under it.
+ */
+static void test_bow_head(void **state)
+{
+	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.08 };
+	const struct vec3 off = { 0, -0.03, 0.25 }, hp = { 0.2, 0.4, 1.5 };
+	const double pitch[] = { 10, 29, 45, 70, 89 };
+	struct avatar av;
+
+	(void)state;
+	avatar_init(&av, &dims, &off, NULL);
+	assert_true(av.body.model & AVATAR_BOW_HEAD);
+	for (size_t i = 0; i < sizeof(pitch) / sizeof(pitch[0]); i++) {
+		const double want = fmax(pitch[i] - 30, 0) * M_PI / 180;
+		struct quat yaw, px, r, cr;
+		struct dq head, chest;
+		struct vec3 cz, d, co;
+		sc_t y;
+
+		quat_from_axis_angle(&(struct vec3){ 0, 0, 1 }, -0.4, &yaw);
+		quat_from_axis_angle(&(struct vec3){ 1, 0, 0 }, -pitch[i] * M_PI / 180, &px);
+		quat_mul(&yaw, &px, &r);
+		dq_from_rt(&r, &hp, &head);
+		assert_true(avatar_chest(&av, &head, &chest, &y));
+		assert_true(fabs(y + 0.4) < 1e-9);
+		quat_rotate(&chest.r, &(struct vec3){ 0, 0, 1 }, &cz);
+		assert_true(fabs(acos(cz.z) - want) < 1e-9);
+		/* pitched about its own x axis, after the yaw, and hung from the head sensor by the offset */
+		quat_from_axis_angle(&(struct vec3){ 1, 0, 0 }, -want, &px);
+		quat_mul(&yaw, &px, &cr);
+		assert_true(quat_angle_between(&chest.r, &cr) < 1e-9);
+		quat_rotate(&cr, &off, &d);
+		dq_translation(&chest, &co);
+		assert_true(fabs(co.x - (hp.x - d.x)) < 1e-9 && fabs(co.y - (hp.y - d.y)) < 1e-9 &&
+			    fabs(co.z - (hp.z - d.z)) < 1e-9);
 	}
 }
 
@@ -829,6 +871,7 @@ int main(void)
 		cmocka_unit_test(test_neck_bends),
 		cmocka_unit_test(test_bow),
 		cmocka_unit_test(test_reach_roll),
+		cmocka_unit_test(test_bow_head),
 		cmocka_unit_test(test_lost_hand),
 		cmocka_unit_test(test_wave_clip),
 		cmocka_unit_test(test_hand_elbow),

@@ -932,6 +932,81 @@ static void test_avatar_roll(void **state)
 		asin(roll_max) * RAD2DEG, worst * 1e6);
 }
 
+/*
+ * AVATAR_BOW_HEAD in Q5.26: a head nodding forward from upright to 85
+ * degrees and back, the trunk bowed by what passes 30 degrees, the arms
+ * hanging from it: the Q5.26 avatar lies on the double one (chest, hands,
+ * elbows), with no result saturated.
+ */
+static void test_avatar_head_bow(void **state)
+{
+	enum { N = 40 };
+	static const struct ikx_avatar_setup body = { .dims = { 0.18, 0.30, 0.26, 0.08 },
+						      .head_offset = { 0, -0.03, 0.25 } };
+	const double head[3] = { -0.2, 0.5, 1.55 }, yaw = 0.6;
+	const double hanging[ARM_DOF] = { 0, -0.1, 0.2, 0, -1.2, 0, 0, 0 };
+	static struct ikx_avatar_frame in[N];
+	static struct ikx_avatar_out od[N], oq[N];
+	double worst = 0, pitch_max = 0;
+
+	(void)state;
+	for (int i = 0; i < N; i++) {
+		const double p = 85 * sin(M_PI * i / (N - 1)) * DEG, q = fmax(p - 30 * DEG, 0);
+		/* head: yaw, then pitched down by p; chest: yaw, then pitched by q, hung from the head by the offset */
+		const double hq[4] = { cos(yaw / 2) * cos(p / 2), -cos(yaw / 2) * sin(p / 2),
+				       -sin(yaw / 2) * sin(p / 2), sin(yaw / 2) * cos(p / 2) };
+		double chest[7] = { 0,
+				    0,
+				    0,
+				    cos(yaw / 2) * cos(q / 2),
+				    -cos(yaw / 2) * sin(q / 2),
+				    -sin(yaw / 2) * sin(q / 2),
+				    sin(yaw / 2) * cos(q / 2) };
+		double off[3];
+
+		chest_to_world(chest, body.head_offset, off);
+		for (int k = 0; k < 3; k++)
+			chest[k] = head[k] - off[k];
+		memcpy(in[i].head, head, sizeof(head));
+		memcpy(in[i].head + 3, hq, sizeof(hq));
+		for (int side = ARM_RIGHT; side <= ARM_LEFT; side++) {
+			const struct ikx_setup arm = { .dims = { 0.18, 0.30, 0.26, 0.08 }, .left = side == ARM_LEFT };
+			double local[7];
+
+			ikx_fk_d(&arm, hanging, local);
+			pose_to_world(chest, local, side == ARM_RIGHT ? in[i].rhand : in[i].lhand);
+		}
+	}
+	ikx_avatar_run_d(&body, in, N, od);
+	ikx_avatar_run_qs(&body, in, N, oq);
+	for (int i = 0; i < N; i++) {
+		set_ctx("bowing, frame %d", i);
+		if (oq[i].saturations)
+			fail_msg("%s: %lu results saturated in Q5.26", ctx, oq[i].saturations);
+		assert_near(dist3(oq[i].chest, od[i].chest), 0, AV_POS);
+		assert_near(rot_between(oq[i].chest + 3, od[i].chest + 3), 0, AV_ROT);
+		/* the chest's pitch: its z axis's fall, 1 - 2 (x^2 + y^2) */
+		pitch_max = fmax(pitch_max,
+				 acos(1 - 2 * (od[i].chest[4] * od[i].chest[4] + od[i].chest[5] * od[i].chest[5])));
+		for (int side = ARM_RIGHT; side <= ARM_LEFT; side++) {
+			double hd[3], hq[3], ed[3], eq[3];
+
+			chest_to_world(od[i].chest, od[i].hand[side], hd);
+			chest_to_world(oq[i].chest, oq[i].hand[side], hq);
+			chest_to_world(od[i].chest, od[i].elbow[side], ed);
+			chest_to_world(oq[i].chest, oq[i].elbow[side], eq);
+			assert_near(dist3(hq, hd), 0, AV_POS);
+			assert_near(dist3(eq, ed), 0, AV_POS);
+			worst = fmax(worst, fmax(dist3(hq, hd), dist3(eq, ed)));
+		}
+	}
+	/* the bow did happen: 55 degrees at the deepest (85 less the neck's 30) */
+	assert_near(pitch_max * RAD2DEG, 55, 0.5);
+	print_message(
+		"bowing: chest pitched up to %.1f degrees; hands and elbows Q5.26 against double %.3g um at most\n",
+		pitch_max * RAD2DEG, worst * 1e6);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -943,6 +1018,7 @@ int main(void)
 		cmocka_unit_test(test_random_reset),	     cmocka_unit_test(test_trajectory_warm),
 		cmocka_unit_test(test_matrix_and_left),	     cmocka_unit_test(test_paper_newton),
 		cmocka_unit_test(test_hopeless_input),	     cmocka_unit_test(test_avatar_roll),
+		cmocka_unit_test(test_avatar_head_bow),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

@@ -72,7 +72,8 @@ static void usage(FILE *f)
 		   "       [--person SOURCE/PREFIX] INPUT.csv|INPUT.agwrec\n"
 		   "  --left-arm     the left arm's own lengths (the right's are --dims)\n"
 		   "  --model        paper, default, or names joined by '+' (or taken away by '-'): hand-elbow,\n"
-		   "                 reach-first, yaw-hands, reach-chest, neck, bow, keep-branch, reach-roll (the\n"
+		   "                 reach-first, yaw-hands, reach-chest, neck, bow, keep-branch, reach-roll,\n"
+		   "                 bow-head (the\n"
 		   "                 avatar's choices, docs/IK.md), e.g. default-bow\n"
 		   "  --chest-truth  the chest from the CSV's true chest columns (X,Y,Z: the chain origin in\n"
 		   "                 the chest frame); --chest-part: all of it, its heading only, or upright\n");
@@ -445,7 +446,8 @@ static int parse_model(const char *s)
 		      { "neck", AVATAR_NECK },
 		      { "bow", AVATAR_BOW },
 		      { "keep-branch", AVATAR_KEEP_BRANCH },
-		      { "reach-roll", AVATAR_REACH_ROLL } };
+		      { "reach-roll", AVATAR_REACH_ROLL },
+		      { "bow-head", AVATAR_BOW_HEAD } };
 	unsigned m = 0;
 	bool add = true;
 
@@ -600,7 +602,7 @@ int main(int argc, char **argv)
 			if (model < 0) {
 				fprintf(stderr, "avatargw-eval: --model paper, default, or names joined by '+': "
 						"hand-elbow, reach-first, yaw-hands, reach-chest, neck, bow, "
-						"keep-branch, reach-roll\n");
+						"keep-branch, reach-roll, bow-head\n");
 				return 2;
 			}
 			break;

@@ -283,9 +283,9 @@ def write_doc(path, clips, args):
     w("posing error, so a calibration step can ask for a retake when it is large. The posing errors of")
     w("separate readings are independent, so going round the three poses twice (six readings, each")
     w("posed anew, what `avatargw-ctl calibrate` asks by default: docs/SERVICE.md) brings them to")
-    w("%s / %s / %s / %s cm (`avatargw-calib --rounds 2`); FIDELITY.md measures what that does to the" % tuple(
+    w("%s / %s / %s / %s cm (`avatargw-calib --rounds 2`). FIDELITY.md measures what that does to the" % tuple(
         n["poses_noisy2"]))
-    w("elbows.")
+    w("elbows: the avatar run with calibrated bodies over every clip, the errors pooled (its summary table).")
     w("")
     w("**Neither method works on these clips as recorded** (closest): the frames nearest to the poses")
     w("are tens of degrees away from them, and the estimates are off by up to %s cm, or refused. A" % n["closest_max"])

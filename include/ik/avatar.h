@@ -48,6 +48,9 @@
  *    beyond reach, the chest also rolls about its forward axis (a lateral
  *    lean: one shoulder up, the other down), by the least move that gives
  *    both arms what they miss, at most 20 degrees.
+ *  - AVATAR_BOW_HEAD: a head pitched forward by more than the neck's 30
+ *    degrees is a bow: the chest pitches by the rest about the head
+ *    sensor.
  *  - AVATAR_KEEP_BRANCH: an elbow that moves 10 cm more than its hand in
  *    one frame (another branch of the arm) is held on the branch it was on
  *    if the hand stays within 1 mm of its sensor and 20 degrees of the
@@ -72,9 +75,10 @@ extern "C" {
 #define AVATAR_BOW 0x20
 #define AVATAR_KEEP_BRANCH 0x40
 #define AVATAR_REACH_ROLL 0x80
+#define AVATAR_BOW_HEAD 0x100
 #define AVATAR_MODEL_DEFAULT                                                                                           \
 	(AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_BOW |                 \
-	 AVATAR_KEEP_BRANCH | AVATAR_REACH_ROLL)
+	 AVATAR_KEEP_BRANCH | AVATAR_REACH_ROLL | AVATAR_BOW_HEAD)
 
 struct avatar_body {
 	struct arm_dims dims;	 /* the right arm (and the left one unless avatar_set_left_arm() says otherwise) */

@@ -134,10 +134,45 @@ static void neck_offset(const struct vec3 *off, const struct quat *yaw, const st
  * heading is averaged in as unit vectors, and the mean's half-angle
  * rotation is (1 + cos, sin) normalised. One atan2, for *yaw.
  */
-bool avatar_chest_hands(const struct avatar *av, const struct dq *head, const struct dq *lhand, const struct dq *rhand,
-			struct dq *chest, sc_t *yaw)
+/*
+ * AVATAR_BOW_HEAD: a head pitched forward by more than the neck takes
+ * (30 degrees, looking down at the hands) is a bow at the waist: the trunk
+ * pitches by the rest (at most 60 degrees) about the head sensor. The
+ * head's pitch is its forward axis's fall below the yawed chest's horizon:
+ * sin p = -f.z, cos p = |f.xy| (no angle computed; a head pitched past the
+ * vertical counts as pitched less). Writes the chest's rotation r Rx(-q);
+ * false if the head pitches less.
+ */
+#define HEAD_BOW_COS SC_C(0.8660254037844387) /* the neck's share: 30 degrees */
+#define HEAD_BOW_SIN SC_C(0.5)
+
+static bool head_bow(const struct quat *r, const struct quat *head, struct quat *rb)
 {
-	struct quat r, hr;
+	const struct vec3 ey = { 0, SC_C(1), 0 };
+	struct quat rc, rel, px;
+	struct vec3 f;
+	sc_t sp, cp, sq, cq, ch;
+
+	quat_conj(r, &rc);
+	quat_mul(&rc, head, &rel);
+	quat_rotate(&rel, &ey, &f);
+	sp = -f.z;
+	cp = sc_sqrt(sc_mul(f.x, f.x) + sc_mul(f.y, f.y));
+	sq = sc_mul(sp, HEAD_BOW_COS) - sc_mul(cp, HEAD_BOW_SIN);
+	if (!(sq > 0))
+		return false;
+	cq = sc_mul(cp, HEAD_BOW_COS) + sc_mul(sp, HEAD_BOW_SIN);
+	/* the half angle: cos = sqrt((1 + cos q) / 2), sin = sin q / (2 cos) */
+	ch = sc_sqrt(sc_mul(SC_C(0.5), SC_C(1) + cq));
+	px = (struct quat){ ch, -sc_div(sq, 2 * ch), 0, 0 };
+	quat_mul(r, &px, rb);
+	return true;
+}
+
+static bool chest_place(const struct avatar *av, unsigned model, const struct dq *head, const struct dq *lhand,
+			const struct dq *rhand, struct dq *chest, sc_t *yaw)
+{
+	struct quat r, hr, rb;
 	struct vec3 hp, off, o, bent;
 	sc_t w, z, n, cy, sy, hx = 0, hy = 0, wt;
 
@@ -163,7 +198,7 @@ bool avatar_chest_hands(const struct avatar *av, const struct dq *head, const st
 	}
 	cy = sc_mul(w, w) - sc_mul(z, z);
 	sy = 2 * sc_mul(w, z);
-	if ((av->body.model & AVATAR_YAW_HANDS) && (wt = hands_heading(lhand, rhand, cy, sy, &hx, &hy)) > 0) {
+	if ((model & AVATAR_YAW_HANDS) && (wt = hands_heading(lhand, rhand, cy, sy, &hx, &hy)) > 0) {
 		/* the weighted circular mean of the two headings */
 		sc_t mx = cy + sc_mul(wt, hx), my = sy + sc_mul(wt, hy), k;
 
@@ -195,7 +230,11 @@ bool avatar_chest_hands(const struct avatar *av, const struct dq *head, const st
 	*yaw = 2 * sc_atan2(z, w);
 	r = (struct quat){ w, 0, 0, z };
 	dq_translation(head, &hp);
-	if (av->body.model & AVATAR_NECK) {
+	if ((model & AVATAR_BOW_HEAD) && head_bow(&r, &hr, &rb)) {
+		/* the trunk bowed about the head sensor, the neck as upright */
+		quat_rotate(&rb, &av->body.head_offset, &off);
+		r = rb;
+	} else if (model & AVATAR_NECK) {
 		neck_offset(&av->body.head_offset, &r, &hr, &bent);
 		quat_rotate(&r, &bent, &off);
 	} else {
@@ -204,6 +243,12 @@ bool avatar_chest_hands(const struct avatar *av, const struct dq *head, const st
 	o = (struct vec3){ hp.x - off.x, hp.y - off.y, hp.z - off.z };
 	dq_from_rt(&r, &o, chest);
 	return true;
+}
+
+bool avatar_chest_hands(const struct avatar *av, const struct dq *head, const struct dq *lhand, const struct dq *rhand,
+			struct dq *chest, sc_t *yaw)
+{
+	return chest_place(av, av->body.model, head, lhand, rhand, chest, yaw);
 }
 
 bool avatar_chest(const struct avatar *av, const struct dq *head, struct dq *chest, sc_t *yaw)
@@ -1166,8 +1211,8 @@ static sc_t bow_line_cost(const struct avatar *av, const struct ik_target t[2])
 }
 
 static unsigned bow(const struct avatar *av, const struct ik_kin *kin, const struct ik_opts *o, const struct dq *head,
-		    const struct dq *const hand[2], const struct avatar_pose *prev, struct avatar_pose *out,
-		    unsigned flags)
+		    const struct dq *const hand[2], const struct avatar_pose *prev, const struct dq *upright,
+		    struct avatar_pose *out, unsigned flags)
 {
 	struct avatar_pose tmp;
 	struct ik_target t[2];
@@ -1175,7 +1220,7 @@ static unsigned bow(const struct avatar *av, const struct ik_kin *kin, const str
 	struct dq chest[BOW_TRIES];
 	sc_t line[BOW_TRIES], best_lie = 0;
 	bool tried[BOW_TRIES] = { false }, kept = false;
-	const struct dq up = out->chest;
+	const struct dq up = *upright;
 	int k, n, side, best_off;
 
 	/* each bow's solve as short as tracking a target out of reach */
@@ -1265,7 +1310,13 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 	}
 	for (side = 0; side < 2; side++)
 		flags |= avatar_arm_solve(av, side, kin, o1, &t[side], prev, out);
-	if ((av->body.model & AVATAR_BOW) && bow_wanted(t, out))
-		flags = bow(av, kin, o, head, hand, prev, out, flags);
+	if ((av->body.model & AVATAR_BOW) && bow_wanted(t, out)) {
+		struct dq up = out->chest;
+		sc_t y;
+
+		if (av->body.model & AVATAR_BOW_HEAD)
+			chest_place(av, av->body.model & ~(unsigned)AVATAR_BOW_HEAD, head, lhand, rhand, &up, &y);
+		flags = bow(av, kin, o, head, hand, prev, &up, out, flags);
+	}
 	return flags;
 }
