@@ -633,11 +633,21 @@ class BowTest(unittest.TestCase):
             try:
                 fr = [m for _, m in dump(["--udp", "127.0.0.1:%d" % port], 40) if m["type"] == "frame"]
                 self.assertGreater(len(fr), 30)
-                for m in fr:
+                first = True
+                for i, m in enumerate(fr):
                     seg = m["segments"]
                     z = qrot(seg["chest"]["q"], (0, 0, 1))
                     bow = math.degrees(math.acos(max(-1, min(1, z[2]))))
-                    self.assertGreater(bow, 55, "the chest is not bowed: %.1f degrees" % bow)
+                    if first and bow < 1:
+                        # the first solve, from the rest posture with the whole search, may find the hands within
+                        # a millimetre upright (J2 to -170 degrees; published until the next sample): a bow is
+                        # tried for a hand off by more; the next solve, tracked with the short search, bows
+                        for s in ("r", "l"):
+                            self.assertLess(math.dist(seg[s + "_hand"]["p"], hands[s]), 1e-3)
+                        self.assertLess(i, 5)
+                        continue
+                    first = False
+                    self.assertGreater(bow, 55, "the chest is not bowed: %.1f degrees (frame %d)" % (bow, i))
                     self.assertLess(bow, 76)
                     # its heading is still chest_yaw
                     w, x, y, zq = seg["chest"]["q"]
