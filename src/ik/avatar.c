@@ -1299,7 +1299,9 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 	for (side = 0; side < 2; side++)
 		avatar_arm_target(&out->chest, hand[side], &t[side]);
 	if (av->body.model & AVATAR_REACH_CHEST)
-		reach_chest(av, hand, &out->chest, t);
+		/* a second step where the first (linear in the roll) left a hand still beyond reach */
+		if (reach_chest(av, hand, &out->chest, t))
+			reach_chest(av, hand, &out->chest, t);
 	if ((av->body.model & AVATAR_BOW) && prev && bowed(&prev->chest) && o->max_evals > TRACK_EVALS) {
 		/* out of a bow the upright chest is likely still short: its search as short as the bow's */
 		short_o = *o;
