@@ -994,22 +994,26 @@ static bool wrist_in_reach(const struct arm *a, const struct ik_target *t)
 }
 
 /*
- * The chest moved by d (chest frame, capped at REACH_SHIFT) and rolled about
- * its forward axis by the angle whose sine is sr (the right shoulder down
- * for sr > 0), both arms' targets rewritten.
+ * The chest moved by d (chest frame, capped at what is left of REACH_SHIFT,
+ * *left, which the move uses up) and rolled about its forward axis by the
+ * angle whose sine is sr (the right shoulder down for sr > 0), both arms'
+ * targets rewritten.
  */
-static void chest_shift(struct vec3 d, sc_t sr, const struct dq *const hand[2], struct dq *chest, struct ik_target t[2])
+static void chest_shift(struct vec3 d, sc_t sr, sc_t *left, const struct dq *const hand[2], struct dq *chest,
+			struct ik_target t[2])
 {
 	struct vec3 dw, c;
 	struct quat r = chest->r;
 	sc_t n = v3_norm(&d);
 	int side;
 
-	if (n > REACH_SHIFT) {
-		sc_t k = sc_div(REACH_SHIFT, n);
+	if (n > *left) {
+		sc_t k = sc_div(*left, n);
 
 		d = (struct vec3){ sc_mul(d.x, k), sc_mul(d.y, k), sc_mul(d.z, k) };
+		n = *left;
 	}
+	*left -= n;
 	quat_rotate(&r, &d, &dw);
 	dq_translation(chest, &c);
 	c = (struct vec3){ c.x + dw.x, c.y + dw.y, c.z + dw.z };
@@ -1054,8 +1058,9 @@ static bool reach_roll(const struct vec3 *ar, sc_t er, const struct vec3 *al, sc
 	return true;
 }
 
+/* shift_left, roll_left: what is left of REACH_SHIFT and ROLL_MAX (a second step takes no more than the first left) */
 static bool reach_chest(const struct avatar *av, const struct dq *const hand[2], struct dq *chest,
-			struct ik_target t[2])
+			struct ik_target t[2], sc_t *shift_left, sc_t *roll_left)
 {
 	struct vec3 d = { 0, 0, 0 }, ax[2];
 	sc_t excess[2] = { 0, 0 }, u = 0, sr = 0;
@@ -1083,9 +1088,10 @@ static bool reach_chest(const struct avatar *av, const struct dq *const hand[2],
 		sc_t sh = av->arm[ARM_RIGHT].dims.shoulder;
 
 		/* the right shoulder at (S, 0, 0) rolled by a about y goes to (S cos a, 0, -S sin a): u = -S sin a */
-		sr = sc_clamp(-sc_div(u, sh), -ROLL_MAX, ROLL_MAX);
+		sr = sc_clamp(-sc_div(u, sh), -*roll_left, *roll_left);
+		*roll_left -= sc_abs(sr);
 	}
-	chest_shift(d, sr, hand, chest, t);
+	chest_shift(d, sr, shift_left, hand, chest, t);
 	return true;
 }
 
@@ -1298,10 +1304,13 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 	}
 	for (side = 0; side < 2; side++)
 		avatar_arm_target(&out->chest, hand[side], &t[side]);
-	if (av->body.model & AVATAR_REACH_CHEST)
-		/* a second step where the first (linear in the roll) left a hand still beyond reach */
-		if (reach_chest(av, hand, &out->chest, t))
-			reach_chest(av, hand, &out->chest, t);
+	if (av->body.model & AVATAR_REACH_CHEST) {
+		/* a second step where the first (linear in the roll) left a hand beyond reach, within the same caps */
+		sc_t shift_left = REACH_SHIFT, roll_left = ROLL_MAX;
+
+		if (reach_chest(av, hand, &out->chest, t, &shift_left, &roll_left))
+			reach_chest(av, hand, &out->chest, t, &shift_left, &roll_left);
+	}
 	if ((av->body.model & AVATAR_BOW) && prev && bowed(&prev->chest) && o->max_evals > TRACK_EVALS) {
 		/* out of a bow the upright chest is likely still short: its search as short as the bow's */
 		short_o = *o;
@@ -1311,11 +1320,11 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 	for (side = 0; side < 2; side++)
 		flags |= avatar_arm_solve(av, side, kin, o1, &t[side], prev, out);
 	if ((av->body.model & AVATAR_BOW) && bow_wanted(t, out)) {
-		struct dq up = out->chest;
+		struct dq up;
 		sc_t y;
 
-		if (av->body.model & AVATAR_BOW_HEAD)
-			chest_place(av, av->body.model & ~(unsigned)AVATAR_BOW_HEAD, head, lhand, rhand, &up, &y);
+		/* the bows are tried from the upright chest the head places (not bowed by it, not shifted or rolled) */
+		chest_place(av, av->body.model & ~(unsigned)AVATAR_BOW_HEAD, head, lhand, rhand, &up, &y);
 		flags = bow(av, kin, o, head, hand, prev, &up, out, flags);
 	}
 	return flags;
