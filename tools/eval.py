@@ -1043,7 +1043,8 @@ def discussion(results, names, cv, sa, sn):
              "%d clips have a median worse than the paper's avatar by more than %g cm, the worst %s; on them the "
              "elbow the hand's orientation asks for is wrong where the paper's, tracked from the previous frame, "
              "stays near its rest. Reachable hands off their sensors: %d arm-frames of %d (%.1f %%), in %d clips, most "
-             "in %s: fast far reaches where the true chest moves more than the 8 cm shift and 20° roll allow." % (
+             "in %s: arms at full stretch or against a limit from our chest, which the true chest, moved or leaning "
+             "further than the 8 cm shift and 20° roll allow, lets reach." % (
                  fmt(sn["elbow"]["median"], 2), GOAL_MEDIAN, "met" if sn["elbow"]["median"] <= GOAL_MEDIAN else "not met",
                  fmt(sn["elbow"]["p95"]), GOAL_P95, "met" if sn["elbow"]["p95"] <= GOAL_P95 else "not met",
                  len(worse), GOAL_PAPER, ", ".join("`%s` %+.1f" % (short(n), x) for x, n in worse[:4]) or "none",
