@@ -6,6 +6,8 @@
  */
 #include "ik/avatar.h"
 
+#include "ik_private.h"
+
 void avatar_default_limits(struct arm_limits *out)
 {
 	arm_default_limits(out);
@@ -276,13 +278,6 @@ void avatar_arm_target(const struct dq *chest, const struct dq *hand, struct ik_
 
 /* ---- the elbow the hand points at ------------------------------------------------------ */
 
-static void v3_axpy(sc_t k, const struct vec3 *x, struct vec3 *y)
-{
-	y->x += sc_mul(k, x->x);
-	y->y += sc_mul(k, x->y);
-	y->z += sc_mul(k, x->z);
-}
-
 /*
  * v scaled to length 1 (unless it is nearly zero); its length before. Short
  * vectors are divided component by component: their reciprocal length would
@@ -306,36 +301,6 @@ static sc_t v3_unit(struct vec3 *v)
 		v->z = sc_div(v->z, n);
 	}
 	return n;
-}
-
-static sc_t over(sc_t v, sc_t lo, sc_t hi)
-{
-	return v < lo ? lo - v : (v > hi ? v - hi : SC_C(0));
-}
-
-/*
- * m = Ry(a) Rx(b) Rz(c): of the two angle triples the one inside the
- * limits of joints i0..i0+2, else the one outside them least.
- */
-static void yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, sc_t out[3])
-{
-	const sc_t *lo = &lim->lo[i0], *hi = &lim->hi[i0];
-	sc_t b = sc_asin(-m[1][2]), a = sc_atan2(m[0][2], m[2][2]), c = sc_atan2(m[1][0], m[1][1]);
-	sc_t a1 = sc_wrap_pi(a + SC_PI), b1 = sc_wrap_pi(SC_PI - b), c1 = sc_wrap_pi(c + SC_PI);
-	sc_t v0 = over(a, lo[0], hi[0]) + over(b, lo[1], hi[1]) + over(c, lo[2], hi[2]);
-	sc_t v1 = over(a1, lo[0], hi[0]) + over(b1, lo[1], hi[1]) + over(c1, lo[2], hi[2]);
-
-	if (v1 < v0) {
-		out[0] = a1, out[1] = b1, out[2] = c1;
-	} else {
-		out[0] = a, out[1] = b, out[2] = c;
-	}
-}
-
-/* (a^T b)[i][j] */
-static sc_t tdot(const sc_t a[3][3], const sc_t b[3][3], int i, int j)
-{
-	return sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), a[0][i], b[0][j]), a[1][i], b[1][j]), a[2][i], b[2][j]));
 }
 
 /*
@@ -375,7 +340,7 @@ static bool goal_init(const struct arm *a, const struct ik_target *t, sc_t q1, s
 	}
 	hy = (struct vec3){ g->R[0][1], g->R[1][1], g->R[2][1] };
 	g->w = p;
-	v3_axpy(-dm->hand, &hy, &g->w);
+	ik_add_scaled(&g->w, -dm->hand, &hy, &g->w);
 	g->q1 = sc_clamp(q1, a->lim.lo[0], a->lim.hi[0]);
 	if (g->q1 == 0) {
 		g->s1 = 0;
@@ -396,11 +361,11 @@ static bool goal_init(const struct arm *a, const struct ik_target *t, sc_t q1, s
 	g->r = r2 > 0 ? sc_sqrt(r2) : SC_C(0);
 	g->d0 = (struct vec3){ 0, 0, SC_C(-1) };
 	k = v3_dot(&g->d0, &g->ax);
-	v3_axpy(-k, &g->ax, &g->d0);
+	ik_add_scaled(&g->d0, -k, &g->ax, &g->d0);
 	if (v3_unit(&g->d0) < SC_C(0.1)) {
 		g->d0 = (struct vec3){ 0, SC_C(-1), 0 };
 		k = v3_dot(&g->d0, &g->ax);
-		v3_axpy(-k, &g->ax, &g->d0);
+		ik_add_scaled(&g->d0, -k, &g->ax, &g->d0);
 		v3_unit(&g->d0);
 	}
 	v3_cross(&g->ax, &g->d0, &g->d1);
@@ -574,8 +539,8 @@ static bool goal_posture_cs(const struct arm *a, const struct arm_goal *g, sc_t 
 	v = (struct vec3){ sc_mul(cp, g->d0.x) + sc_mul(sp, g->d1.x), sc_mul(cp, g->d0.y) + sc_mul(sp, g->d1.y),
 			   sc_mul(cp, g->d0.z) + sc_mul(sp, g->d1.z) };
 	e = g->s;
-	v3_axpy(g->x, &g->ax, &e);
-	v3_axpy(g->r, &v, &e);
+	ik_add_scaled(&e, g->x, &g->ax, &e);
+	ik_add_scaled(&e, g->r, &v, &e);
 	u = (struct vec3){ e.x - g->s.x, e.y - g->s.y, e.z - g->s.z };
 	f = (struct vec3){ g->w.x - e.x, g->w.y - e.y, g->w.z - e.z };
 	v3_unit(&u);
@@ -584,11 +549,11 @@ static bool goal_posture_cs(const struct arm *a, const struct arm_goal *g, sc_t 
 	/* the bend plane: the forearm's part across the upper arm; a straight arm bends away from the elbow's side */
 	yu = f;
 	k = v3_dot(&yu, &zu);
-	v3_axpy(-k, &zu, &yu);
+	ik_add_scaled(&yu, -k, &zu, &yu);
 	if (v3_unit(&yu) < SC_C(1e-4)) {
 		yu = (struct vec3){ -v.x, -v.y, -v.z };
 		k = v3_dot(&yu, &zu);
-		v3_axpy(-k, &zu, &yu);
+		ik_add_scaled(&yu, -k, &zu, &yu);
 		if (v3_unit(&yu) < SC_C(1e-6))
 			return false;
 	}
@@ -606,7 +571,7 @@ static bool goal_posture_cs(const struct arm *a, const struct arm_goal *g, sc_t 
 		M[1][i] = sc_mul(g->c1, Ru[1][i]) - sc_mul(g->s1, Ru[0][i]);
 		M[2][i] = Ru[2][i];
 	}
-	yxz((const sc_t(*)[3])M, lim, 1, &q[1]);
+	ik_euler_yxz((const sc_t(*)[3])M, lim, 1, &q[1]);
 	/* the forearm frame Ru Rx(q5), then Rf^T R = Ry(q6) Rx(q7) Rz(q8) */
 	sc_sincos(q[4], &s5, &c5);
 	for (i = 0; i < 3; i++) {
@@ -616,17 +581,17 @@ static bool goal_posture_cs(const struct arm *a, const struct arm_goal *g, sc_t 
 	}
 	for (i = 0; i < 3; i++)
 		for (j = 0; j < 3; j++)
-			N[i][j] = tdot((const sc_t(*)[3])Rf, (const sc_t(*)[3])g->R, i, j);
-	yxz((const sc_t(*)[3])N, lim, 5, &q[5]);
+			N[i][j] = ik_m3_tdot((const sc_t(*)[3])Rf, (const sc_t(*)[3])g->R, i, j);
+	ik_euler_yxz((const sc_t(*)[3])N, lim, 5, &q[5]);
 	*v_arm = 0;
 	*v_wrist = 0;
 	for (i = 0; i < ARM_DOF; i++) {
 		if (!sc_isfinite(q[i]))
 			return false;
 		if (i >= 1 && i <= 4)
-			*v_arm += over(q[i], lim->lo[i], lim->hi[i]);
+			*v_arm += ik_violation(q[i], lim->lo[i], lim->hi[i]);
 		else if (i >= 5)
-			*v_wrist += over(q[i], lim->lo[i], lim->hi[i]);
+			*v_wrist += ik_violation(q[i], lim->lo[i], lim->hi[i]);
 	}
 	return true;
 }
@@ -705,12 +670,6 @@ static bool hand_elbow_posture(const struct arm *a, const struct ik_target *t, b
 
 /* ---- the hand to its sensor first ---------------------------------------------------------- */
 
-static void q_set(sc_t dst[ARM_DOF], const sc_t src[ARM_DOF])
-{
-	for (int j = 0; j < ARM_DOF; j++)
-		dst[j] = src[j];
-}
-
 /*
  * A posture that puts the hand on its target's position with J1..J5 inside
  * their limits and the wrist as near the target's orientation as its limits
@@ -741,7 +700,7 @@ static bool reach_first(const struct arm *a, const struct ik_target *t, const sc
 			best_phi = phi;
 			best_q1 = g.q1;
 			found = true;
-			q_set(q, cand);
+			ik_q_copy(q, cand);
 		}
 	}
 	if (!found)
@@ -760,11 +719,11 @@ static bool reach_first(const struct arm *a, const struct ik_target *t, const sc
 
 			if (ok1 && vw1 < best_vw) {
 				best_vw = vw1;
-				q_set(q, cand);
+				ik_q_copy(q, cand);
 			}
 			if (ok2 && vw2 < best_vw) {
 				best_vw = vw2;
-				q_set(q, c2);
+				ik_q_copy(q, c2);
 			}
 			if (!ok1 && !ok2)
 				break;
@@ -916,7 +875,7 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 		if (reach_first(a, t, q1s, 4, q2)) {
 			posture_err(a, t, q2, &e2);
 			if (e2.pos < res->err.pos) {
-				q_set(q, q2);
+				ik_q_copy(q, q2);
 				arm_fk_pose(a, q, &out->seg[side]);
 				res->err = e2;
 				res->flags = (res->flags & ~(unsigned)IK_LIMITED) | at_limits(a, q);
@@ -954,7 +913,7 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 		}
 		if (r2.err.pos <= HOLD_POS && r2.err.rot <= res->err.rot + HOLD_ROT &&
 		    !arm_jumped(&prev->seg[side], &s2)) {
-			q_set(q, q2);
+			ik_q_copy(q, q2);
 			*res = r2;
 			out->seg[side] = s2;
 			flags = r2.flags;

@@ -17,6 +17,65 @@
 #define IK_UNROLL
 #endif
 
+/* the posture src into dst */
+static inline void ik_q_copy(sc_t dst[ARM_DOF], const sc_t src[ARM_DOF])
+{
+	for (int i = 0; i < ARM_DOF; i++)
+		dst[i] = src[i];
+}
+
+/* how far v lies outside [lo, hi], 0 inside */
+static inline sc_t ik_violation(sc_t v, sc_t lo, sc_t hi)
+{
+	return v < lo ? lo - v : (v > hi ? v - hi : SC_C(0));
+}
+
+/* (a^T b)[i][j] for row-major 3x3 matrices */
+static inline sc_t ik_m3_tdot(const sc_t a[3][3], const sc_t b[3][3], int i, int j)
+{
+	return sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), a[0][i], b[0][j]), a[1][i], b[1][j]), a[2][i], b[2][j]));
+}
+
+/*
+ * M = Ry(a) Rx(b) Rz(c): both angle triples, the one inside the limits
+ * [i0, i0+2] chosen (else the one violating them least). Returns the
+ * violation in radians.
+ */
+static inline sc_t ik_euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, sc_t out[3])
+{
+#if IK_COMPACT
+	sc_t e[2][3], v[2] = { 0, 0 };
+	int k, br;
+
+	e[0][0] = sc_atan2(m[0][2], m[2][2]);
+	e[0][1] = sc_asin(-m[1][2]);
+	e[0][2] = sc_atan2(m[1][0], m[1][1]);
+	e[1][0] = sc_wrap_pi(e[0][0] + SC_PI);
+	e[1][1] = sc_wrap_pi(SC_PI - e[0][1]);
+	e[1][2] = sc_wrap_pi(e[0][2] + SC_PI);
+	for (br = 0; br < 2; br++)
+		for (k = 0; k < 3; k++)
+			v[br] += ik_violation(e[br][k], lim->lo[i0 + k], lim->hi[i0 + k]);
+	br = v[1] < v[0];
+	for (k = 0; k < 3; k++)
+		out[k] = e[br][k];
+	return v[br];
+#else
+	const sc_t *lo = &lim->lo[i0], *hi = &lim->hi[i0];
+	sc_t b = sc_asin(-m[1][2]), a = sc_atan2(m[0][2], m[2][2]), c = sc_atan2(m[1][0], m[1][1]);
+	sc_t a1 = sc_wrap_pi(a + SC_PI), b1 = sc_wrap_pi(SC_PI - b), c1 = sc_wrap_pi(c + SC_PI);
+	sc_t v0 = ik_violation(a, lo[0], hi[0]) + ik_violation(b, lo[1], hi[1]) + ik_violation(c, lo[2], hi[2]);
+	sc_t v1 = ik_violation(a1, lo[0], hi[0]) + ik_violation(b1, lo[1], hi[1]) + ik_violation(c1, lo[2], hi[2]);
+
+	if (v1 < v0) {
+		out[0] = a1, out[1] = b1, out[2] = c1;
+		return v1;
+	}
+	out[0] = a, out[1] = b, out[2] = c;
+	return v0;
+#endif
+}
+
 /* p + k u */
 static inline void ik_add_scaled(const struct vec3 *p, sc_t k, const struct vec3 *u, struct vec3 *out)
 {

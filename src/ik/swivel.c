@@ -16,12 +16,7 @@
  * (the left chain is the mirror image, with the same angles).
  */
 #include "ik/ik.h"
-
-/* (a^T b)[i][j] for row-major 3x3 matrices */
-static sc_t m3_tdot(const sc_t a[3][3], const sc_t b[3][3], int i, int j)
-{
-	return sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), a[0][i], b[0][j]), a[1][i], b[1][j]), a[2][i], b[2][j]));
-}
+#include "ik_private.h"
 
 /* out = p + k u (p NULL: k u), or p - k u with sub (the product is rounded, then negated) */
 static void v3_madd(const struct vec3 *p, sc_t k, const struct vec3 *u, bool sub, struct vec3 *out)
@@ -61,51 +56,6 @@ static sc_t v3_normalize(struct vec3 *v)
 		v->z = sc_mul_recip(v->z, k);
 	}
 	return n;
-}
-
-static sc_t violation(sc_t v, sc_t lo, sc_t hi)
-{
-	return v < lo ? lo - v : (v > hi ? v - hi : SC_C(0));
-}
-
-/*
- * M = Ry(a) Rx(b) Rz(c): both angle triples, the one inside the limits
- * [i0, i0+2] chosen (else the one violating them least). Returns the
- * violation in radians.
- */
-static sc_t euler_yxz(const sc_t m[3][3], const struct arm_limits *lim, int i0, sc_t out[3])
-{
-#if IK_COMPACT
-	sc_t e[2][3], v[2] = { 0, 0 };
-	int k, br;
-
-	e[0][0] = sc_atan2(m[0][2], m[2][2]);
-	e[0][1] = sc_asin(-m[1][2]);
-	e[0][2] = sc_atan2(m[1][0], m[1][1]);
-	e[1][0] = sc_wrap_pi(e[0][0] + SC_PI);
-	e[1][1] = sc_wrap_pi(SC_PI - e[0][1]);
-	e[1][2] = sc_wrap_pi(e[0][2] + SC_PI);
-	for (br = 0; br < 2; br++)
-		for (k = 0; k < 3; k++)
-			v[br] += violation(e[br][k], lim->lo[i0 + k], lim->hi[i0 + k]);
-	br = v[1] < v[0];
-	for (k = 0; k < 3; k++)
-		out[k] = e[br][k];
-	return v[br];
-#else
-	const sc_t *lo = &lim->lo[i0], *hi = &lim->hi[i0];
-	sc_t b = sc_asin(-m[1][2]), a = sc_atan2(m[0][2], m[2][2]), c = sc_atan2(m[1][0], m[1][1]);
-	sc_t a1 = sc_wrap_pi(a + SC_PI), b1 = sc_wrap_pi(SC_PI - b), c1 = sc_wrap_pi(c + SC_PI);
-	sc_t v0 = violation(a, lo[0], hi[0]) + violation(b, lo[1], hi[1]) + violation(c, lo[2], hi[2]);
-	sc_t v1 = violation(a1, lo[0], hi[0]) + violation(b1, lo[1], hi[1]) + violation(c1, lo[2], hi[2]);
-
-	if (v1 < v0) {
-		out[0] = a1, out[1] = b1, out[2] = c1;
-		return v1;
-	}
-	out[0] = a, out[1] = b, out[2] = c;
-	return v0;
-#endif
 }
 
 /*
@@ -219,7 +169,7 @@ static bool ctx_init(struct swivel_ctx *x, const struct arm *a, const struct vec
 	x->q5 = sc_asin(sq5);
 	x->s5 = sq5;
 	x->c5 = sc_sqrt(SC_C(1) - sc_mul(sq5, sq5));
-	x->viol15 = violation(q1, a->lim.lo[0], a->lim.hi[0]) + violation(x->q5, a->lim.lo[4], a->lim.hi[4]);
+	x->viol15 = ik_violation(q1, a->lim.lo[0], a->lim.hi[0]) + ik_violation(x->q5, a->lim.lo[4], a->lim.hi[4]);
 	x->uh = x->u;
 	v3_normalize(&x->uh);
 	/* angle at the shoulder between the upper arm and u */
@@ -316,7 +266,7 @@ static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM
 		if (v > 0)
 			return v + x->viol15 + UPPER_PENALTY;
 	} else {
-		v = euler_yxz((const sc_t(*)[3])R, &a->lim, 1, &q[1]);
+		v = ik_euler_yxz((const sc_t(*)[3])R, &a->lim, 1, &q[1]);
 	}
 	/*
 	 * The wrist turns M = R15^T Rt with R15 = R Rx(q5) (J1 frame). Rx only
@@ -340,34 +290,26 @@ static sc_t ctx_eval_cs(const struct swivel_ctx *x, sc_t cp, sc_t sp, sc_t q[ARM
 		static const unsigned char rc[5] = { 0x02, 0x10, 0x11, 0x12, 0x22 }; /* row << 4 | column */
 		int r = rc[i] >> 4, c = rc[i] & 3;
 
-		M[r][c] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, r, c);
+		M[r][c] = ik_m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, r, c);
 	}
 #else
-	M[0][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 0, 2);
-	M[1][0] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 0);
-	M[1][1] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 1);
-	M[1][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 2);
-	M[2][2] = m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 2, 2);
+	M[0][2] = ik_m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 0, 2);
+	M[1][0] = ik_m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 0);
+	M[1][1] = ik_m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 1);
+	M[1][2] = ik_m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 1, 2);
+	M[2][2] = ik_m3_tdot((const sc_t(*)[3])R15, (const sc_t(*)[3])x->rt1, 2, 2);
 #endif
 	if (!full) {
 		v = euler_fast((const sc_t(*)[3])M, a, 5);
 		if (v > 0)
 			return v + x->viol15;
 		/* inside: now the angles themselves */
-		euler_yxz((const sc_t(*)[3])R, &a->lim, 1, &q[1]);
-		euler_yxz((const sc_t(*)[3])M, &a->lim, 5, &q[5]);
+		ik_euler_yxz((const sc_t(*)[3])R, &a->lim, 1, &q[1]);
+		ik_euler_yxz((const sc_t(*)[3])M, &a->lim, 5, &q[5]);
 		return x->viol15;
 	}
-	v += euler_yxz((const sc_t(*)[3])M, &a->lim, 5, &q[5]);
+	v += ik_euler_yxz((const sc_t(*)[3])M, &a->lim, 5, &q[5]);
 	return v + x->viol15;
-}
-
-static void q_copy(sc_t dst[ARM_DOF], const sc_t src[ARM_DOF])
-{
-	int i;
-
-	for (i = 0; i < ARM_DOF; i++)
-		dst[i] = src[i];
 }
 
 struct search {
@@ -392,7 +334,7 @@ static sc_t search_eval_cs(struct search *s, const struct swivel_ctx *x, sc_t ph
 		s->best_v = v;
 		s->best_q1 = x->q1;
 		s->best_phi = phi;
-		q_copy(s->best_q, q);
+		ik_q_copy(s->best_q, q);
 	}
 	return v;
 }
@@ -421,7 +363,7 @@ static bool ctx_refine(struct search *s, const struct swivel_ctx *x, sc_t lo, sc
 	v2 = search_eval(s, x, m2, t, true);
 	for (it = 0; it < 12; it++) {
 		if (v2 == 0) {
-			q_copy(q, t);
+			ik_q_copy(q, t);
 			return true;
 		}
 		if (v1 <= v2) {
@@ -430,7 +372,7 @@ static bool ctx_refine(struct search *s, const struct swivel_ctx *x, sc_t lo, sc
 			m1 = lo + sc_mul(g, hi - lo);
 			v1 = search_eval(s, x, m1, t, true);
 			if (v1 == 0) {
-				q_copy(q, t);
+				ik_q_copy(q, t);
 				return true;
 			}
 		} else {
@@ -478,7 +420,7 @@ static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, 
 					bv = v, bphi = hi;
 				continue;
 			}
-			q_copy(q, t);
+			ik_q_copy(q, t);
 			/* feasible at hi, not at lo: move hi toward lo */
 			lo = hi - sc_mul_int(step, side);
 			for (it = 0; it < 8; it++) {
@@ -488,7 +430,7 @@ static bool ctx_search(struct search *s, const struct swivel_ctx *x, sc_t phi0, 
 					lo = mid;
 				} else {
 					hi = mid;
-					q_copy(q, t);
+					ik_q_copy(q, t);
 				}
 			}
 			return true;
@@ -561,7 +503,7 @@ static bool rescue(struct search *s, const struct swivel_target *st, sc_t q[ARM_
 	}
 	if (v > 0)
 		return false;
-	q_copy(q, s->best_q);
+	ik_q_copy(q, s->best_q);
 	return true;
 }
 
@@ -705,7 +647,7 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 	s.evals = 0;
 	s.best_v = SC_BIG;
 	s.best_q1 = s.best_phi = 0;
-	q_copy(s.best_q, pref);
+	ik_q_copy(s.best_q, pref);
 	st.a = a;
 	d = t->d;
 	if (a->side == ARM_LEFT)
@@ -744,7 +686,7 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 		if (!ctx_search(&s, &x, ctx_swivel(&x, k == 0 ? &st.x4p : NULL), k == 0, cand))
 			continue;
 		found = true;
-		q_copy(q, cand);
+		ik_q_copy(q, cand);
 		break;
 	}
 	if (!found && nc > 1 && ctx_init(&x, a, &st.w, (const sc_t(*)[3])st.rt, s.best_q1) && x.viol15 == 0) {
@@ -756,7 +698,7 @@ bool ik_swivel_solve(const struct arm *a, const struct ik_target *t, const sc_t 
 	if (!found)
 		found = rescue(&s, &st, q);
 	if (!found)
-		q_copy(q, s.best_q);
+		ik_q_copy(q, s.best_q);
 	*evals = s.evals;
 	return found;
 }
