@@ -98,7 +98,8 @@ static const struct cfg_key daemon_keys[] = {
 	  CFG_AT(struct cfg_daemon, control_socket),
 	  .def = "auto",
 	  .doc = "Unix socket of avatargw-ctl; auto = $RUNTIME_DIRECTORY/control, else "
-		 "$XDG_RUNTIME_DIR/avatargw.control, else /tmp/avatargw-UID.control; empty = none" },
+		 "$XDG_RUNTIME_DIR/avatargw.control, else $TMPDIR/avatargw-UID/control (a directory made with mode "
+		 "0700); empty = none" },
 	{ .name = "describe_interval",
 	  .kind = CFG_DOUBLE,
 	  CFG_AT(struct cfg_daemon, describe_interval),

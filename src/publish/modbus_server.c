@@ -29,6 +29,7 @@
  * silent client holds a slot for a bounded time and never holds the thread.
  */
 #include "publish/output.h"
+#include "base/json.h"
 #include "publish/modbus_server.h"
 #include "base/clock.h"
 #include "publish/listen.h"
@@ -481,9 +482,14 @@ static void describe_addr(const struct cfg_output *cfg, char *buf, size_t len)
 	snprintf(buf, len, "%s:%d", opts_of(cfg)->address, opts_of(cfg)->port);
 }
 
-static int listen_on(const struct cfg_output *cfg, char *err, size_t errlen)
+/* a reload that changes the server's settings shares the old server's socket until it closes */
+static int listen_on(const struct output *o, const char *addr, char *err, size_t errlen)
 {
-	return out_listen_tcp(cfg->name, opts_of(cfg)->address, opts_of(cfg)->port, "Modbus server", true, err, errlen);
+	const struct cfg_output *cfg = o->cfg;
+	const struct mb_server *p = o->prev ? o->prev->priv : NULL;
+
+	return out_listen_tcp(cfg->name, opts_of(cfg)->address, opts_of(cfg)->port, "Modbus server",
+			      p && !strcmp(p->addr, addr) ? p->lfd : -1, err, errlen);
 }
 
 static void free_server(struct mb_server *s)
@@ -566,7 +572,7 @@ static int modbus_server_open(struct output *o, char *err, size_t errlen)
 		free_server(s);
 		return rc;
 	}
-	s->lfd = listen_on(cfg, err, errlen);
+	s->lfd = listen_on(o, s->addr, err, errlen);
 	if (s->lfd < 0) {
 		rc = s->lfd;
 		s->lfd = -1;
@@ -662,17 +668,18 @@ static void modbus_server_report(struct output *o, FILE *out, bool json)
 	if (!s)
 		return;
 	if (json) {
+		fputs(",\"modbus\":{\"address\":", out);
+		json_string(out, s->addr);
 		fprintf(out,
-			",\"modbus\":{\"address\":\"%s\",\"avatars\":%d,\"requests\":%llu,"
+			",\"avatars\":%d,\"requests\":%llu,"
 			"\"illegal_function\":%llu,\"illegal_address\":%llu,\"illegal_value\":%llu,"
 			"\"malformed\":%llu,\"writes\":%llu,\"writes_refused\":%llu,\"idle_closed\":%llu,"
 			"\"send_errors\":%llu,\"updates\":%llu}",
-			s->addr, s->n, (unsigned long long)get(&s->st.requests),
-			(unsigned long long)get(&s->st.exceptions[1]), (unsigned long long)get(&s->st.exceptions[2]),
-			(unsigned long long)get(&s->st.exceptions[3]), (unsigned long long)get(&s->st.malformed),
-			(unsigned long long)get(&s->st.writes), (unsigned long long)get(&s->st.writes_refused),
-			(unsigned long long)get(&s->st.idle_closed), (unsigned long long)get(&s->st.send_errors),
-			(unsigned long long)get(&s->st.updates));
+			s->n, (unsigned long long)get(&s->st.requests), (unsigned long long)get(&s->st.exceptions[1]),
+			(unsigned long long)get(&s->st.exceptions[2]), (unsigned long long)get(&s->st.exceptions[3]),
+			(unsigned long long)get(&s->st.malformed), (unsigned long long)get(&s->st.writes),
+			(unsigned long long)get(&s->st.writes_refused), (unsigned long long)get(&s->st.idle_closed),
+			(unsigned long long)get(&s->st.send_errors), (unsigned long long)get(&s->st.updates));
 		return;
 	}
 	fprintf(out,

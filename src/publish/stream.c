@@ -101,40 +101,39 @@ static void describe_addr(const struct cfg_output *cfg, char *buf, size_t len)
 		snprintf(buf, len, "tcp:%s:%d", opts_of(cfg)->address, opts_of(cfg)->port);
 }
 
-static int listen_tcp(const struct cfg_output *cfg, char *err, size_t errlen)
+/* the listening socket of the output a reload replaces, when it has the same address */
+static int inherited(const struct output *o, const char *addr)
 {
-	return out_listen_tcp(cfg->name, opts_of(cfg)->address, opts_of(cfg)->port, "listen", false, err, errlen);
+	const struct stream *p = o->prev ? o->prev->priv : NULL;
+
+	return p && !strcmp(p->addr, addr) ? p->lfd : -1;
 }
 
-static int listen_unix(const struct cfg_output *cfg, char *err, size_t errlen)
+static int listen_tcp(const struct output *o, const char *addr, char *err, size_t errlen)
 {
-	struct sockaddr_un sun = { .sun_family = AF_UNIX };
-	struct stat st;
-	int fd, rc;
+	const struct cfg_output *cfg = o->cfg;
 
-	if (strlen(opts_of(cfg)->path) >= sizeof(sun.sun_path)) {
-		snprintf(err, errlen, "[output %s] path: longer than %zu characters", cfg->name,
-			 sizeof(sun.sun_path) - 1);
-		return -ENAMETOOLONG;
+	return out_listen_tcp(cfg->name, opts_of(cfg)->address, opts_of(cfg)->port, "listen", inherited(o, addr), err,
+			      errlen);
+}
+
+static int listen_unix(const struct output *o, const char *addr, char *err, size_t errlen)
+{
+	const struct cfg_output *cfg = o->cfg;
+	char why[CFG_PATH_MAX + 128];
+	int fd, old = inherited(o, addr);
+
+	if (old >= 0) {
+		fd = out_unix_share(old, opts_of(cfg)->path);
+		if (fd < 0)
+			snprintf(err, errlen, "[output %s]: listen on %s: %s", cfg->name, opts_of(cfg)->path,
+				 strerror(-fd));
+		return fd;
 	}
-	strcpy(sun.sun_path, opts_of(cfg)->path);
-	/* a socket left by a previous run is ours to replace; anything else is not */
-	if (lstat(opts_of(cfg)->path, &st) == 0) {
-		if (!S_ISSOCK(st.st_mode)) {
-			snprintf(err, errlen, "[output %s] path: %s exists and is not a socket", cfg->name,
-				 opts_of(cfg)->path);
-			return -EEXIST;
-		}
-		unlink(opts_of(cfg)->path);
-	}
-	fd = socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-	if (fd < 0 || bind(fd, (struct sockaddr *)&sun, sizeof(sun)) || listen(fd, 16)) {
-		rc = -errno;
-		snprintf(err, errlen, "[output %s]: listen on %s: %s", cfg->name, opts_of(cfg)->path, strerror(errno));
-		if (fd >= 0)
-			close(fd);
-		return rc;
-	}
+	/* 0660: the daemon's user and group may subscribe (under systemd: its runtime directory's mode) */
+	fd = out_listen_unix(opts_of(cfg)->path, 0660, why, sizeof(why));
+	if (fd < 0)
+		snprintf(err, errlen, "[output %s] path: %s", cfg->name, why);
 	return fd;
 }
 
@@ -161,7 +160,7 @@ static int stream_open(struct output *o, char *err, size_t errlen)
 		s->cl[i].fd = -1;
 		s->cl[i].buf = s->pool + (size_t)i * s->buf_size;
 	}
-	s->lfd = cfg_output_is(cfg, "unix") ? listen_unix(cfg, err, errlen) : listen_tcp(cfg, err, errlen);
+	s->lfd = s->is_unix ? listen_unix(o, s->addr, err, errlen) : listen_tcp(o, s->addr, err, errlen);
 	if (s->lfd < 0) {
 		int rc = s->lfd;
 
@@ -193,9 +192,10 @@ static void stream_close(struct output *o)
 	for (int i = 0; i < s->max_clients; i++)
 		if (s->cl[i].fd >= 0)
 			close(s->cl[i].fd);
-	close(s->lfd);
 	if (s->is_unix)
-		unlink(opts_of(o->cfg)->path);
+		out_unix_close(s->lfd, s->addr + 5); /* "unix:" */
+	else
+		close(s->lfd);
 	free(s->cl);
 	free(s->pool);
 	free(s);
