@@ -55,9 +55,9 @@ static const struct cfg_key vrpn_keys[] = {
 	{ .name = "address",
 	  .kind = CFG_STR,
 	  CFG_AT(struct vrpn_opts, address),
-	  .def = "0.0.0.0",
+	  .def = "127.0.0.1",
 	  .doc = "listen address for TCP connections and UDP connection requests (0.0.0.0: every IPv4 interface, "
-		 "::: every interface)" },
+		 "::: every interface; the default serves this host only)" },
 	{ .name = "port",
 	  .kind = CFG_INT,
 	  CFG_AT(struct vrpn_opts, port),

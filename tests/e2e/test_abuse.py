@@ -28,6 +28,7 @@ import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from busutil import CTL, DAEMON, Daemon, free_port, until, wait_port  # noqa: E402
+import vrpn_client as vc  # noqa: E402
 
 SIM = "[source sim]\ntype = sim\n[avatar a]\nperson = sim/p0\n[output u]\ntype = udp\nport = %d\n"
 
@@ -381,6 +382,99 @@ class SecondInstanceTest(unittest.TestCase):
                     self.assertIn("in use", err)
             finally:
                 squat.close()
+
+
+def bound(proto, port):
+    """the local addresses (hex, as /proc/net shows them) of this host's sockets on port"""
+    out = set()
+    for name in (proto, proto + "6"):
+        with open("/proc/net/" + name) as f:
+            for line in f.readlines()[1:]:
+                addr, p = line.split()[1].split(":")
+                if int(p, 16) == port:
+                    out.add(addr)
+    return out
+
+
+class VrpnTest(unittest.TestCase):
+    def test_default_address_is_loopback(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            port = free_port()
+            d = Daemon(tmp, sim_conf("[output v]\ntype = vrpn\nport = %d\n" % port))
+            try:
+                wait_port(port)
+                self.assertEqual(bound("tcp", port), {"0100007F"})
+                self.assertEqual(bound("udp", port), {"0100007F"})
+            finally:
+                self.assertEqual(d.stop(), 0)
+
+    def test_udp_only_to_the_connections_address(self):
+        """a client at 127.0.0.2 names 127.0.0.1 in its UDP announcement: the reports go to 127.0.0.2"""
+        with tempfile.TemporaryDirectory() as tmp:
+            port = free_port()
+            d = Daemon(tmp, sim_conf("[output v]\ntype = vrpn\nport = %d\n" % port))
+            socks = []
+            try:
+                wait_port(port)
+                named = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+                named.bind(("127.0.0.1", 0))
+                udp_port = named.getsockname()[1]
+                peer = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+                peer.bind(("127.0.0.2", udp_port))
+                c = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+                c.bind(("127.0.0.2", 0))
+                c.connect(("127.0.0.1", port))
+                socks = [named, peer, c]
+                c.sendall(vc.cookie())
+                c.sendall(vc.message(vc.UDP_DESCRIPTION, udp_port, b"127.0.0.1\0") +
+                          vc.description(vc.SENDER_DESCRIPTION, 0, "Avatar0"))
+                peer.settimeout(5)
+                data = peer.recv(65536)
+                self.assertGreater(len(data), 24)
+                named.settimeout(0.5)
+                with self.assertRaises(socket.timeout):
+                    named.recv(65536)
+            finally:
+                for s_ in socks:
+                    s_.close()
+                self.assertEqual(d.stop(), 0)
+
+    def test_call_back_only_to_the_requests_address(self):
+        """a request from 127.0.0.2 naming 127.0.0.1: the server connects to 127.0.0.2"""
+        with tempfile.TemporaryDirectory() as tmp:
+            port = free_port()
+            d = Daemon(tmp, sim_conf("[output v]\ntype = vrpn\nport = %d\n" % port))
+            socks = []
+            try:
+                wait_port(port)
+                named = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+                named.bind(("127.0.0.1", 0))
+                cb_port = named.getsockname()[1]
+                named.listen(1)
+                real = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+                real.bind(("127.0.0.2", cb_port))
+                real.listen(1)
+                lob = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+                lob.bind(("127.0.0.2", 0))
+                socks = [named, real, lob]
+                real.settimeout(0.5)
+                conn = None
+                for _ in range(10):
+                    lob.sendto(b"127.0.0.1 %d\0" % cb_port, ("127.0.0.1", port))
+                    try:
+                        conn, _ = real.accept()
+                        break
+                    except socket.timeout:
+                        pass
+                self.assertIsNotNone(conn, "no call back to the request's address")
+                socks.append(conn)
+                named.settimeout(0.5)
+                with self.assertRaises(socket.timeout):
+                    named.accept()
+            finally:
+                for s_ in socks:
+                    s_.close()
+                self.assertEqual(d.stop(), 0)
 
 
 class JsonTest(unittest.TestCase):
