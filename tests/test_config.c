@@ -1738,7 +1738,8 @@ static void test_values_renderer_outputs(void **state)
 
 	assert_int_equal(c->n_outputs, 7);
 	assert_int_equal(o[0].type, cfg_output_type_find("vrpn"));
-	assert_string_equal(((const struct vrpn_opts *)(o[0]).opt)->address, "0.0.0.0");
+	/* vrpn listens on this host only by default */
+	assert_string_equal(((const struct vrpn_opts *)(o[0]).opt)->address, "127.0.0.1");
 	assert_int_equal(((const struct vrpn_opts *)(o[0]).opt)->port, 3883);
 	assert_string_equal(((const struct vrpn_opts *)(o[0]).opt)->device, "Avatar%d");
 	assert_true(((const struct vrpn_opts *)(o[0]).opt)->udp);
