@@ -14,6 +14,7 @@
 Run from the repository root: python3 -m unittest tests/e2e/test_abuse.py
 (BUILD=build-san selects the sanitizer build)."""
 import json
+import math
 import os
 import pwd
 import signal
@@ -24,10 +25,12 @@ import sys
 import tempfile
 import threading
 import time
+import struct
 import unittest
+import zlib
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from busutil import CTL, DAEMON, Daemon, free_port, until, wait_port  # noqa: E402
+from busutil import CTL, DAEMON, ROOT, Daemon, UdpFrames, free_port, until, wait_port  # noqa: E402
 import vrpn_client as vc  # noqa: E402
 
 SIM = "[source sim]\ntype = sim\n[avatar a]\nperson = sim/p0\n[output u]\ntype = udp\nport = %d\n"
@@ -475,6 +478,261 @@ class VrpnTest(unittest.TestCase):
                 for s_ in socks:
                     s_.close()
                 self.assertEqual(d.stop(), 0)
+
+
+CLIP = os.path.join(ROOT, "config", "clips", "cmu_141_16.csv")
+ROLES = ("head", "lhand", "rhand")
+AXES = ("x", "y", "z", "qw", "qx", "qy", "qz")
+
+
+def clip_pose_rows(n):
+    """n rows of the clip's first n frames: frame, t, then x y z qw qx qy qz of head, lhand, rhand"""
+    rows = []
+    with open(CLIP) as f:
+        head = f.readline().strip().split(",")
+        idx = [head.index("%s_%s" % (r, a)) for r in ROLES for a in AXES]
+        for i, line in enumerate(f):
+            if i == n:
+                break
+            v = line.strip().split(",")
+            rows.append([float(v[k]) for k in idx])
+    return rows
+
+
+class HostileTest(unittest.TestCase):
+    """hostile values in each kind of source: never a NaN (but a missing sensor's) or an infinity on the
+    wire, nothing beyond max_distance, the values counted as malformed"""
+
+    def check_frames(self, frames, limit=100.0):
+        """every frame finite where the protocol says so; returns how many had a STALE sensor"""
+        self.assertGreater(len(frames), 20, "too few frames")
+        stale = 0
+        for f in frames:
+            for s in f["sensors"]:
+                if s["state"] == 2:
+                    continue  # MISSING: NaN by the protocol's rule
+                stale += s["state"] == 1
+                for v in s["p"] + s["q"]:
+                    self.assertTrue(math.isfinite(v), "a non-finite sensor value published: %r" % (f,))
+                self.assertLessEqual(math.sqrt(sum(v * v for v in s["p"])), limit * 1.0001,
+                                     "a sensor beyond max_distance published: %r" % (s,))
+                self.assertAlmostEqual(math.sqrt(sum(v * v for v in s["q"])), 1.0, delta=1e-3)
+            j = f["joints"]
+            if not all(math.isnan(v) for v in j):
+                for v in j:
+                    self.assertTrue(math.isfinite(v), "a non-finite joint published: %r" % (f,))
+        return stale
+
+    def run_daemon(self, tmp, conf, seconds, pass_fds=(), during=None):
+        """the daemon on conf for seconds (during(d) is called meanwhile); its frames and last status"""
+        udp = free_port(socket.SOCK_DGRAM)
+        rx = UdpFrames(udp)
+        d = Daemon(tmp, conf + "[output hostile_u]\ntype = udp\nport = %d\n" % udp, pass_fds=pass_fds)
+        try:
+            if during:
+                during(d)
+            t_end = time.monotonic() + seconds
+            while time.monotonic() < t_end:
+                time.sleep(0.05)
+            st = d.status()
+        finally:
+            rx.close()
+            self.assertEqual(d.stop(), 0)
+        return rx.snapshot(), st
+
+    def test_replay_csv(self):
+        rows = clip_pose_rows(300)
+        with tempfile.TemporaryDirectory() as tmp:
+            clip = os.path.join(tmp, "hostile.csv")
+            with open(clip, "w") as f:
+                f.write(",".join(["frame", "t"] + ["%s_%s" % (r, a) for r in ROLES for a in AXES]) + "\n")
+                for i, r in enumerate(rows):
+                    r = list(r)
+                    if 60 <= i < 120:
+                        r[7 * 2 + 1] = "1e39"  # rhand y: finite as a double, infinite as a float
+                    elif 120 <= i < 180:
+                        r[7 * 1 + 0] = "-3e38"  # lhand x: a float, 3e38 m away
+                    elif 180 <= i < 200:
+                        r[7 * 2 + 2] = "150"  # rhand z: 150 m up
+                    f.write(",".join(["%d" % i, "%.6f" % (i / 60)] + [str(v) for v in r]) + "\n")
+            conf = ("[daemon]\nrate = 120\nstale_ms = 100\n[source rp]\ntype = replay\nfile = %s\n"
+                    "[avatar a]\nperson = rp\n" % clip)
+            frames, st = self.run_daemon(tmp, conf, 4.5)
+            stale = self.check_frames(frames)
+            self.assertGreater(stale, 10, "the hands were never STALE while their samples were refused")
+            src = [x for x in st["sources"] if x["name"] == "rp"][0]
+            self.assertGreaterEqual(src["malformed"], 140)
+            # the posture stayed: frames went on all along
+            self.assertEqual([a["nan_blocked"] for a in st["avatars"]], [0])
+
+    def test_replay_recording(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            rec = os.path.join(tmp, "rec")
+            d = Daemon(tmp, sim_conf("[daemon]\nrecord_dir = %s\n" % rec))
+            try:
+                until(lambda: d.status()["recorder"]["records"] > 2400, 20, "three seconds recorded")
+            finally:
+                self.assertEqual(d.stop(), 0)
+            files = sorted(os.listdir(rec))
+            path = os.path.join(rec, files[0])
+            with open(path, "rb") as f:
+                data = bytearray(f.read())
+            # the right hand's samples (sensor 2 of source 0, sim's p0.right_hand) in the middle: hostile
+            samples, pos = [], 32
+            while pos + 12 <= len(data):
+                self.assertEqual(bytes(data[pos:pos + 4]), b"\xa5REC")
+                word = struct.unpack_from("<I", data, pos + 4)[0]
+                n = word >> 8
+                if word & 0xFF == 2 and struct.unpack_from("<HH", data, pos + 8) == (0, 2):
+                    samples.append(pos)
+                pos += 12 + n
+            bad = samples[len(samples) // 3: 2 * len(samples) // 3]
+            for k, at in enumerate(bad):
+                pl = at + 8
+                if k % 3 == 0:
+                    struct.pack_into("<f", data, pl + 28, float("inf"))  # y
+                elif k % 3 == 1:
+                    struct.pack_into("<f", data, pl + 24, 1e30)  # x, far beyond any room
+                else:
+                    struct.pack_into("<4f", data, pl + 36, 0.0, 0.0, 0.0, 0.0)  # no rotation at all
+                n = struct.unpack_from("<I", data, at + 4)[0] >> 8
+                struct.pack_into("<I", data, at + 8 + n, zlib.crc32(bytes(data[at + 4:at + 8 + n])))
+            hostile = os.path.join(tmp, "hostile.agwrec")
+            with open(hostile, "wb") as f:
+                f.write(data)
+            conf = ("[daemon]\nrate = 120\nstale_ms = 100\n[source rp]\ntype = replay\nfile = %s\n"
+                    "[avatar a]\nperson = rp/sim.p0\n" % hostile)
+            frames, st = self.run_daemon(os.path.join(tmp, "rec"), conf, 3.0)
+            stale = self.check_frames(frames)
+            self.assertGreater(stale, 10, "the right hand was never STALE while its samples were refused")
+            src = [x for x in st["sources"] if x["name"] == "rp"][0]
+            self.assertGreaterEqual(src["malformed"], len(bad) // 2)  # those played in the time
+
+    def test_modbus(self):
+        peer = os.path.join(os.path.dirname(os.path.abspath(__file__)), "modbus_peer.py")
+        port = free_port()
+
+        def f32(v):
+            return list(struct.unpack(">HH", struct.pack(">f", v)))
+
+        # pose0: x = FLT_MAX (7F7F FFFF) times a scale of 10; pose1: 1000 km; pose2: a quaternion of length 3
+        quat = f32(0.0) * 3 + f32(1.0)  # x y z w
+        regs = ([0x7F7F, 0xFFFF] + f32(0.0) * 2 + quat + [0] * 6 +
+                f32(1e6) + f32(0.0) * 2 + quat + [0] * 6 +
+                f32(0.5) * 3 + f32(0.0) * 3 + f32(3.0) + [0] * 6)
+        p = subprocess.Popen([sys.executable, peer, str(port), "i:100=" + ",".join(str(v) for v in regs)],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        try:
+            wait_port(port)
+            conf = ("[daemon]\nrate = 120\n[source sim]\ntype = sim\n"
+                    "[source dev]\ntype = modbus\naddress = 127.0.0.1\nport = %d\nregister_type = input\n"
+                    "sensors = 3\nsensor_stride = 20\nposition_register = 100\nposition_format = float32\n"
+                    "position_scale = 10\norientation_register = 106\norientation_format = float32\n"
+                    "orientation_scale = 1\norientation = quat_xyzw\npoll_rate = 50\n"
+                    "[avatar a]\nperson = sim/p0\nleft_hand = dev/pose0\n"
+                    "[avatar b]\nid = 1\nperson = sim/p0\nleft_hand = dev/pose1\nright_hand = dev/pose2\n" % port)
+            with tempfile.TemporaryDirectory() as tmp:
+                frames, st = self.run_daemon(tmp, conf, 2.0)
+            self.check_frames(frames)
+            # the hostile sensors never got a sample in: MISSING throughout
+            for f in frames:
+                if f["avatar"] == 0:
+                    self.assertEqual(f["sensors"][1]["state"], 2)
+                else:
+                    self.assertEqual([s["state"] for s in f["sensors"][1:]], [2, 2])
+            src = [x for x in st["sources"] if x["name"] == "dev"][0]
+            self.assertGreater(src["malformed"], 10)
+        finally:
+            p.kill()
+            p.wait()
+
+    def test_can(self):
+        frame = struct.Struct("<IB3x8s")
+        mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+        conf = ("[daemon]\nrate = 120\nstale_ms = 100\n[source sim]\ntype = sim\n"
+                "[source imu]\ntype = can\ninterface = fd:%d\nsensors = 1\norientation_id = 0x200\n"
+                "position_id = 0x280\nquaternion_scale = 16384\nposition_scale = 0.01\n"
+                "[avatar a]\nperson = sim/p0\nright_hand = imu/pose0\n" % theirs.fileno())
+
+        def send(can_id, data):
+            mine.send(frame.pack(can_id, len(data), data))
+
+        def feed(d):
+            quat = struct.pack("<4h", 16384, 0, 0, 0)
+            # a good pose, then positions of 327 m (int16 at 0.01 m) for a second, then good again
+            for _ in range(20):
+                send(0x200, quat)
+                send(0x280, struct.pack("<3h", 30, 40, 100))
+                time.sleep(0.01)
+            t_end = time.monotonic() + 1.0
+            while time.monotonic() < t_end:
+                send(0x280, struct.pack("<3h", 32767, -32768, 32767))
+                time.sleep(0.01)
+
+        with tempfile.TemporaryDirectory() as tmp:
+            try:
+                frames, st = self.run_daemon(tmp, conf, 0.2, pass_fds=(theirs.fileno(),), during=feed)
+            finally:
+                mine.close()
+                theirs.close()
+        stale = self.check_frames(frames)
+        self.assertGreater(stale, 10, "the hand was never STALE while its samples were refused")
+        # what was published for it is its last good pose
+        for f in frames:
+            s = f["sensors"][2]
+            if s["state"] != 2:
+                for got, want in zip(s["p"], (0.3, 0.4, 1.0)):
+                    self.assertAlmostEqual(got, want, delta=1e-6)
+        src = [x for x in st["sources"] if x["name"] == "imu"][0]
+        self.assertGreater(src["malformed"], 20)
+
+    def capture_run(self, driver, lines, extra="", limit=100.0):
+        with tempfile.TemporaryDirectory() as tmp:
+            cap = os.path.join(tmp, "hostile.cap")
+            with open(cap, "w") as f:
+                f.write("\n".join(lines) + "\n")
+            conf = ("[daemon]\nrate = 120\nstale_ms = 100\n[source sim]\ntype = sim\n"
+                    "[source dev]\ntype = %s\ncapture = %s\n%s"
+                    "[avatar a]\nperson = sim/p0\n%s" % (driver, cap, extra,
+                                                           "left_hand = dev/left\nright_hand = dev/right\n"
+                                                           if driver == "hydra" else
+                                                           "right_hand = dev/right_hand\n"))
+            frames, st = self.run_daemon(tmp, conf, 3.0)
+        self.check_frames(frames, limit)
+        src = [x for x in st["sources"] if x["name"] == "dev"][0]
+        self.assertGreater(src["malformed"], 10)
+        return frames
+
+    def test_hydra_capture(self):
+        with open(os.path.join(ROOT, "tests", "data", "hydra-cmu_141_16.cap")) as f:
+            lines = [ln.strip() for ln in f if ln.strip() and not ln.startswith("#")]
+        out = []
+        for i, ln in enumerate(lines[:600]):
+            t, hexes = ln.split(" ", 1)
+            b = bytearray(bytes.fromhex(hexes.replace(" ", "")))
+            if 200 <= i < 400:
+                w = 8 + 22 * (i % 2)
+                if i % 4 < 2:
+                    struct.pack_into("<4h", b, w + 6, 0, 0, 0, 0)  # no rotation
+                else:
+                    struct.pack_into("<3h", b, w, 32767, -32768, 32767)  # 57 m in one report
+            out.append(t + " " + " ".join("%02x" % c for c in b))
+        self.capture_run("hydra", out, "origin = 0 0.5 1.45\nyaw = -20\n")
+
+    def test_polhemus_capture(self):
+        with open(os.path.join(ROOT, "tests", "data", "polhemus-cmu_141_16.cap")) as f:
+            lines = [ln.strip() for ln in f if ln.strip() and not ln.startswith("#")]
+        out = []
+        for i, ln in enumerate(lines[:720]):
+            b = bytearray(bytes.fromhex(ln))
+            if 240 <= i < 480:
+                # station 3 (the right hand, the third 41-byte record): x infinite, NaN, 1e30 cm, 9999 cm
+                at = 2 * 41 + 8
+                v = (float("inf"), float("nan"), 1e30, 9999.0)[i % 4]
+                struct.pack_into("<f", b, at, v)
+            out.append(b.hex())
+        self.capture_run("polhemus", out, "model = liberty_hs\norigin = 0.1 0.6 2.2\nyaw = 30\n"
+                         "max_distance = 50\n", limit=50.0)
 
 
 class JsonTest(unittest.TestCase):
