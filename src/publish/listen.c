@@ -7,6 +7,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <netdb.h>
+#include <netinet/in.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/socket.h>
@@ -193,4 +194,65 @@ void out_unix_close(int fd, const char *path)
 	if (lstat(path, &st) == 0 && st.st_dev == m->dev && st.st_ino == m->ino)
 		unlink(path);
 	m->path[0] = '\0';
+}
+
+bool out_same_host(const struct sockaddr_storage *a, const struct sockaddr_storage *b)
+{
+	if (a->ss_family != b->ss_family)
+		return false;
+	if (a->ss_family == AF_INET)
+		return ((const struct sockaddr_in *)a)->sin_addr.s_addr ==
+		       ((const struct sockaddr_in *)b)->sin_addr.s_addr;
+	if (a->ss_family == AF_INET6)
+		return !memcmp(&((const struct sockaddr_in6 *)a)->sin6_addr,
+			       &((const struct sockaddr_in6 *)b)->sin6_addr, sizeof(struct in6_addr));
+	return a->ss_family == AF_UNSPEC || a->ss_family == AF_UNIX;
+}
+
+int out_slot_for(const void *base, size_t stride, size_t fd_off, size_t peer_off, int n,
+		 const struct sockaddr_storage *from, int per_addr, uint64_t now_ns, bool *drop)
+{
+	int free_slot = -1, same = 0, idlest = -1, idlest_same = -1;
+	bool host = from && from->ss_family != AF_UNSPEC && from->ss_family != AF_UNIX;
+
+	*drop = false;
+	for (int i = 0; i < n; i++) {
+		const char *c = (const char *)base + (size_t)i * stride;
+		const struct out_peer *p = (const struct out_peer *)(c + peer_off);
+		int fd;
+
+		memcpy(&fd, c + fd_off, sizeof(fd));
+		if (fd < 0) {
+			if (free_slot < 0)
+				free_slot = i;
+			continue;
+		}
+		if (idlest < 0 ||
+		    p->active_ns < ((const struct out_peer *)((const char *)base + (size_t)idlest * stride + peer_off))
+					   ->active_ns)
+			idlest = i;
+		if (host && out_same_host(&p->addr, from)) {
+			same++;
+			if (idlest_same < 0 ||
+			    p->active_ns < ((const struct out_peer *)((const char *)base +
+								      (size_t)idlest_same * stride + peer_off))
+						   ->active_ns)
+				idlest_same = i;
+		}
+	}
+	if (host && per_addr > 0 && same >= per_addr)
+		idlest = idlest_same; /* this address has its share: it gives up one of its own */
+	else if (free_slot >= 0)
+		return free_slot;
+	if (idlest < 0)
+		return -1;
+	{
+		const struct out_peer *p =
+			(const struct out_peer *)((const char *)base + (size_t)idlest * stride + peer_off);
+
+		if (now_ns - p->active_ns < OUT_MIN_IDLE_NS)
+			return -1;
+	}
+	*drop = true;
+	return idlest;
 }

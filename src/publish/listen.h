@@ -14,6 +14,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <sys/socket.h>
 #include <sys/types.h>
 
 /*
@@ -39,6 +40,33 @@ int out_listen_unix(const char *path, mode_t mode, char *err, size_t errlen);
 int out_unix_share(int fd, const char *path);
 /* closes fd; once the last descriptor is closed, unlinks path if it is still the socket we made */
 void out_unix_close(int fd, const char *path);
+
+/*
+ * Connection slots. A client's address (its host, without the port) and
+ * when it was last active (a request, bytes received: what the listener
+ * counts as activity), as each server keeps them in its client slots.
+ */
+struct out_peer {
+	struct sockaddr_storage addr; /* family 0: none (a Unix socket) */
+	uint64_t active_ns;	      /* CLOCK_MONOTONIC */
+};
+
+#define OUT_MIN_IDLE_NS 1000000000ull /* a client active within the last second is never dropped for another */
+
+/* same host: the same family and address, whatever the ports */
+bool out_same_host(const struct sockaddr_storage *a, const struct sockaddr_storage *b);
+
+/*
+ * The slot a new client from `from` takes among n slots: clients[i] is at
+ * base + i * stride, its descriptor (int, -1 when free) at fd_off and its
+ * struct out_peer at peer_off. An address that already holds per_addr
+ * clients (0: no limit but n) gives up its client idle the longest; a full
+ * listener gives up the client idle the longest of all; either only if that
+ * client has been idle OUT_MIN_IDLE_NS. Returns the slot, with *drop true
+ * when its client must be dropped first, or -1: refuse the new client.
+ */
+int out_slot_for(const void *base, size_t stride, size_t fd_off, size_t peer_off, int n,
+		 const struct sockaddr_storage *from, int per_addr, uint64_t now_ns, bool *drop);
 
 /*
  * Sends what the socket takes now of the len bytes at buf + *off, without

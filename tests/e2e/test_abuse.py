@@ -15,6 +15,7 @@ Run from the repository root: python3 -m unittest tests/e2e/test_abuse.py
 (BUILD=build-san selects the sanitizer build)."""
 import json
 import math
+import select
 import os
 import pwd
 import signal
@@ -733,6 +734,207 @@ class HostileTest(unittest.TestCase):
             out.append(b.hex())
         self.capture_run("polhemus", out, "model = liberty_hs\norigin = 0.1 0.6 2.2\nyaw = 30\n"
                          "max_distance = 50\n", limit=50.0)
+
+
+def connect_from(src, port, timeout=3):
+    """a TCP connection to 127.0.0.1:port from the loopback address src (127.0.0.2 is another host)"""
+    s = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    s.bind((src, 0))
+    s.settimeout(timeout)
+    s.connect(("127.0.0.1", port))
+    return s
+
+
+def mb_read(s, tid=1):
+    """one Modbus request (input register 0) and its answer's length, 0 if the connection was closed"""
+    try:
+        s.sendall(bytes([0, tid & 0xFF, 0, 0, 0, 6, 1, 4, 0, 0, 0, 1]))
+        return len(s.recv(64))
+    except (ConnectionResetError, BrokenPipeError, socket.timeout):
+        return 0
+
+
+def is_closed(s, timeout):
+    """true if the peer closes s within timeout (what it sends before is read and dropped)"""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        s.settimeout(max(0.01, end - time.monotonic()))
+        try:
+            if not s.recv(65536):
+                return True
+        except socket.timeout:
+            return False
+        except ConnectionResetError:
+            return True
+    return False
+
+
+class SlotsTest(unittest.TestCase):
+    """connection slots: idle or broken clients do not lock others out"""
+
+    def test_modbus_idle_clients(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            port = free_port()
+            d = Daemon(tmp, sim_conf("[output m]\ntype = modbus\nport = %d\n" % port))
+            idle = []
+            try:
+                wait_port(port)
+                until(lambda: d.output("m")["clients"] == 0, 5, "wait_port's connection gone")
+                # one host opens 8 silent connections: it gets its share (4), and a fifth of its own
+                # connections only ever replaces one of its others
+                for _ in range(8):
+                    idle.append(connect_from("127.0.0.2", port))
+                until(lambda: d.output("m")["clients"] == 4, 5, "four clients of 127.0.0.2")
+                time.sleep(0.3)
+                self.assertEqual(d.output("m")["clients"], 4)
+                # a second host fills the other slots
+                for _ in range(4):
+                    idle.append(connect_from("127.0.0.3", port))
+                until(lambda: d.output("m")["clients"] == 8, 5, "eight clients")
+                # a real client still gets in once they have been idle a second, and is served
+                time.sleep(1.2)
+                c = connect_from("127.0.0.1", port)
+                idle.append(c)
+                self.assertEqual(mb_read(c), 11, "a client locked out by idle connections")
+                o = d.output("m")
+                self.assertEqual(o["clients"], 8)
+                self.assertGreaterEqual(o["modbus"]["evicted"], 1)
+            finally:
+                for s_ in idle:
+                    s_.close()
+                self.assertEqual(d.stop(), 0)
+
+    def test_vrpn_clients_that_only_read(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            port = free_port()
+            d = Daemon(tmp, sim_conf("[output v]\ntype = vrpn\nport = %d\n" % port))
+            readers, stop = [], threading.Event()
+
+            def drain():
+                while not stop.is_set():
+                    r, _, _ = select.select(readers, [], [], 0.05)
+                    for s_ in r:
+                        try:
+                            s_.recv(65536)
+                        except OSError:
+                            pass
+
+            th = threading.Thread(target=drain, daemon=True)
+            try:
+                wait_port(port)
+                until(lambda: d.output("v")["clients"] == 0, 5, "wait_port's connection gone")
+                # two hosts, four clients each that shake hands and then read everything, forever
+                for src in ("127.0.0.2", "127.0.0.3"):
+                    for _ in range(4):
+                        s_ = connect_from(src, port)
+                        s_.sendall(vc.cookie())
+                        s_.setblocking(False)
+                        readers.append(s_)
+                th.start()
+                until(lambda: d.output("v")["clients"] == 8, 5, "eight readers")
+                # a fifth from one of them: it takes one of its own host's slots, no one else's
+                time.sleep(1.2)
+                extra = connect_from("127.0.0.2", port)
+                extra.close()
+                # a real client gets in and receives reports
+                c = vc.Client("127.0.0.1", port, ["Avatar0"], mode="tcp")
+                try:
+                    self.assertTrue(c.poll(1.0), "the new client was closed")
+                    self.assertTrue(c.of(vc.POS_QUAT, "Avatar0"), "no reports for the new client")
+                finally:
+                    c.close()
+            finally:
+                stop.set()
+                if th.is_alive():
+                    th.join()
+                for s_ in readers:
+                    s_.close()
+                self.assertEqual(d.stop(), 0)
+
+    def test_stream_subscribers_that_stopped_reading(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            port = free_port()
+            d = Daemon(tmp, sim_conf("[output t]\ntype = tcp\nport = %d\nmax_clients = 2\nclient_buffer = 4096\n"
+                                     % port))
+            stuck = []
+            try:
+                wait_port(port)
+                until(lambda: d.output("t")["clients"] == 0, 5, "wait_port's connection gone")
+                for src in ("127.0.0.2", "127.0.0.3"):
+                    s_ = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+                    s_.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+                    s_.bind((src, 0))
+                    s_.connect(("127.0.0.1", port))
+                    stuck.append(s_)  # never read: their sockets fill, then take nothing more
+                until(lambda: d.output("t")["dropped"] > 200, 10, "the two subscribers stalled")
+                time.sleep(1.2)
+                c = connect_from("127.0.0.1", port)
+                stuck.append(c)
+                got = b""
+                while len(got) < 8:
+                    chunk = c.recv(4096)
+                    self.assertTrue(chunk, "the new subscriber was closed")
+                    got += chunk
+                self.assertEqual(d.output("t")["clients"], 2)
+            finally:
+                for s_ in stuck:
+                    s_.close()
+                self.assertEqual(d.stop(), 0)
+
+    def ws_conf(self, port):
+        return sim_conf("[output w]\ntype = websocket\nport = %d\nmax_clients = 2\nidle_timeout = 2\n"
+                        "client_timeout = 2\n" % port)
+
+    def test_websocket_broken_clients(self):
+        from wsclient import WsClient
+        with tempfile.TemporaryDirectory() as tmp:
+            port = free_port()
+            d = Daemon(tmp, self.ws_conf(port))
+            try:
+                wait_port(port)
+                cases = {
+                    "unmasked frame": b"\x81\x05hello",
+                    "2^62 bytes announced": b"\x82\xff" + struct.pack(">Q", 1 << 62) + b"\0\0\0\0",
+                    "endless fragments": b"\x01\x81\0\0\0\0a" + b"\x00\x81\0\0\0\0a" * 50,
+                    "a masked text": b"\x81\x85\x01\x02\x03\x04" + bytes(a ^ b for a, b in zip(b"hello", b"\x01\x02\x03\x04\x01")),
+                }
+                for what, data in cases.items():
+                    w = WsClient("127.0.0.1", port)
+                    w.sock.sendall(data)
+                    # closed at once (it sends data), or within the idle timeout (2 s) when it says nothing
+                    self.assertTrue(is_closed(w.sock, 6), "%s: the connection stays" % what)
+                    w.close()
+                # and the slots are free again: two browsers get frames
+                ws = [WsClient("127.0.0.1", port) for _ in range(2)]
+                for w in ws:
+                    self.assertIsNotNone(w.recv_text(3))
+                    w.close()
+            finally:
+                self.assertEqual(d.stop(), 0)
+
+    def test_websocket_slots(self):
+        from wsclient import WsClient
+        with tempfile.TemporaryDirectory() as tmp:
+            port = free_port()
+            d = Daemon(tmp, self.ws_conf(port))
+            try:
+                wait_port(port)
+                # a connection that never finishes its HTTP request goes after client_timeout (2 s)
+                half = socket.create_connection(("127.0.0.1", port))
+                half.sendall(b"GET / HTTP/1.1\r\nHost: x\r\n")
+                self.assertTrue(is_closed(half, 8), "a half request holds its connection")
+                half.close()
+                # two browsers that answer no ping fill the slots; after a second a third takes the slot
+                # of the one idle the longest
+                a, b = WsClient("127.0.0.1", port), WsClient("127.0.0.1", port)
+                time.sleep(1.2)
+                c = WsClient("127.0.0.1", port)
+                self.assertIsNotNone(c.recv_text(3), "the new browser gets no frame")
+                self.assertTrue(is_closed(a.sock, 3), "the browser idle the longest stays")
+                for w in (a, b, c):
+                    w.close()
+            finally:
+                self.assertEqual(d.stop(), 0)
 
 
 class JsonTest(unittest.TestCase):
