@@ -895,11 +895,11 @@ static void test_err_unknown_key(void **state)
 /* a key of another driver or output type is unknown here, and the list shows this type's keys */
 static void test_err_key_of_other_type(void **state)
 {
-	expect_text_err(
-		*state, "[source clip]\ntype = replay\nfile = builtin:cmu_141_16.csv\npeople = 2\n",
-		"e.conf:4: [source clip] people: unknown key for type replay",
-		"(known: type, origin, yaw, mount_SENSOR, sample_rate, file, speed, loop, start, step, interpolate)",
-		NULL);
+	expect_text_err(*state, "[source clip]\ntype = replay\nfile = builtin:cmu_141_16.csv\npeople = 2\n",
+			"e.conf:4: [source clip] people: unknown key for type replay",
+			"(known: type, origin, yaw, max_distance, mount_SENSOR, sample_rate, file, speed, loop, start, "
+			"step, interpolate)",
+			NULL);
 	expect_text_err(*state, "[output o]\ntype = udp\npath = /tmp/x\n",
 			"e.conf:3: [output o] path: unknown key for type udp",
 			"(known: type, decimate, avatars, port, gso, address)", NULL);
@@ -1738,7 +1738,8 @@ static void test_values_renderer_outputs(void **state)
 
 	assert_int_equal(c->n_outputs, 7);
 	assert_int_equal(o[0].type, cfg_output_type_find("vrpn"));
-	assert_string_equal(((const struct vrpn_opts *)(o[0]).opt)->address, "0.0.0.0");
+	/* vrpn listens on this host only by default */
+	assert_string_equal(((const struct vrpn_opts *)(o[0]).opt)->address, "127.0.0.1");
 	assert_int_equal(((const struct vrpn_opts *)(o[0]).opt)->port, 3883);
 	assert_string_equal(((const struct vrpn_opts *)(o[0]).opt)->device, "Avatar%d");
 	assert_true(((const struct vrpn_opts *)(o[0]).opt)->udp);
@@ -1790,7 +1791,8 @@ static void test_err_renderer_outputs(void **state)
 			"e.conf:3: [output o] device: unknown key for type tcp", NULL);
 	expect_text_err(*state, "[output o]\ntype = vrpn\nrate = 30\n",
 			"e.conf:3: [output o] rate: unknown key for type vrpn",
-			"(known: type, decimate, avatars, address, port, max_clients, client_buffer, device, udp, "
+			"(known: type, decimate, avatars, address, port, max_clients, clients_per_address, "
+			"client_buffer, device, udp, "
 			"client_timeout)",
 			NULL);
 	expect_text_err(*state, "[output o]\ntype = websocket\nclient_buffer = 4096\n",

@@ -25,6 +25,7 @@
 #include <getopt.h>
 #include <math.h>
 #include <poll.h>
+#include <pwd.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -32,6 +33,8 @@
 #include <sys/un.h>
 #include <time.h>
 #include <unistd.h>
+
+#define SERVICE_USER "avatargw" /* the systemd unit's User= (systemd/avatargw.sysusers) */
 
 static void usage(FILE *out)
 {
@@ -52,6 +55,33 @@ static void usage(FILE *out)
 		     "               `avatargw-ctl reload` applies it\n");
 }
 
+/*
+ * The process answering on the socket must be the daemon: running as root,
+ * as us, or as the service's user (avatargw). Anyone else may have bound the
+ * path first (a socket in a directory others can write to), to answer in
+ * the daemon's place or to read what we send.
+ */
+static bool peer_trusted(int fd, const char *path)
+{
+	struct ucred cr;
+	socklen_t len = sizeof(cr);
+	const struct passwd *pw;
+
+	if (getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &cr, &len)) {
+		fprintf(stderr, "avatargw-ctl: %s: who listens there (SO_PEERCRED): %s\n", path, strerror(errno));
+		return false;
+	}
+	if (cr.uid == 0 || cr.uid == getuid() || cr.uid == geteuid() ||
+	    ((pw = getpwnam(SERVICE_USER)) && cr.uid == pw->pw_uid))
+		return true;
+	pw = getpwuid(cr.uid);
+	fprintf(stderr,
+		"avatargw-ctl: %s: the process listening there (pid %ld) runs as user %s (%u), not as the daemon's "
+		"user (" SERVICE_USER "), root or you: not talking to it\n",
+		path, (long)cr.pid, pw ? pw->pw_name : "?", (unsigned)cr.uid);
+	return false;
+}
+
 static int connect_to(const char *path)
 {
 	struct sockaddr_un sun = { .sun_family = AF_UNIX };
@@ -69,6 +99,10 @@ static int connect_to(const char *path)
 		close(fd);
 		return rc;
 	}
+	if (!peer_trusted(fd, path)) {
+		close(fd);
+		return -EPERM;
+	}
 	return fd;
 }
 
@@ -81,7 +115,7 @@ static int open_socket(char *path, size_t len)
 		return connect_to(path);
 	ctl_resolve_path("auto", path, len);
 	fd = connect_to(path);
-	if (fd < 0) {
+	if (fd < 0 && fd != -EPERM) {
 		snprintf(path, len, "/run/avatargw/control");
 		fd = connect_to(path);
 	}
@@ -101,6 +135,8 @@ static int converse(char *path, size_t plen, const char *req, FILE *out, char *r
 	bool refused = false;
 	int fd = open_socket(path, plen);
 
+	if (fd == -EPERM)
+		return 77; /* EX_NOPERM: said why */
 	if (fd < 0) {
 		fprintf(stderr, "avatargw-ctl: %s: %s (is avatargw running? -s names its control socket)\n", path,
 			strerror(-fd));

@@ -98,7 +98,8 @@ static const struct cfg_key daemon_keys[] = {
 	  CFG_AT(struct cfg_daemon, control_socket),
 	  .def = "auto",
 	  .doc = "Unix socket of avatargw-ctl; auto = $RUNTIME_DIRECTORY/control, else "
-		 "$XDG_RUNTIME_DIR/avatargw.control, else /tmp/avatargw-UID.control; empty = none" },
+		 "$XDG_RUNTIME_DIR/avatargw.control, else $TMPDIR/avatargw-UID/control (a directory made with mode "
+		 "0700); empty = none" },
 	{ .name = "describe_interval",
 	  .kind = CFG_DOUBLE,
 	  CFG_AT(struct cfg_daemon, describe_interval),
@@ -198,6 +199,15 @@ static const struct cfg_key source_keys[] = {
 	  .def = "0",
 	  .unit = "deg",
 	  .doc = "rotation of the tracker's frame about the world's z axis" },
+	{ .name = "max_distance",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_source, max_distance),
+	  .min = 0.01,
+	  .max = 1e6,
+	  .def = "100",
+	  .unit = "m",
+	  .doc = "a sample farther than this from the world's origin, or whose orientation is not a unit quaternion, "
+		 "is malformed: dropped and counted (the sensor keeps its last good sample and goes STALE)" },
 	{ .name = "mount_SENSOR",
 	  .kind = CFG_MOUNT,
 	  .min = -10,

@@ -157,6 +157,7 @@ struct cfg_source {
 	struct cfg_where where; /* its first line */
 	double origin[3];	/* world position of the tracker's frame, m */
 	double yaw;		/* rotation of the tracker's frame about world z, rad */
+	double max_distance;	/* m from the world's origin: farther samples are malformed */
 	int n_mounts;
 	struct cfg_mount mount[CFG_MAX_MOUNTS];
 	void *opt; /* the driver's options (its cfg_type's keys) */

@@ -4,7 +4,10 @@
  * take its time; it reads the loop's counters with relaxed atomic loads.
  */
 #include "daemon/ctl.h"
+#include "base/json.h"
+#include "base/clock.h"
 #include "base/seqlock.h"
+#include "publish/listen.h"
 
 #include "record/recorder.h"
 #include "trackers/replay.h"
@@ -15,7 +18,7 @@
 #include <string.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
-#include <sys/time.h>
+#include <time.h>
 #include <sys/un.h>
 #include <unistd.h>
 
@@ -37,42 +40,142 @@ void ctl_resolve_path(const char *configured, char *out, size_t len)
 	} else if ((d = getenv("XDG_RUNTIME_DIR")) && d[0]) {
 		snprintf(out, len, "%s/avatargw.control", d);
 	} else {
-		snprintf(out, len, "/tmp/avatargw-%u.control", (unsigned)getuid());
+		/* a directory of our own (made with mode 0700), never a name in /tmp itself */
+		d = getenv("TMPDIR");
+		snprintf(out, len, "%s/avatargw-%u/control", d && d[0] == '/' ? d : "/tmp", (unsigned)geteuid());
 	}
 }
 
-int ctl_listen(const char *path)
+/*
+ * The socket's directory: made (mode 0700) when missing, refused when
+ * another user could replace or pre-empt the socket in it (a directory
+ * writable by everyone, or owned by someone else than us or root).
+ */
+static int check_dir(const char *path, char *err, size_t errlen)
 {
-	struct sockaddr_un sun = { .sun_family = AF_UNIX };
+	char dir[CFG_PATH_MAX];
+	const char *slash = strrchr(path, '/');
 	struct stat st;
-	int fd;
 
-	if (strlen(path) >= sizeof(sun.sun_path))
-		return -ENAMETOOLONG;
-	strcpy(sun.sun_path, path);
-	if (lstat(path, &st) == 0) {
-		if (!S_ISSOCK(st.st_mode))
-			return -EEXIST;
-		unlink(path);
-	}
-	fd = socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-	if (fd < 0)
+	if (!slash)
+		snprintf(dir, sizeof(dir), ".");
+	else
+		snprintf(dir, sizeof(dir), "%.*s", slash == path ? 1 : (int)(slash - path), path);
+	if (stat(dir, &st) && errno == ENOENT && mkdir(dir, 0700) && errno != EEXIST) {
+		snprintf(err, errlen, "cannot make its directory %s: %s", dir, strerror(errno));
 		return -errno;
-	if (bind(fd, (struct sockaddr *)&sun, sizeof(sun)) || listen(fd, 8)) {
-		int rc = -errno;
+	}
+	if (stat(dir, &st)) {
+		snprintf(err, errlen, "%s: %s", dir, strerror(errno));
+		return -errno;
+	}
+	if (!S_ISDIR(st.st_mode)) {
+		snprintf(err, errlen, "%s is not a directory", dir);
+		return -ENOTDIR;
+	}
+	if (st.st_uid != geteuid() && st.st_uid != 0) {
+		snprintf(err, errlen, "its directory %s belongs to user %u, not to us (%u) or root: not safe", dir,
+			 (unsigned)st.st_uid, (unsigned)geteuid());
+		return -EPERM;
+	}
+	if (st.st_mode & S_IWOTH) {
+		snprintf(err, errlen,
+			 "its directory %s is writable by every user, who could take the socket's name first: not "
+			 "safe",
+			 dir);
+		return -EPERM;
+	}
+	return 0;
+}
 
-		close(fd);
+/* a client of the control socket: its request line, then its answer */
+struct ctl_client {
+	int fd; /* -1: free */
+	char req[128];
+	size_t got;
+	char *text; /* the answer, NULL while the request is read */
+	size_t off, len;
+	double deadline; /* CLOCK_MONOTONIC s */
+};
+
+struct ctl_server {
+	int lfd;
+	char path[CFG_PATH_MAX];
+	struct ctl_client cl[CTL_CLIENTS];
+};
+
+static double mono_s(void)
+{
+	return (double)mono_ns() * 1e-9;
+}
+
+int ctl_open(struct ctl_server **out, const char *path, char *err, size_t errlen)
+{
+	struct ctl_server *s;
+	char why[CFG_PATH_MAX + 160];
+	int rc;
+
+	*out = NULL;
+	if ((rc = check_dir(path, why, sizeof(why)))) {
+		snprintf(err, errlen, "control socket %s: %s", path, why);
 		return rc;
 	}
-	return fd;
+	s = calloc(1, sizeof(*s));
+	if (!s) {
+		snprintf(err, errlen, "control socket %s: out of memory", path);
+		return -ENOMEM;
+	}
+	snprintf(s->path, sizeof(s->path), "%s", path);
+	for (int i = 0; i < CTL_CLIENTS; i++)
+		s->cl[i].fd = -1;
+	/* 0600: the daemon's user (and root) only; a request can reload the configuration */
+	s->lfd = out_listen_unix(path, 0600, why, sizeof(why));
+	if (s->lfd < 0) {
+		rc = s->lfd;
+		snprintf(err, errlen, "control socket %s", why);
+		free(s);
+		return rc;
+	}
+	*out = s;
+	return 0;
 }
 
-void ctl_close(int fd, const char *path)
+static void client_end(struct ctl_client *c)
 {
-	if (fd < 0)
+	close(c->fd);
+	free(c->text);
+	*c = (struct ctl_client){ .fd = -1 };
+}
+
+void ctl_close(struct ctl_server *s)
+{
+	if (!s)
 		return;
-	close(fd);
-	unlink(path);
+	for (int i = 0; i < CTL_CLIENTS; i++)
+		if (s->cl[i].fd >= 0)
+			client_end(&s->cl[i]);
+	out_unix_close(s->lfd, s->path);
+	free(s);
+}
+
+int ctl_pollfds(struct ctl_server *s, struct pollfd *pf, int max, double *wait_s)
+{
+	double now = mono_s();
+	int n = 0;
+
+	if (!s || max < 1)
+		return 0;
+	pf[n++] = (struct pollfd){ s->lfd, POLLIN, 0 };
+	for (int i = 0; i < CTL_CLIENTS && n < max; i++) {
+		struct ctl_client *c = &s->cl[i];
+
+		if (c->fd < 0)
+			continue;
+		pf[n++] = (struct pollfd){ c->fd, c->text ? POLLOUT : POLLIN, 0 };
+		if (c->deadline - now < *wait_s)
+			*wait_s = c->deadline - now;
+	}
+	return n;
 }
 
 int ctl_rates_update(struct ctl_rates *r, struct gateway *g)
@@ -129,21 +232,6 @@ static double us(uint64_t ns)
 	return (double)ns / 1000.0;
 }
 
-/* a JSON string's content: quotes, backslashes and control characters escaped */
-static void json_text(FILE *out, const char *s)
-{
-	for (; *s; s++) {
-		unsigned char c = (unsigned char)*s;
-
-		if (c == '"' || c == '\\')
-			fprintf(out, "\\%c", c);
-		else if (c < 0x20)
-			fprintf(out, "\\u%04x", c);
-		else
-			fputc(c, out);
-	}
-}
-
 void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 {
 	struct gateway *g = info->g;
@@ -157,12 +245,13 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 	clock_gettime(CLOCK_MONOTONIC, &ts);
 	up = (double)ts.tv_sec + ts.tv_nsec * 1e-9 - info->started;
 	if (json) {
+		fprintf(out, "{\"uptime_s\":%.3f,\"config\":", up);
+		json_string(out, info->config_name);
 		fprintf(out,
-			"{\"uptime_s\":%.3f,\"config\":\"%s\",\"source_id\":%u,\"rate_hz\":%.6g,\"mode\":\"%s\","
+			",\"source_id\":%u,\"rate_hz\":%.6g,\"mode\":\"%s\","
 			"\"realtime\":\"%s\",\"reloads\":%llu,\"reload_failures\":%llu,",
-			up, info->config_name, g->source_id, g->cfg.daemon.rate,
-			g->cfg.daemon.mode == CFG_LOOP_EVENTS ? "events" : "deadline", rts,
-			(unsigned long long)info->reloads, (unsigned long long)info->reload_failures);
+			g->source_id, g->cfg.daemon.rate, g->cfg.daemon.mode == CFG_LOOP_EVENTS ? "events" : "deadline",
+			rts, (unsigned long long)info->reloads, (unsigned long long)info->reload_failures);
 		fprintf(out,
 			"\"loop\":{\"cycles\":%llu,\"overruns\":%llu,\"poll_errors\":%llu,"
 			"\"work_us\":{\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f},"
@@ -178,11 +267,14 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 		for (int i = 0; i < g->n_trackers; i++) {
 			struct tracker *t = &g->trk[i];
 
+			fprintf(out, "%s{\"name\":", i ? "," : "");
+			json_string(out, t->name);
+			fputs(",\"driver\":", out);
+			json_string(out, t->drv->type.name);
 			fprintf(out,
-				"%s{\"name\":\"%s\",\"driver\":\"%s\",\"state\":\"%s\",\"sensors\":%d,"
+				",\"state\":\"%s\",\"sensors\":%d,"
 				"\"samples\":%llu,\"rate_hz\":%.2f,\"malformed\":%llu,\"faults\":%llu,\"lost\":%llu,"
 				"\"reconnects\":%llu",
-				i ? "," : "", t->name, t->drv->type.name,
 				tracker_states[atomic_load_explicit(&t->st.state, memory_order_relaxed) & 3],
 				t->n_sensors, (unsigned long long)ctr_get(&t->st.samples),
 				r && i < r->n_trackers ? r->trk_rate[i] : 0.0,
@@ -194,7 +286,7 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 
 				t->drv->status(t, dev, sizeof(dev));
 				fputs(",\"device\":\"", out);
-				json_text(out, dev);
+				json_escape(out, dev);
 				fputc('"', out);
 			}
 			if (t->drv->report)
@@ -206,13 +298,14 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 			struct gw_avatar *a = &g->av[i];
 			uint64_t solves = ctr_get(&a->st.ik_solves);
 
+			fprintf(out, "%s{\"name\":", i ? "," : "");
+			json_string(out, a->cfg->name);
 			fprintf(out,
-				"%s{\"name\":\"%s\",\"id\":%u,\"state\":\"%s\",\"frames\":%llu,\"rate_hz\":%.2f,"
+				",\"id\":%u,\"state\":\"%s\",\"frames\":%llu,\"rate_hz\":%.2f,"
 				"\"new_frames\":%llu,\"stale_frames\":%llu,\"held\":%llu,\"ik_iters_per_arm\":%.3f,"
 				"\"ik_unreached\":%llu,\"nan_blocked\":%llu,"
 				"\"latency_us\":{\"n\":%llu,\"p50\":%.1f,\"p99\":%.1f,\"p999\":%.1f,\"max\":%.1f}}",
-				i ? "," : "", a->cfg->name, a->cfg->id,
-				sensor_states[atomic_load_explicit(&a->st.state, memory_order_relaxed) % 3],
+				a->cfg->id, sensor_states[atomic_load_explicit(&a->st.state, memory_order_relaxed) % 3],
 				(unsigned long long)ctr_get(&a->st.frames), r && i < r->n_avatars ? r->av_rate[i] : 0.0,
 				(unsigned long long)ctr_get(&a->st.new_frames),
 				(unsigned long long)ctr_get(&a->st.stale_frames),
@@ -228,11 +321,13 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 		for (int i = 0; i < g->n_outputs; i++) {
 			struct output *o = &g->out[i];
 
+			fprintf(out, "%s{\"name\":", i ? "," : "");
+			json_string(out, o->name);
 			fprintf(out,
-				"%s{\"name\":\"%s\",\"type\":\"%s\",\"sent\":%llu,\"dropped\":%llu,\"errors\":%llu,"
+				",\"type\":\"%s\",\"sent\":%llu,\"dropped\":%llu,\"errors\":%llu,"
 				"\"clients\":%llu,\"accepted\":%llu,\"refused\":%llu,\"closed\":%llu,\"gso_off\":%llu,"
 				"\"malformed\":%llu",
-				i ? "," : "", o->name, o->ops->type.name, (unsigned long long)ctr_get(&o->st.sent),
+				o->ops->type.name, (unsigned long long)ctr_get(&o->st.sent),
 				(unsigned long long)ctr_get(&o->st.dropped), (unsigned long long)ctr_get(&o->st.errors),
 				(unsigned long long)ctr_get(&o->st.clients),
 				(unsigned long long)ctr_get(&o->st.accepted),
@@ -251,14 +346,17 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 
 			recorder_current_file(g->rec, file, sizeof(file));
 			recorder_ring_use(g->rec, &used, &cap);
+			fputs(",\"recorder\":{\"dir\":", out);
+			json_string(out, g->cfg.daemon.record_dir);
+			fputs(",\"file\":", out);
+			json_string(out, file);
 			fprintf(out,
-				",\"recorder\":{\"dir\":\"%s\",\"file\":\"%s\",\"files\":%llu,\"records\":%llu,"
+				",\"files\":%llu,\"records\":%llu,"
 				"\"bytes\":%llu,\"flushes\":%llu,\"dropped\":%llu,\"skipped\":%llu,\"write_errors\":%"
 				"llu,"
 				"\"buffer_used\":%llu,\"buffer_size\":%llu}",
-				g->cfg.daemon.record_dir, file, (unsigned long long)ctr_get(&rs->files),
-				(unsigned long long)ctr_get(&rs->records), (unsigned long long)ctr_get(&rs->bytes),
-				(unsigned long long)ctr_get(&rs->flushes),
+				(unsigned long long)ctr_get(&rs->files), (unsigned long long)ctr_get(&rs->records),
+				(unsigned long long)ctr_get(&rs->bytes), (unsigned long long)ctr_get(&rs->flushes),
 				(unsigned long long)ctr_get(&rs->dropped_records),
 				(unsigned long long)ctr_get(&rs->skipped_records),
 				(unsigned long long)ctr_get(&rs->write_errors), (unsigned long long)used,
@@ -391,11 +489,12 @@ static void ctl_sensors(FILE *out, const struct ctl_info *info, const char *name
 	}
 	atomic_store_explicit(&g->probe.want, 0, memory_order_relaxed);
 	t = (uint64_t)w[0] | (uint64_t)w[1] << 32;
-	fprintf(out,
-		"{\"avatar\":\"%s\",\"id\":%u,\"section\":\"%s\",\"section_avatars\":%d,\"hand\":%.4f,"
-		"\"mono_ns\":%llu,\"sensors\":[",
-		name, g->av[idx].cfg->id, g->av[idx].cfg->section, shared, (double)g->av[idx].av->body.dims.hand,
-		(unsigned long long)t);
+	fputs("{\"avatar\":", out);
+	json_string(out, name);
+	fprintf(out, ",\"id\":%u,\"section\":", g->av[idx].cfg->id);
+	json_string(out, g->av[idx].cfg->section);
+	fprintf(out, ",\"section_avatars\":%d,\"hand\":%.4f,\"mono_ns\":%llu,\"sensors\":[", shared,
+		(double)g->av[idx].av->body.dims.hand, (unsigned long long)t);
 	for (int r = 0; r < FRAME_SENSORS; r++) {
 		const uint32_t *o = w + GW_PROBE_HEAD + r * GW_PROBE_SENSOR_WORDS;
 		float v[7];
@@ -455,43 +554,17 @@ static void ctl_step(FILE *out, const struct ctl_info *info, const char *args)
 			name[0] ? name : "");
 }
 
-void ctl_serve(int lfd, const struct ctl_info *info, bool *want_reload)
+/* the answer to one request line */
+static char *answer(const char *line, const struct ctl_info *info, bool *want_reload, size_t *len)
 {
-	char req[128];
-	size_t got = 0;
-	int fd = accept4(lfd, NULL, NULL, SOCK_CLOEXEC);
-	char *text = NULL;
-	size_t len = 0;
+	char req[128], *text = NULL;
 	FILE *out;
 
-	if (fd < 0)
-		return;
-	{
-		struct timeval tv = { 0, 500000 };
-
-		setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof(tv));
-	}
-	/* one line, within half a second: a silent client does not hold the control thread */
-	while (got < sizeof(req) - 1) {
-		struct pollfd p = { fd, POLLIN, 0 };
-		ssize_t n;
-
-		if (poll(&p, 1, 500) <= 0)
-			break;
-		n = recv(fd, req + got, sizeof(req) - 1 - got, 0);
-		if (n <= 0)
-			break;
-		got += (size_t)n;
-		if (memchr(req, '\n', got))
-			break;
-	}
-	req[got] = '\0';
+	snprintf(req, sizeof(req), "%s", line);
 	req[strcspn(req, "\r\n")] = '\0';
-	out = open_memstream(&text, &len);
-	if (!out) {
-		close(fd);
-		return;
-	}
+	out = open_memstream(&text, len);
+	if (!out)
+		return NULL;
 	if (!strcmp(req, "status"))
 		ctl_status(out, info, false);
 	else if (!strcmp(req, "status json"))
@@ -509,13 +582,110 @@ void ctl_serve(int lfd, const struct ctl_info *info, bool *want_reload)
 			"AVATAR)\n",
 			req);
 	fclose(out);
-	for (size_t off = 0; off < len;) {
-		ssize_t n = send(fd, text + off, len - off, MSG_NOSIGNAL);
+	return text;
+}
 
-		if (n <= 0)
-			break;
-		off += (size_t)n;
+/* what the client takes of its answer now; true when it is all sent (or the client is gone) */
+static bool client_send(struct ctl_client *c)
+{
+	while (c->off < c->len) {
+		ssize_t n = send(c->fd, c->text + c->off, c->len - c->off, MSG_NOSIGNAL | MSG_DONTWAIT);
+
+		if (n > 0) {
+			c->off += (size_t)n;
+			continue;
+		}
+		if (n < 0 && errno == EINTR)
+			continue;
+		return !(n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK));
 	}
-	free(text);
-	close(fd);
+	return true;
+}
+
+/* reads what the client sent; once its line is whole (or it stopped sending), answers it */
+static void client_read(struct ctl_client *c, const struct ctl_info *info, bool *want_reload)
+{
+	bool whole = false;
+
+	for (;;) {
+		ssize_t n = recv(c->fd, c->req + c->got, sizeof(c->req) - 1 - c->got, MSG_DONTWAIT);
+
+		if (n > 0) {
+			c->got += (size_t)n;
+			c->req[c->got] = '\0';
+			if (memchr(c->req, '\n', c->got) || c->got == sizeof(c->req) - 1) {
+				whole = true;
+				break;
+			}
+			continue;
+		}
+		if (n < 0 && errno == EINTR)
+			continue;
+		if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK))
+			return;
+		whole = n == 0 && c->got; /* a request without its newline, then EOF (shutdown) */
+		break;
+	}
+	if (!whole) {
+		client_end(c);
+		return;
+	}
+	c->text = answer(c->req, info, want_reload, &c->len);
+	c->off = 0;
+	/* the answer gets its own second to be taken */
+	c->deadline = mono_s() + CTL_DEADLINE_S;
+	if (!c->text || client_send(c))
+		client_end(c);
+}
+
+void ctl_serve(struct ctl_server *s, const struct pollfd *pf, int n, const struct ctl_info *info, bool *want_reload)
+{
+	double now = mono_s();
+
+	if (!s || n < 1)
+		return;
+	for (int k = 1; k < n; k++) {
+		for (int i = 0; i < CTL_CLIENTS; i++) {
+			struct ctl_client *c = &s->cl[i];
+
+			if (c->fd != pf[k].fd || !pf[k].revents)
+				continue;
+			if (c->text) {
+				if (client_send(c))
+					client_end(c);
+			} else {
+				client_read(c, info, want_reload);
+			}
+			break;
+		}
+	}
+	/* new clients: each has CTL_DEADLINE_S for its request line */
+	if (pf[0].revents & POLLIN) {
+		for (int k = 0; k < CTL_CLIENTS; k++) {
+			int fd = accept4(s->lfd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC), slot = -1;
+
+			if (fd < 0)
+				break;
+			for (int i = 0; i < CTL_CLIENTS && slot < 0; i++)
+				if (s->cl[i].fd < 0)
+					slot = i;
+			if (slot < 0) {
+				/* every slot waits on a client: this one is refused, not queued */
+				static const char busy[] = "error: busy (too many clients at once), try again\n";
+
+				ssize_t r = send(fd, busy, sizeof(busy) - 1, MSG_NOSIGNAL | MSG_DONTWAIT);
+
+				(void)r;
+				close(fd);
+				continue;
+			}
+			s->cl[slot] = (struct ctl_client){ .fd = fd, .deadline = now + CTL_DEADLINE_S };
+			/* a request sent with the connection is answered now */
+			client_read(&s->cl[slot], info, want_reload);
+		}
+	}
+	now = mono_s();
+	for (int i = 0; i < CTL_CLIENTS; i++)
+		if (s->cl[i].fd >= 0 && now >= s->cl[i].deadline)
+			client_end(&s->cl[i]); /* too slow to ask, or to take its answer */
 }

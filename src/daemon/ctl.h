@@ -10,9 +10,14 @@
 #include "daemon/gateway.h"
 #include "daemon/loop.h"
 
+#include <poll.h>
 #include <stdio.h>
 
-/* "auto": $RUNTIME_DIRECTORY/control, else $XDG_RUNTIME_DIR/avatargw.control, else /tmp/avatargw-UID.control */
+/*
+ * "auto": $RUNTIME_DIRECTORY/control, else $XDG_RUNTIME_DIR/avatargw.control,
+ * else $TMPDIR/avatargw-UID/control (TMPDIR: /tmp when unset), a directory
+ * ctl_open() makes with mode 0700
+ */
 void ctl_resolve_path(const char *configured, char *out, size_t len);
 
 struct ctl_rates {
@@ -33,10 +38,33 @@ struct ctl_info {
 	uint64_t reloads, reload_failures;
 };
 
-int ctl_listen(const char *path);
-void ctl_close(int fd, const char *path);
-/* serves one client if one is waiting; want_reload set when it asked for one */
-void ctl_serve(int lfd, const struct ctl_info *info, bool *want_reload);
+/*
+ * The control socket and its clients, served by the control thread without
+ * ever waiting on one: a client has CTL_DEADLINE_S from its connection to
+ * send its request line, and as long again to take the answer; then it is
+ * closed. At most CTL_CLIENTS at once; more are told "error: busy".
+ */
+#define CTL_CLIENTS 8
+#define CTL_DEADLINE_S 1.0
+
+struct ctl_server;
+
+/*
+ * Listens at path (mode 0600), in a directory made (mode 0700) if missing;
+ * refuses a directory every user may write to or that another user owns,
+ * and a socket something already listens on. 0, or a negative errno with
+ * err saying why.
+ */
+int ctl_open(struct ctl_server **out, const char *path, char *err, size_t errlen);
+/* closes the clients and the socket, and removes the socket file if it is still ours */
+void ctl_close(struct ctl_server *s);
+/*
+ * The descriptors to poll (pf[0]: the listening socket, then the clients);
+ * lowers *wait_s to the next client's deadline. Returns how many.
+ */
+int ctl_pollfds(struct ctl_server *s, struct pollfd *pf, int max, double *wait_s);
+/* after poll(): accepts, reads, answers, closes what is late; want_reload set when a client asked */
+void ctl_serve(struct ctl_server *s, const struct pollfd *pf, int n, const struct ctl_info *info, bool *want_reload);
 /* renders the status (human or JSON) */
 void ctl_status(FILE *out, const struct ctl_info *info, bool json);
 /* updates the per-second rates (control thread, once a second) */

@@ -414,10 +414,11 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		memset(&wf->h, 0, sizeof(wf->h));
 		encode_frame(&in, wf);
 		frame_inputs(pf, wf); /* buttons and analog values: an input block after the FRAME */
-		if (in.pose && !encode_frame_finite(wf)) {
-			/* never publish a NaN posture: count, and forget it as a seed */
+		if (!encode_frame_finite(wf, in.pose != NULL)) {
+			/* never publish a NaN or an infinity: count, and forget the posture as a seed */
 			ctr_add(&a->st.nan_blocked, 1);
-			a->have_pose = false;
+			if (in.pose)
+				a->have_pose = false;
 			continue;
 		}
 		wf->h.source_id = g->source_id;

@@ -3,8 +3,8 @@
  * main.c - avatargw: the control thread.
  *
  * Start-up, in this order (torn down in reverse): configuration, gateway
- * (trackers, avatars, outputs), mlockall, the loop thread, the control
- * socket, READY=1. Then the control thread waits on its signalfd and the
+ * (trackers, avatars, outputs), the control socket, mlockall, the loop
+ * thread, READY=1. Then the control thread waits on its signalfd and the
  * control socket: SIGHUP reloads (a bad configuration is rejected and the
  * running one stays), SIGTERM/SIGINT stop, and once a second it feeds the
  * watchdog if the loop advanced, refreshes STATUS= and logs what the loop
@@ -264,11 +264,12 @@ int main(int argc, char **argv)
 	static struct gateway gws[2];
 	const char *path = DEFAULT_CONFIG;
 	const char *sets[MAX_SETS];
-	int n_sets = 0, cur = 0, sfd, lfd = -1, opt;
+	int n_sets = 0, cur = 0, sfd, opt;
 	bool check = false, given = false;
 	char err[1024], ctl_path[CFG_PATH_MAX];
 	struct config cfg;
 	struct loop *loop = NULL;
+	struct ctl_server *ctl = NULL;
 	struct recorder *rec = NULL;
 	struct ctl_rates rates = { 0 };
 	struct ctl_info info = { 0 };
@@ -349,8 +350,20 @@ int main(int argc, char **argv)
 	if (gw_open(&gws[cur], &cfg, NULL, source_id, err, sizeof(err))) {
 		pr_err("%s", err);
 		config_free(&cfg);
-		/* the configuration was valid: what failed is the system (a port in use...), worth a retry */
-		return 1;
+		/*
+		 * An output that cannot be opened as configured (a port or a socket
+		 * in use, an address that does not resolve): a restart would fail
+		 * the same way, so the configuration error's status (the unit does
+		 * not restart on it).
+		 */
+		return EX_CONFIG_CODE;
+	}
+	/* the control socket before anything runs: one that cannot be ours stops the start the same way */
+	ctl_resolve_path(gws[cur].cfg.daemon.control_socket, ctl_path, sizeof(ctl_path));
+	if (ctl_path[0] && ctl_open(&ctl, ctl_path, err, sizeof(err))) {
+		pr_err("%s (daemon.control_socket; empty: none)", err);
+		gw_close(&gws[cur]);
+		return EX_CONFIG_CODE;
 	}
 	for (int i = 0; i < gws[cur].n_trackers; i++)
 		replay_log_damage(&gws[cur].trk[i]);
@@ -360,38 +373,35 @@ int main(int argc, char **argv)
 		pr_warning("mlockall: %s: memory may be paged out (raise LimitMEMLOCK)", strerror(errno));
 	if (loop_start(&loop, &gws[cur], err, sizeof(err))) {
 		pr_err("%s", err);
+		ctl_close(ctl);
 		gw_close(&gws[cur]);
 		return 1;
 	}
 	if (loop_rt_status(loop) < 0)
 		pr_warning("SCHED_FIFO priority %d refused: the loop runs with normal scheduling (raise LimitRTPRIO)",
 			   gws[cur].cfg.daemon.realtime_priority);
-	ctl_resolve_path(gws[cur].cfg.daemon.control_socket, ctl_path, sizeof(ctl_path));
-	if (ctl_path[0]) {
-		lfd = ctl_listen(ctl_path);
-		if (lfd < 0)
-			pr_warning("control socket %s: %s: avatargw-ctl will not reach this daemon", ctl_path,
-				   strerror(-lfd));
-	}
 	info = (struct ctl_info){ &gws[cur], loop, &rates, mono_s(), path, 0, 0 };
 	seen_reset(&seen, &gws[cur]);
 	pr_info("serving %d avatars from %d sources to %d outputs at %.6g Hz (%s), source id %08x, control %s",
 		gws[cur].n_avatars, gws[cur].n_trackers, gws[cur].n_outputs, gws[cur].cfg.daemon.rate, path, source_id,
-		lfd >= 0 ? ctl_path : "none");
+		ctl ? ctl_path : "none");
 	notify_send("READY=1");
 	status_line(&gws[cur]);
 	wd_usec = notify_watchdog_usec();
 	next_tick = mono_s() + 1.0;
 
 	while (!stop) {
-		struct pollfd pf[2] = { { sfd, POLLIN, 0 }, { lfd, POLLIN, 0 } };
+		struct pollfd pf[1 + 1 + CTL_CLIENTS] = { { sfd, POLLIN, 0 } };
 		double now = mono_s();
 		double wait = next_tick - now;
 		bool reload = false;
+		int n_ctl;
 
 		if (wd_usec && next_wd - now < wait)
 			wait = next_wd - now;
-		if (poll(pf, lfd >= 0 ? 2 : 1, wait > 0 ? (int)(wait * 1000) + 1 : 0) < 0 && errno != EINTR) {
+		/* the control socket's clients never hold this thread: each has a deadline, polled here */
+		n_ctl = ctl_pollfds(ctl, pf + 1, 1 + CTL_CLIENTS, &wait);
+		if (poll(pf, (nfds_t)(1 + n_ctl), wait > 0 ? (int)(wait * 1000) + 1 : 0) < 0 && errno != EINTR) {
 			pr_err("poll: %s", strerror(errno));
 			break;
 		}
@@ -405,8 +415,7 @@ int main(int argc, char **argv)
 					stop = true;
 			}
 		}
-		if (lfd >= 0 && (pf[1].revents & POLLIN))
-			ctl_serve(lfd, &info, &reload);
+		ctl_serve(ctl, pf + 1, n_ctl, &info, &reload);
 		if (reload && !stop) {
 			struct config ncfg;
 			int nxt = 1 - cur;
@@ -463,7 +472,7 @@ int main(int argc, char **argv)
 
 	notify_send("STOPPING=1");
 	pr_info("stopping");
-	ctl_close(lfd, ctl_path);
+	ctl_close(ctl);
 	loop_stop(loop);
 	final_line(&gws[cur], rec);
 	recorder_close(rec);

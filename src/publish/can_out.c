@@ -23,6 +23,7 @@
  * line and the output stays disabled: the daemon carries on without it.
  */
 #include "publish/output.h"
+#include "base/json.h"
 #include "publish/can_out.h"
 #include "base/clock.h"
 
@@ -340,11 +341,11 @@ static void can_out_report(struct output *o, FILE *out, bool json)
 	if (!c)
 		return;
 	if (json) {
-		fprintf(out, ",\"can\":{\"interface\":\"%s\",\"state\":\"%s\",\"why\":\"", c->iface,
-			c->disabled ? "disabled" : "open");
-		for (const char *s = c->why; *s; s++)
-			fprintf(out, *s == '"' || *s == '\\' ? "\\%c" : "%c", *s);
-		fprintf(out, "\",\"safe\":%s,\"commands\":%llu,\"withheld\":%llu,\"no_limits\":%llu,\"limited\":%llu}",
+		fputs(",\"can\":{\"interface\":", out);
+		json_string(out, c->iface);
+		fprintf(out, ",\"state\":\"%s\",\"why\":", c->disabled ? "disabled" : "open");
+		json_string(out, c->why);
+		fprintf(out, ",\"safe\":%s,\"commands\":%llu,\"withheld\":%llu,\"no_limits\":%llu,\"limited\":%llu}",
 			opts_of(o->cfg)->safe ? "true" : "false",
 			(unsigned long long)atomic_load_explicit(&c->commands, memory_order_relaxed),
 			(unsigned long long)atomic_load_explicit(&c->withheld, memory_order_relaxed),

@@ -162,12 +162,26 @@ static uint32_t nonfinite_bits(const void *src, size_t n)
 	return (m | m4[0] | m4[1] | m4[2] | m4[3]) & 0x80000000u;
 }
 
-bool encode_frame_finite(const struct wire_frame *f)
+bool encode_frame_finite(const struct wire_frame *f, bool solved)
 {
+	uint32_t bad = 0;
+
 	_Static_assert(sizeof(float) == sizeof(uint32_t) && sizeof(struct wire_pose) == 7 * sizeof(float),
 		       "IEEE single floats; a wire_pose is 7 of them");
+	/* the sensors' records: NaN (unknown) only while a sensor is missing */
+	for (int i = 0; i < WIRE_SENSORS; i++)
+		if (f->sensor[i].state != WIRE_SENSOR_MISSING)
+			bad |= nonfinite_bits(&f->sensor[i].pose, 7);
+	if (f->h.flags & WIRE_F_INPUTS)
+		bad |= nonfinite_bits(f->in.analog, WIRE_SENSORS * WIRE_ANALOG);
+	if (!solved)
+		return !bad; /* the posture is NaN throughout: unknown */
+	for (int side = 0; side < WIRE_ARMS; side++)
+		bad |= nonfinite_bits(&f->arm[side].pos_err, 1);
 	/* the head segment is the head sensor's own pose: NaN while the sensor is missing */
-	return !(nonfinite_bits(f->joint, WIRE_JOINTS) | nonfinite_bits(f->segment, WIRE_SEG_HEAD * 7) |
+	if (f->sensor[WIRE_S_HEAD].state != WIRE_SENSOR_MISSING)
+		bad |= nonfinite_bits(&f->segment[WIRE_SEG_HEAD], 7);
+	return !(bad | nonfinite_bits(f->joint, WIRE_JOINTS) | nonfinite_bits(f->segment, WIRE_SEG_HEAD * 7) |
 		 nonfinite_bits(&f->segment[WIRE_SEG_HEAD + 1], (WIRE_SEGMENTS - WIRE_SEG_HEAD - 1) * 7));
 }
 

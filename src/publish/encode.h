@@ -20,8 +20,14 @@ struct encode_in {
 };
 
 void encode_frame(const struct encode_in *in, struct wire_frame *out);
-/* a pose made of finite numbers only (checked before anything is published) */
-bool encode_frame_finite(const struct wire_frame *f);
+/*
+ * Every float of the frame finite but where NaN means unknown (checked
+ * before anything is published): a missing sensor's record and the head
+ * segment while the head is missing, and the whole posture when not solved
+ * (the joints, segments and pos_err of a frame that has none). Sensor
+ * records, pos_err and the input block's analog values are checked too.
+ */
+bool encode_frame_finite(const struct wire_frame *f, bool solved);
 void encode_describe(const struct avatar *av, const char *name, double rate_hz, struct wire_describe *out);
 
 #endif /* AGW_ENCODE_H */

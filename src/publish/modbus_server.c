@@ -29,6 +29,7 @@
  * silent client holds a slot for a bounded time and never holds the thread.
  */
 #include "publish/output.h"
+#include "base/json.h"
 #include "publish/modbus_server.h"
 #include "base/clock.h"
 #include "publish/listen.h"
@@ -74,7 +75,16 @@ static const struct cfg_key modbus_keys[] = {
 	  .min = 1,
 	  .max = 256,
 	  .def = "8",
-	  .doc = "stream subscribers (Modbus, VRPN, WebSocket clients) at most; more are refused" },
+	  .doc = "clients at most; when all are taken, a new one takes the slot of the one that has sent no request "
+		 "the longest (a second at least), else it is refused" },
+	{ .name = "clients_per_address",
+	  .kind = CFG_INT,
+	  CFG_AT(struct modbus_out_opts, clients_per_address),
+	  .min = 0,
+	  .max = 256,
+	  .def = "4",
+	  .doc = "clients at most from one host (IP address); a further one takes the slot of that host's client idle "
+		 "the longest, else it is refused; 0: no limit but max_clients" },
 	{ .name = "register_base",
 	  .kind = CFG_INT,
 	  CFG_AT(struct modbus_out_opts, reg_base),
@@ -151,8 +161,8 @@ struct mb_client {
 	int fd; /* -1: free */
 	uint8_t buf[MB_ADU_MAX];
 	size_t len;
-	uint64_t last_ns;    /* last complete request (or the connection) */
-	uint64_t partial_ns; /* when the bytes now waiting began to arrive */
+	struct out_peer peer; /* its host; active_ns: its last complete request (or the connection) */
+	uint64_t partial_ns;  /* when the bytes now waiting began to arrive */
 };
 
 struct mb_stats {
@@ -162,6 +172,7 @@ struct mb_stats {
 	_Atomic uint64_t writes_refused; /* write functions answered ILLEGAL FUNCTION */
 	_Atomic uint64_t malformed;	 /* PDUs of the wrong length (exception 3) and broken headers (closed) */
 	_Atomic uint64_t idle_closed;	 /* clients closed for silence or half a request */
+	_Atomic uint64_t evicted;	 /* idle clients closed to make room for a new one */
 	_Atomic uint64_t send_errors;	 /* responses a client could not take: closed */
 	_Atomic uint64_t clients, accepted, refused, closed;
 	_Atomic uint64_t updates; /* blocks stored by the loop */
@@ -170,7 +181,7 @@ struct mb_stats {
 struct mb_server {
 	/* settings, copied: the thread outlives nothing it points to */
 	char addr[CFG_PATH_MAX + 8];
-	int base, stride, order, writable, max_clients, n;
+	int base, stride, order, writable, max_clients, per_addr, n;
 	uint64_t idle_ns;
 	int *slot; /* per avatar index: its block, or -1 */
 	int n_avatars;
@@ -381,7 +392,7 @@ static bool serve_buffer(struct mb_server *s, struct mb_client *c, uint64_t now)
 		}
 		memmove(c->buf, c->buf + len, c->len - (size_t)len);
 		c->len -= (size_t)len;
-		c->last_ns = now;
+		c->peer.active_ns = now;
 		c->partial_ns = now;
 	}
 	return true;
@@ -412,20 +423,27 @@ static void read_client(struct mb_server *s, struct mb_client *c, uint64_t now)
 static void accept_clients(struct mb_server *s, uint64_t now)
 {
 	for (;;) {
-		int fd = accept4(s->lfd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC), slot = -1, one = 1;
+		struct sockaddr_storage from = { 0 };
+		socklen_t fl = sizeof(from);
+		int fd = accept4(s->lfd, (struct sockaddr *)&from, &fl, SOCK_NONBLOCK | SOCK_CLOEXEC), slot, one = 1;
+		bool drop;
 
 		if (fd < 0)
 			return;
-		for (int i = 0; i < s->max_clients && slot < 0; i++)
-			if (s->cl[i].fd < 0)
-				slot = i;
+		/* a free slot, or the one of the client idle the longest (this host's own when it has its share) */
+		slot = out_slot_for(s->cl, sizeof(*s->cl), offsetof(struct mb_client, fd),
+				    offsetof(struct mb_client, peer), s->max_clients, &from, s->per_addr, now, &drop);
 		if (slot < 0) {
 			close(fd);
 			bump(&s->st.refused);
 			continue;
 		}
+		if (drop) {
+			bump(&s->st.evicted);
+			drop_client(s, &s->cl[slot]);
+		}
 		setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
-		s->cl[slot] = (struct mb_client){ .fd = fd, .len = 0, .last_ns = now, .partial_ns = now };
+		s->cl[slot] = (struct mb_client){ .fd = fd, .len = 0, .peer = { from, now }, .partial_ns = now };
 		bump(&s->st.accepted);
 		bump(&s->st.clients);
 	}
@@ -464,7 +482,7 @@ static void *mb_thread(void *arg)
 
 			if (c->fd < 0)
 				continue;
-			if ((s->idle_ns && now - c->last_ns > s->idle_ns) ||
+			if ((s->idle_ns && now - c->peer.active_ns > s->idle_ns) ||
 			    (c->len && now - c->partial_ns > MB_PARTIAL_NS)) {
 				bump(&s->st.idle_closed);
 				drop_client(s, c);
@@ -481,9 +499,14 @@ static void describe_addr(const struct cfg_output *cfg, char *buf, size_t len)
 	snprintf(buf, len, "%s:%d", opts_of(cfg)->address, opts_of(cfg)->port);
 }
 
-static int listen_on(const struct cfg_output *cfg, char *err, size_t errlen)
+/* a reload that changes the server's settings shares the old server's socket until it closes */
+static int listen_on(const struct output *o, const char *addr, char *err, size_t errlen)
 {
-	return out_listen_tcp(cfg->name, opts_of(cfg)->address, opts_of(cfg)->port, "Modbus server", true, err, errlen);
+	const struct cfg_output *cfg = o->cfg;
+	const struct mb_server *p = o->prev ? o->prev->priv : NULL;
+
+	return out_listen_tcp(cfg->name, opts_of(cfg)->address, opts_of(cfg)->port, "Modbus server",
+			      p && !strcmp(p->addr, addr) ? p->lfd : -1, err, errlen);
 }
 
 static void free_server(struct mb_server *s)
@@ -531,6 +554,7 @@ static int modbus_server_open(struct output *o, char *err, size_t errlen)
 	s->order = opts_of(cfg)->word_order;
 	s->writable = opts_of(cfg)->writable_regs;
 	s->max_clients = opts_of(cfg)->max_clients;
+	s->per_addr = opts_of(cfg)->clients_per_address;
 	s->idle_ns = (uint64_t)(opts_of(cfg)->idle_timeout * 1e9);
 	s->n_avatars = o->n_avatars;
 	s->slot = calloc((size_t)o->n_avatars + 1, sizeof(*s->slot));
@@ -566,7 +590,7 @@ static int modbus_server_open(struct output *o, char *err, size_t errlen)
 		free_server(s);
 		return rc;
 	}
-	s->lfd = listen_on(cfg, err, errlen);
+	s->lfd = listen_on(o, s->addr, err, errlen);
 	if (s->lfd < 0) {
 		rc = s->lfd;
 		s->lfd = -1;
@@ -640,8 +664,8 @@ static bool modbus_server_adopt(struct output *o, struct output *old)
 	describe_addr(cfg, addr, sizeof(addr));
 	if (strcmp(addr, s->addr) || s->base != opts_of(cfg)->reg_base || s->stride != opts_of(cfg)->reg_stride ||
 	    s->order != opts_of(cfg)->word_order || s->writable != opts_of(cfg)->writable_regs ||
-	    s->max_clients != opts_of(cfg)->max_clients || s->idle_ns != (uint64_t)(opts_of(cfg)->idle_timeout * 1e9) ||
-	    s->n_avatars != o->n_avatars)
+	    s->max_clients != opts_of(cfg)->max_clients || s->per_addr != opts_of(cfg)->clients_per_address ||
+	    s->idle_ns != (uint64_t)(opts_of(cfg)->idle_timeout * 1e9) || s->n_avatars != o->n_avatars)
 		return false;
 	for (int i = 0; i < o->n_avatars; i++) {
 		if ((s->slot[i] >= 0) != o->wants[i])
@@ -662,26 +686,29 @@ static void modbus_server_report(struct output *o, FILE *out, bool json)
 	if (!s)
 		return;
 	if (json) {
+		fputs(",\"modbus\":{\"address\":", out);
+		json_string(out, s->addr);
 		fprintf(out,
-			",\"modbus\":{\"address\":\"%s\",\"avatars\":%d,\"requests\":%llu,"
+			",\"avatars\":%d,\"requests\":%llu,"
 			"\"illegal_function\":%llu,\"illegal_address\":%llu,\"illegal_value\":%llu,"
 			"\"malformed\":%llu,\"writes\":%llu,\"writes_refused\":%llu,\"idle_closed\":%llu,"
-			"\"send_errors\":%llu,\"updates\":%llu}",
-			s->addr, s->n, (unsigned long long)get(&s->st.requests),
-			(unsigned long long)get(&s->st.exceptions[1]), (unsigned long long)get(&s->st.exceptions[2]),
-			(unsigned long long)get(&s->st.exceptions[3]), (unsigned long long)get(&s->st.malformed),
-			(unsigned long long)get(&s->st.writes), (unsigned long long)get(&s->st.writes_refused),
-			(unsigned long long)get(&s->st.idle_closed), (unsigned long long)get(&s->st.send_errors),
+			"\"evicted\":%llu,\"send_errors\":%llu,\"updates\":%llu}",
+			s->n, (unsigned long long)get(&s->st.requests), (unsigned long long)get(&s->st.exceptions[1]),
+			(unsigned long long)get(&s->st.exceptions[2]), (unsigned long long)get(&s->st.exceptions[3]),
+			(unsigned long long)get(&s->st.malformed), (unsigned long long)get(&s->st.writes),
+			(unsigned long long)get(&s->st.writes_refused), (unsigned long long)get(&s->st.idle_closed),
+			(unsigned long long)get(&s->st.evicted), (unsigned long long)get(&s->st.send_errors),
 			(unsigned long long)get(&s->st.updates));
 		return;
 	}
 	fprintf(out,
 		"  %s: Modbus %s: %llu requests, exceptions 01/02/03 %llu/%llu/%llu, %llu malformed, "
-		"%llu writes refused, %llu idle closed\n",
+		"%llu writes refused, %llu idle closed, %llu dropped for a new client\n",
 		o->name, s->addr, (unsigned long long)get(&s->st.requests),
 		(unsigned long long)get(&s->st.exceptions[1]), (unsigned long long)get(&s->st.exceptions[2]),
 		(unsigned long long)get(&s->st.exceptions[3]), (unsigned long long)get(&s->st.malformed),
-		(unsigned long long)get(&s->st.writes_refused), (unsigned long long)get(&s->st.idle_closed));
+		(unsigned long long)get(&s->st.writes_refused), (unsigned long long)get(&s->st.idle_closed),
+		(unsigned long long)get(&s->st.evicted));
 }
 
 const struct output_ops modbus_output_ops = {

@@ -90,6 +90,8 @@ struct output {
 	int n_avatars;
 	uint32_t cycle; /* for decimation */
 	bool adopted;	/* priv was taken over from the previous configuration */
+	/* during open() only: the same-named output of the configuration a reload replaces, or NULL */
+	struct output *prev;
 	struct output_stats st;
 	void *priv;
 };

@@ -105,7 +105,9 @@ int output_open(struct output *o, const struct cfg_output *cfg, const uint16_t *
 		o->adopted = true;
 		return 0;
 	}
+	o->prev = old && old->ops == o->ops ? old : NULL;
 	rc = o->ops->open(o, err, errlen);
+	o->prev = NULL;
 	if (rc) {
 		free(o->wants);
 		free(o->ids);

@@ -14,6 +14,7 @@
 #include "publish/output.h"
 #include "publish/stream.h"
 #include "publish/listen.h"
+#include "base/clock.h"
 
 #include "avatargw/wire.h"
 
@@ -37,7 +38,16 @@ static const struct cfg_key stream_shared_keys[] = {
 	  .min = 1,
 	  .max = 256,
 	  .def = "8",
-	  .doc = "stream subscribers (Modbus, VRPN, WebSocket clients) at most; more are refused" },
+	  .doc = "stream subscribers at most; when all are taken, a new one takes the slot of the one that has taken "
+		 "nothing the longest (a second at least), else it is refused" },
+	{ .name = "clients_per_address",
+	  .kind = CFG_INT,
+	  CFG_AT(struct stream_opts, clients_per_address),
+	  .min = 0,
+	  .max = 256,
+	  .def = "4",
+	  .doc = "tcp: clients at most from one host (IP address); a further one takes the slot of that host's client "
+		 "idle the longest, else it is refused; 0: no limit but max_clients (unix: no hosts, no limit)" },
 	{ .name = "client_buffer",
 	  .kind = CFG_INT,
 	  CFG_AT(struct stream_opts, client_buffer),
@@ -81,13 +91,14 @@ struct client {
 	int fd; /* -1: free slot */
 	uint8_t *buf;
 	size_t off, len;
+	struct out_peer host; /* its host (TCP); active_ns: when its socket last took bytes (or it connected) */
 };
 
 struct stream {
 	int lfd;
 	bool is_unix;		     /* a Unix stream socket, else TCP */
 	char addr[CFG_PATH_MAX + 8]; /* what adopt() compares */
-	int max_clients;
+	int max_clients, per_addr;
 	size_t buf_size;
 	struct client *cl;
 	uint8_t *pool;
@@ -101,40 +112,39 @@ static void describe_addr(const struct cfg_output *cfg, char *buf, size_t len)
 		snprintf(buf, len, "tcp:%s:%d", opts_of(cfg)->address, opts_of(cfg)->port);
 }
 
-static int listen_tcp(const struct cfg_output *cfg, char *err, size_t errlen)
+/* the listening socket of the output a reload replaces, when it has the same address */
+static int inherited(const struct output *o, const char *addr)
 {
-	return out_listen_tcp(cfg->name, opts_of(cfg)->address, opts_of(cfg)->port, "listen", false, err, errlen);
+	const struct stream *p = o->prev ? o->prev->priv : NULL;
+
+	return p && !strcmp(p->addr, addr) ? p->lfd : -1;
 }
 
-static int listen_unix(const struct cfg_output *cfg, char *err, size_t errlen)
+static int listen_tcp(const struct output *o, const char *addr, char *err, size_t errlen)
 {
-	struct sockaddr_un sun = { .sun_family = AF_UNIX };
-	struct stat st;
-	int fd, rc;
+	const struct cfg_output *cfg = o->cfg;
 
-	if (strlen(opts_of(cfg)->path) >= sizeof(sun.sun_path)) {
-		snprintf(err, errlen, "[output %s] path: longer than %zu characters", cfg->name,
-			 sizeof(sun.sun_path) - 1);
-		return -ENAMETOOLONG;
+	return out_listen_tcp(cfg->name, opts_of(cfg)->address, opts_of(cfg)->port, "listen", inherited(o, addr), err,
+			      errlen);
+}
+
+static int listen_unix(const struct output *o, const char *addr, char *err, size_t errlen)
+{
+	const struct cfg_output *cfg = o->cfg;
+	char why[CFG_PATH_MAX + 128];
+	int fd, old = inherited(o, addr);
+
+	if (old >= 0) {
+		fd = out_unix_share(old, opts_of(cfg)->path);
+		if (fd < 0)
+			snprintf(err, errlen, "[output %s]: listen on %s: %s", cfg->name, opts_of(cfg)->path,
+				 strerror(-fd));
+		return fd;
 	}
-	strcpy(sun.sun_path, opts_of(cfg)->path);
-	/* a socket left by a previous run is ours to replace; anything else is not */
-	if (lstat(opts_of(cfg)->path, &st) == 0) {
-		if (!S_ISSOCK(st.st_mode)) {
-			snprintf(err, errlen, "[output %s] path: %s exists and is not a socket", cfg->name,
-				 opts_of(cfg)->path);
-			return -EEXIST;
-		}
-		unlink(opts_of(cfg)->path);
-	}
-	fd = socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-	if (fd < 0 || bind(fd, (struct sockaddr *)&sun, sizeof(sun)) || listen(fd, 16)) {
-		rc = -errno;
-		snprintf(err, errlen, "[output %s]: listen on %s: %s", cfg->name, opts_of(cfg)->path, strerror(errno));
-		if (fd >= 0)
-			close(fd);
-		return rc;
-	}
+	/* 0660: the daemon's user and group may subscribe (under systemd: its runtime directory's mode) */
+	fd = out_listen_unix(opts_of(cfg)->path, 0660, why, sizeof(why));
+	if (fd < 0)
+		snprintf(err, errlen, "[output %s] path: %s", cfg->name, why);
 	return fd;
 }
 
@@ -148,6 +158,7 @@ static int stream_open(struct output *o, char *err, size_t errlen)
 	s->is_unix = cfg_output_is(cfg, "unix");
 	describe_addr(cfg, s->addr, sizeof(s->addr));
 	s->max_clients = opts_of(cfg)->max_clients;
+	s->per_addr = s->is_unix ? 0 : opts_of(cfg)->clients_per_address;
 	s->buf_size = (size_t)opts_of(cfg)->client_buffer;
 	s->cl = calloc((size_t)s->max_clients, sizeof(*s->cl));
 	s->pool = malloc((size_t)s->max_clients * s->buf_size);
@@ -161,7 +172,7 @@ static int stream_open(struct output *o, char *err, size_t errlen)
 		s->cl[i].fd = -1;
 		s->cl[i].buf = s->pool + (size_t)i * s->buf_size;
 	}
-	s->lfd = cfg_output_is(cfg, "unix") ? listen_unix(cfg, err, errlen) : listen_tcp(cfg, err, errlen);
+	s->lfd = s->is_unix ? listen_unix(o, s->addr, err, errlen) : listen_tcp(o, s->addr, err, errlen);
 	if (s->lfd < 0) {
 		int rc = s->lfd;
 
@@ -193,25 +204,31 @@ static void stream_close(struct output *o)
 	for (int i = 0; i < s->max_clients; i++)
 		if (s->cl[i].fd >= 0)
 			close(s->cl[i].fd);
-	close(s->lfd);
 	if (s->is_unix)
-		unlink(opts_of(o->cfg)->path);
+		out_unix_close(s->lfd, s->addr + 5); /* "unix:" */
+	else
+		close(s->lfd);
 	free(s->cl);
 	free(s->pool);
 	free(s);
 	o->priv = NULL;
 }
 
-static void flush_client(struct output *o, struct client *c)
+static void flush_client(struct output *o, struct client *c, uint64_t now)
 {
+	size_t had = c->len;
+
 	if (out_send_pending(c->fd, c->buf, &c->off, &c->len))
 		drop_client(o, c);
+	else if (c->len < had || !c->len)
+		c->host.active_ns = now; /* it reads: a subscriber in good health */
 }
 
 static void stream_send(struct output *o, const struct out_msg *m, int n)
 {
 	struct stream *s = o->priv;
 	bool frames = o->cfg->decimate <= 1 || o->cycle % (uint32_t)o->cfg->decimate == 0;
+	uint64_t now = mono_ns();
 
 	o->cycle++;
 	for (int i = 0; i < s->max_clients; i++) {
@@ -237,7 +254,7 @@ static void stream_send(struct output *o, const struct out_msg *m, int n)
 			c->len += need;
 			ctr_add(&o->st.sent, 1);
 		}
-		flush_client(o, c);
+		flush_client(o, c, now);
 	}
 }
 
@@ -245,20 +262,26 @@ static void stream_service(struct output *o)
 {
 	struct stream *s = o->priv;
 	uint8_t junk[256];
+	uint64_t now = mono_ns();
 
 	for (;;) {
-		int fd = accept4(s->lfd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC), slot = -1, one = 1;
+		struct sockaddr_storage from = { 0 };
+		socklen_t fl = sizeof(from);
+		int fd = accept4(s->lfd, (struct sockaddr *)&from, &fl, SOCK_NONBLOCK | SOCK_CLOEXEC), slot, one = 1;
+		bool drop;
 
 		if (fd < 0)
 			break;
-		for (int i = 0; i < s->max_clients && slot < 0; i++)
-			if (s->cl[i].fd < 0)
-				slot = i;
+		/* a free slot, or the one of the subscriber that has taken nothing the longest */
+		slot = out_slot_for(s->cl, sizeof(*s->cl), offsetof(struct client, fd), offsetof(struct client, host),
+				    s->max_clients, &from, s->per_addr, now, &drop);
 		if (slot < 0) {
 			close(fd);
 			ctr_add(&o->st.refused, 1);
 			continue;
 		}
+		if (drop)
+			drop_client(o, &s->cl[slot]);
 		if (!s->is_unix)
 			setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
 		{
@@ -269,6 +292,7 @@ static void stream_service(struct output *o)
 		}
 		s->cl[slot].fd = fd;
 		s->cl[slot].off = s->cl[slot].len = 0;
+		s->cl[slot].host = (struct out_peer){ from, now };
 		ctr_add(&o->st.accepted, 1);
 		ctr_add(&o->st.clients, 1);
 	}
@@ -294,6 +318,7 @@ static bool stream_adopt(struct output *o, struct output *old)
 		return false;
 	describe_addr(o->cfg, addr, sizeof(addr));
 	if (strcmp(addr, s->addr) || s->max_clients != opts_of(o->cfg)->max_clients ||
+	    s->per_addr != (s->is_unix ? 0 : opts_of(o->cfg)->clients_per_address) ||
 	    s->buf_size != (size_t)opts_of(o->cfg)->client_buffer)
 		return false;
 	o->priv = s;

@@ -11,6 +11,7 @@ struct stream_opts {
 	char address[CFG_PATH_MAX]; /* udp/multicast: destination; tcp: listen address */
 	int port;
 	int max_clients;
+	int clients_per_address; /* tcp: 0: no limit but max_clients */
 	int client_buffer;	 /* bytes per stream client */
 	char path[CFG_PATH_MAX]; /* unix */
 };

@@ -55,9 +55,9 @@ static const struct cfg_key vrpn_keys[] = {
 	{ .name = "address",
 	  .kind = CFG_STR,
 	  CFG_AT(struct vrpn_opts, address),
-	  .def = "0.0.0.0",
+	  .def = "127.0.0.1",
 	  .doc = "listen address for TCP connections and UDP connection requests (0.0.0.0: every IPv4 interface, "
-		 "::: every interface)" },
+		 "::: every interface; the default serves this host only)" },
 	{ .name = "port",
 	  .kind = CFG_INT,
 	  CFG_AT(struct vrpn_opts, port),
@@ -71,7 +71,16 @@ static const struct cfg_key vrpn_keys[] = {
 	  .min = 1,
 	  .max = 256,
 	  .def = "8",
-	  .doc = "stream subscribers (Modbus, VRPN, WebSocket clients) at most; more are refused" },
+	  .doc = "clients at most; when all are taken, a new one takes the slot of the one that has sent nothing the "
+		 "longest (a second at least), else it is refused" },
+	{ .name = "clients_per_address",
+	  .kind = CFG_INT,
+	  CFG_AT(struct vrpn_opts, clients_per_address),
+	  .min = 0,
+	  .max = 256,
+	  .def = "4",
+	  .doc = "clients at most from one host (IP address); a further one takes the slot of that host's client idle "
+		 "the longest, else it is refused; 0: no limit but max_clients" },
 	{ .name = "client_buffer",
 	  .kind = CFG_INT,
 	  CFG_AT(struct vrpn_opts, client_buffer),
@@ -157,6 +166,7 @@ struct vcl {
 	int fd;
 	enum vcl_state state;
 	uint64_t since_ns;    /* entered this state */
+	struct out_peer host; /* its host; active_ns: when it last sent us something (or connected) */
 	uint64_t dropping_ns; /* first message dropped since the buffer was last empty, 0 none */
 	struct sockaddr_storage peer;
 	socklen_t peer_len;
@@ -190,7 +200,7 @@ struct vrpn {
 	int lfd, ufd;
 	int family;
 	char key[CFG_PATH_MAX + 32]; /* what adopt() compares */
-	int max_clients;
+	int max_clients, per_addr;
 	size_t buf_size;
 	bool udp;
 	uint64_t timeout_ns;
@@ -419,6 +429,7 @@ static void vcl_start(struct vcl *c, int fd, enum vcl_state st, uint64_t now)
 	c->fd = fd;
 	c->state = st;
 	c->since_ns = now;
+	c->host.active_ns = now;
 	c->dropping_ns = 0;
 	c->udp = false;
 	c->off = c->len = 0;
@@ -579,6 +590,7 @@ static bool vcl_read(struct vrpn *v, struct vcl *c, const struct vmap *m, uint64
 		if (n < 0)
 			return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR;
 		c->in_len += (size_t)n;
+		c->host.active_ns = now;
 		if (c->state == VC_COOKIE) {
 			if (c->in_len < VRPN_COOKIE_LEN)
 				continue;
@@ -722,8 +734,9 @@ static void vrpn_free(struct vrpn *v)
 
 static void describe_key(const struct cfg_output *cfg, char *buf, size_t len)
 {
-	snprintf(buf, len, "%s|%d|%d|%d|%d|%.9g", opts_of(cfg)->address, opts_of(cfg)->port, opts_of(cfg)->udp,
-		 opts_of(cfg)->max_clients, opts_of(cfg)->client_buffer, opts_of(cfg)->client_timeout);
+	snprintf(buf, len, "%s|%d|%d|%d|%d|%d|%.9g", opts_of(cfg)->address, opts_of(cfg)->port, opts_of(cfg)->udp,
+		 opts_of(cfg)->max_clients, opts_of(cfg)->clients_per_address, opts_of(cfg)->client_buffer,
+		 opts_of(cfg)->client_timeout);
 }
 
 static int vrpn_open(struct output *o, char *err, size_t errlen)
@@ -736,6 +749,7 @@ static int vrpn_open(struct output *o, char *err, size_t errlen)
 		return -ENOMEM;
 	v->lfd = v->ufd = -1;
 	v->max_clients = opts_of(cfg)->max_clients;
+	v->per_addr = opts_of(cfg)->clients_per_address;
 	v->buf_size = (size_t)opts_of(cfg)->client_buffer;
 	v->udp = opts_of(cfg)->udp;
 	v->timeout_ns = (uint64_t)(opts_of(cfg)->client_timeout * 1e9);
@@ -813,8 +827,9 @@ static void vrpn_lob(struct output *o, struct vrpn *v, const char *msg, const st
 		     socklen_t from_len, uint64_t now)
 {
 	char host[128];
-	int port = 0, fd, slot = -1;
+	int port = 0, fd, slot;
 	struct sockaddr_storage to;
+	bool drop;
 
 	if (sscanf(msg, "%127s %d", host, &port) != 2 || port < 1024 || port > 65535) {
 		ctr_add(&o->st.malformed, 1);
@@ -837,9 +852,10 @@ static void vrpn_lob(struct output *o, struct vrpn *v, const char *msg, const st
 		/* it lobs again every two seconds until called back: one call per client */
 		if (c->fd >= 0 && c->peer_len == from_len && !memcmp(&c->peer, &to, from_len))
 			return;
-		if (c->fd < 0 && slot < 0)
-			slot = i;
 	}
+	/* a free slot, or the one of the client idle the longest (this host's own when it has its share) */
+	slot = out_slot_for(v->cl, sizeof(*v->cl), offsetof(struct vcl, fd), offsetof(struct vcl, host), v->max_clients,
+			    &to, v->per_addr, now, &drop);
 	if (slot < 0) {
 		ctr_add(&o->st.refused, 1);
 		return;
@@ -856,9 +872,12 @@ static void vrpn_lob(struct output *o, struct vrpn *v, const char *msg, const st
 		atomic_store_explicit(&o->st.last_errno, errno, memory_order_relaxed);
 		return;
 	}
+	if (drop)
+		vcl_drop(o, &v->cl[slot], false);
 	vcl_start(&v->cl[slot], fd, VC_CONNECTING, now);
 	memcpy(&v->cl[slot].peer, &to, sizeof(to));
 	v->cl[slot].peer_len = from_len;
+	v->cl[slot].host.addr = to;
 	ctr_add(&o->st.clients, 1);
 }
 
@@ -890,21 +909,25 @@ static void vrpn_service(struct output *o)
 	for (int k = 0; k < 16; k++) {
 		struct sockaddr_storage peer;
 		socklen_t pl = sizeof(peer);
-		int fd = accept4(v->lfd, (struct sockaddr *)&peer, &pl, SOCK_NONBLOCK | SOCK_CLOEXEC), slot = -1;
+		int fd = accept4(v->lfd, (struct sockaddr *)&peer, &pl, SOCK_NONBLOCK | SOCK_CLOEXEC), slot;
+		bool drop;
 
 		if (fd < 0)
 			break;
-		for (int i = 0; i < v->max_clients && slot < 0; i++)
-			if (v->cl[i].fd < 0)
-				slot = i;
+		/* a free slot, or the one of the client idle the longest (this host's own when it has its share) */
+		slot = out_slot_for(v->cl, sizeof(*v->cl), offsetof(struct vcl, fd), offsetof(struct vcl, host),
+				    v->max_clients, &peer, v->per_addr, now, &drop);
 		if (slot < 0) {
 			close(fd);
 			ctr_add(&o->st.refused, 1);
 			continue;
 		}
+		if (drop)
+			vcl_drop(o, &v->cl[slot], false);
 		vcl_start(&v->cl[slot], fd, VC_CONNECTING, now);
 		memcpy(&v->cl[slot].peer, &peer, sizeof(peer));
 		v->cl[slot].peer_len = pl;
+		v->cl[slot].host.addr = peer;
 		ctr_add(&o->st.clients, 1);
 		vcl_connected(o, v, &v->cl[slot], now);
 	}

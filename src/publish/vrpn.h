@@ -11,6 +11,7 @@ struct vrpn_opts {
 	char address[CFG_PATH_MAX]; /* udp/multicast: destination; tcp: listen address */
 	int port;
 	int max_clients;
+	int clients_per_address;   /* 0: no limit but max_clients */
 	int client_buffer;	   /* bytes per stream client */
 	char device[CFG_PATH_MAX]; /* vrpn: device name pattern, %d = avatar id */
 	bool udp;		   /* vrpn: low-latency reports over UDP when a client offers a port */

@@ -21,6 +21,7 @@
  */
 #include "publish/output.h"
 #include "publish/websocket.h"
+#include "publish/listen.h"
 #include "base/clock.h"
 #include "publish/snapshot.h"
 
@@ -60,7 +61,32 @@ static const struct cfg_key websocket_keys[] = {
 	  .min = 1,
 	  .max = 256,
 	  .def = "8",
-	  .doc = "stream subscribers (Modbus, VRPN, WebSocket clients) at most; more are refused" },
+	  .doc = "browsers at most; when all are taken, a new one takes the slot of the one that has answered no ping "
+		 "the longest (a second at least), else it is refused" },
+	{ .name = "clients_per_address",
+	  .kind = CFG_INT,
+	  CFG_AT(struct websocket_opts, clients_per_address),
+	  .min = 0,
+	  .max = 256,
+	  .def = "4",
+	  .doc = "clients at most from one host (IP address); a further one takes the slot of that host's client idle "
+		 "the longest, else it is refused; 0: no limit but max_clients" },
+	{ .name = "client_timeout",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct websocket_opts, client_timeout),
+	  .min = 1,
+	  .max = 3600,
+	  .def = "5",
+	  .unit = "s",
+	  .doc = "a connection that has not finished its HTTP request or WebSocket handshake this long is dropped" },
+	{ .name = "idle_timeout",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct websocket_opts, idle_timeout),
+	  .min = 2,
+	  .max = 3600,
+	  .def = "30",
+	  .unit = "s",
+	  .doc = "a browser that answers no ping for this long is disconnected (pinged when silent for half of it)" },
 	{ .name = "rate",
 	  .kind = CFG_DOUBLE,
 	  CFG_AT(struct websocket_opts, rate),
@@ -112,10 +138,13 @@ struct ws_srv {
 	char start_err[256];
 	pthread_cond_t started_cv;
 	_Atomic bool stop;
-	char key[3 * CFG_PATH_MAX + 32]; /* what adopt() compares */
+	char key[3 * CFG_PATH_MAX + 128]; /* what adopt() compares */
 	char address[CFG_PATH_MAX];
 	int port;
 	int max_clients;
+	int per_addr;		      /* clients_per_address */
+	unsigned handshake_s, idle_s; /* client_timeout, idle_timeout */
+	lws_retry_bo_t idle;	      /* pings when silent for half of idle_s, hangs up at idle_s */
 	uint64_t period_us;
 	char www[PATH_MAX];
 	char three[PATH_MAX];
@@ -136,6 +165,8 @@ struct ws_srv {
 struct ws_session {
 	uint64_t gen; /* the text it last got */
 	bool counted; /* admitted (under max_clients) */
+	struct lws *wsi;
+	struct out_peer host; /* its address; active_ns: its connection, or its last pong */
 };
 
 static struct output *ws_owner(struct ws_srv *w)
@@ -316,6 +347,54 @@ static void ws_clients(struct ws_srv *w)
 	pthread_mutex_unlock(&w->mu);
 }
 
+/* forgets an admitted browser (its connection closes, or is being closed) */
+static void ws_forget(struct ws_srv *w, struct ws_session *s)
+{
+	for (int i = 0; i < w->max_clients; i++)
+		if (w->sessions[i] == s)
+			w->sessions[i] = NULL;
+	w->clients--;
+	s->counted = false;
+	ws_count(w, offsetof(struct output_stats, closed), 1);
+	ws_clients(w);
+}
+
+/*
+ * Room for a browser from `from`: under max_clients and clients_per_address,
+ * or by closing the browser idle the longest (no pong for a second at least;
+ * of this host's own when it has its share). False: refuse it.
+ */
+static bool ws_make_room(struct ws_srv *w, const struct sockaddr_storage *from, uint64_t now)
+{
+	struct ws_session *idlest = NULL, *idlest_same = NULL, *victim;
+	int same = 0;
+
+	for (int i = 0; i < w->max_clients; i++) {
+		struct ws_session *s = w->sessions[i];
+
+		if (!s)
+			continue;
+		if (!idlest || s->host.active_ns < idlest->host.active_ns)
+			idlest = s;
+		if (out_same_host(&s->host.addr, from)) {
+			same++;
+			if (!idlest_same || s->host.active_ns < idlest_same->host.active_ns)
+				idlest_same = s;
+		}
+	}
+	if (w->per_addr > 0 && same >= w->per_addr)
+		victim = idlest_same;
+	else if (w->clients < w->max_clients)
+		return true;
+	else
+		victim = idlest;
+	if (!victim || now - victim->host.active_ns < OUT_MIN_IDLE_NS)
+		return false;
+	lws_set_timeout(victim->wsi, PENDING_TIMEOUT_USER_OK, LWS_TO_KILL_ASYNC);
+	ws_forget(w, victim);
+	return true;
+}
+
 static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in, size_t len)
 {
 	struct ws_srv *w = lws_context_user(lws_get_context(wsi));
@@ -324,12 +403,19 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
 	(void)in;
 	(void)len;
 	switch (reason) {
-	case LWS_CALLBACK_ESTABLISHED:
-		if (w->clients >= w->max_clients) {
+	case LWS_CALLBACK_ESTABLISHED: {
+		struct sockaddr_storage from = { 0 };
+		socklen_t fl = sizeof(from);
+		uint64_t now = mono_ns();
+
+		getpeername(lws_get_socket_fd(wsi), (struct sockaddr *)&from, &fl);
+		if (!ws_make_room(w, &from, now)) {
 			ws_count(w, offsetof(struct output_stats, refused), 1);
 			return -1;
 		}
 		s->counted = true;
+		s->wsi = wsi;
+		s->host = (struct out_peer){ from, now };
 		s->gen = w->gen;
 		w->clients++;
 		for (int i = 0; i < w->max_clients; i++)
@@ -346,16 +432,10 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
 		ws_count(w, offsetof(struct output_stats, accepted), 1);
 		ws_clients(w);
 		break;
+	}
 	case LWS_CALLBACK_CLOSED:
-		if (s->counted) {
-			for (int i = 0; i < w->max_clients; i++)
-				if (w->sessions[i] == s)
-					w->sessions[i] = NULL;
-			w->clients--;
-			ws_count(w, offsetof(struct output_stats, closed), 1);
-			ws_clients(w);
-			s->counted = false;
-		}
+		if (s->counted)
+			ws_forget(w, s);
 		break;
 	case LWS_CALLBACK_SERVER_WRITEABLE:
 		if (!s->counted || s->gen == w->gen)
@@ -376,7 +456,15 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
 		ws_count(w, offsetof(struct output_stats, sent), 1);
 		break;
 	case LWS_CALLBACK_RECEIVE:
-		break; /* the page sends nothing we act on */
+		/*
+		 * The page sends nothing: whatever comes (an unmasked frame, a
+		 * fragment of an endless message, a 2^62-byte one) is not it.
+		 */
+		ws_count(w, offsetof(struct output_stats, malformed), 1);
+		return -1;
+	case LWS_CALLBACK_RECEIVE_PONG:
+		s->host.active_ns = mono_ns(); /* a browser answers its pings by itself */
+		break;
 	case LWS_CALLBACK_EVENT_WAIT_CANCELLED:
 		break; /* close() woke us: the service loop looks at stop */
 	default:
@@ -408,6 +496,11 @@ static void *ws_main(void *arg)
 	info.protocols = w->protocols;
 	info.mounts = &w->mount_www;
 	info.user = w;
+	/* the HTTP request and the WebSocket handshake get client_timeout; then pings prove the browser there */
+	info.timeout_secs = w->handshake_s;
+	info.timeout_secs_ah_idle = w->handshake_s; /* a request that stops half-way */
+	info.keepalive_timeout = (int)w->handshake_s;
+	info.retry_and_idle_policy = &w->idle;
 	/* an IPv4 address to listen on: no IPv6 socket (lws would try to bind it there too) */
 	if (!strchr(w->address, ':'))
 		info.options |= LWS_SERVER_OPTION_DISABLE_IPV6;
@@ -532,8 +625,9 @@ static void srv_free(struct ws_srv *w)
 
 static void describe_key(const struct cfg_output *cfg, char *buf, size_t len)
 {
-	snprintf(buf, len, "%s|%d|%d|%.9g|%s|%s", opts_of(cfg)->address, opts_of(cfg)->port, opts_of(cfg)->max_clients,
-		 opts_of(cfg)->rate, opts_of(cfg)->www, opts_of(cfg)->three);
+	snprintf(buf, len, "%s|%d|%d|%d|%.9g|%.9g|%.9g|%s|%s", opts_of(cfg)->address, opts_of(cfg)->port,
+		 opts_of(cfg)->max_clients, opts_of(cfg)->clients_per_address, opts_of(cfg)->client_timeout,
+		 opts_of(cfg)->idle_timeout, opts_of(cfg)->rate, opts_of(cfg)->www, opts_of(cfg)->three);
 }
 
 static int ws_open(struct output *o, char *err, size_t errlen)
@@ -551,6 +645,11 @@ static int ws_open(struct output *o, char *err, size_t errlen)
 	snprintf(w->address, sizeof(w->address), "%s", opts_of(cfg)->address);
 	w->port = opts_of(cfg)->port;
 	w->max_clients = opts_of(cfg)->max_clients;
+	w->per_addr = opts_of(cfg)->clients_per_address;
+	w->handshake_s = (unsigned)ceil(opts_of(cfg)->client_timeout);
+	w->idle_s = (unsigned)ceil(opts_of(cfg)->idle_timeout);
+	w->idle = (lws_retry_bo_t){ .secs_since_valid_ping = (uint16_t)(w->idle_s / 2),
+				    .secs_since_valid_hangup = (uint16_t)w->idle_s };
 	w->period_us = (uint64_t)(1e6 / opts_of(cfg)->rate);
 	if (find_www(opts_of(cfg)->www, w->www, sizeof(w->www), tried, sizeof(tried))) {
 		snprintf(err, errlen, "[output %s] www: no viewer page (index.html) in %s", cfg->name, tried);

@@ -19,6 +19,7 @@
  * tries again.
  */
 #include "trackers/tracker.h"
+#include "base/json.h"
 #include "trackers/can_in.h"
 
 #include "base/log.h"
@@ -285,11 +286,11 @@ static void can_in_report(struct tracker *t, FILE *out, bool json)
 	int e = atomic_load_explicit(&c->last_errno, memory_order_relaxed);
 
 	if (json) {
-		fprintf(out, ",\"can\":{\"interface\":\"%s\",\"state\":\"%s\",\"why\":\"", opts_of(t->cfg)->interface,
-			c->disabled ? "disabled" : "open");
-		for (const char *s = c->disabled ? c->why : e ? strerror(e) : ""; *s; s++)
-			fprintf(out, *s == '"' || *s == '\\' ? "\\%c" : "%c", *s);
-		fprintf(out, "\",\"frames\":%llu,\"unknown_id\":%llu,\"bad_length\":%llu,\"bad_value\":%llu}",
+		fputs(",\"can\":{\"interface\":", out);
+		json_string(out, opts_of(t->cfg)->interface);
+		fprintf(out, ",\"state\":\"%s\",\"why\":", c->disabled ? "disabled" : "open");
+		json_string(out, c->disabled ? c->why : e ? strerror(e) : "");
+		fprintf(out, ",\"frames\":%llu,\"unknown_id\":%llu,\"bad_length\":%llu,\"bad_value\":%llu}",
 			(unsigned long long)ctr_get(&c->frames), (unsigned long long)ctr_get(&c->unknown_id),
 			(unsigned long long)ctr_get(&c->bad_length), (unsigned long long)ctr_get(&c->bad_value));
 		return;

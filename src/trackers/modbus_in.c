@@ -24,6 +24,7 @@
  * or a quaternion far from unit length are counted as malformed and dropped.
  */
 #include "trackers/tracker.h"
+#include "base/json.h"
 #include "trackers/modbus_in.h"
 
 #include "base/log.h"
@@ -682,14 +683,17 @@ static void modbus_in_report(struct tracker *t, FILE *out, bool json)
 	int e = atomic_load_explicit(&m->last_errno, memory_order_relaxed);
 
 	if (json) {
+		fputs(",\"modbus\":{\"device\":", out);
+		json_string(out, m->where);
+		fprintf(out, ",\"link\":\"%s\",\"last_error\":", links[link]);
+		json_string(out, e ? modbus_strerror(e) : "");
 		fprintf(out,
-			",\"modbus\":{\"device\":\"%s\",\"link\":\"%s\",\"last_error\":\"%s\",\"polls\":%llu,"
+			",\"polls\":%llu,"
 			"\"connects\":%llu,\"losses\":%llu,\"timeouts\":%llu,\"exceptions\":%llu,\"reads_per_poll\":%"
 			"d}",
-			m->where, links[link], e ? modbus_strerror(e) : "", (unsigned long long)ctr_get(&m->polls),
-			(unsigned long long)ctr_get(&m->connects), (unsigned long long)ctr_get(&m->losses),
-			(unsigned long long)ctr_get(&m->timeouts), (unsigned long long)ctr_get(&m->exceptions),
-			m->reads);
+			(unsigned long long)ctr_get(&m->polls), (unsigned long long)ctr_get(&m->connects),
+			(unsigned long long)ctr_get(&m->losses), (unsigned long long)ctr_get(&m->timeouts),
+			(unsigned long long)ctr_get(&m->exceptions), m->reads);
 		return;
 	}
 	fprintf(out, "  %s: Modbus %s %s%s%s: %llu polls, %llu connects, %llu losses, %llu timeouts, %llu exceptions\n",

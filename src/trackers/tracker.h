@@ -113,7 +113,14 @@ extern const int trackers_count;
 /* start-up: allocates the slots and calls the driver's open() */
 int tracker_open(struct tracker *t, const struct cfg_source *cfg, char *err, size_t errlen);
 void tracker_close(struct tracker *t);
-/* a sample in the tracker's frame, stored in world coordinates (through the sensor's mount, if any) */
+/*
+ * A sample in the tracker's frame, stored in world coordinates (through the
+ * sensor's mount, if any). A pose that is not finite as single-precision
+ * floats, farther than the source's max_distance from the world's origin, or
+ * whose rotation is not a unit quaternion to TRACKER_QUAT_TOL is not stored:
+ * counted as malformed (the slot keeps its last good sample).
+ */
+#define TRACKER_QUAT_TOL 1e-3
 void tracker_put(struct tracker *t, int sensor, const struct dq *local, uint64_t t_ns, uint64_t arrival_ns);
 
 #endif /* AGW_TRACKER_H */

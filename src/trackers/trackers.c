@@ -130,10 +130,44 @@ void tracker_close(struct tracker *t)
 	t->drv = NULL;
 }
 
+/*
+ * A world pose as it would be published (single-precision floats): finite,
+ * within max_distance of the origin, its rotation a unit quaternion to
+ * TRACKER_QUAT_TOL. A double that is finite may still become infinite as a
+ * float (1e39), and a huge finite position makes the solver's numbers
+ * overflow: both stop here, at the one place every driver's samples pass.
+ */
+static bool publishable(const struct dq *pose, double max_distance)
+{
+	struct vec3 t;
+	float p[3], q[4];
+	double d2 = 0, n2 = 0;
+
+	dq_translation(pose, &t);
+	p[0] = (float)t.x;
+	p[1] = (float)t.y;
+	p[2] = (float)t.z;
+	q[0] = (float)pose->r.w;
+	q[1] = (float)pose->r.x;
+	q[2] = (float)pose->r.y;
+	q[3] = (float)pose->r.z;
+	for (int i = 0; i < 3; i++) {
+		if (!isfinite(p[i]))
+			return false;
+		d2 += (double)p[i] * p[i];
+	}
+	for (int i = 0; i < 4; i++) {
+		if (!isfinite(q[i]))
+			return false;
+		n2 += (double)q[i] * q[i];
+	}
+	return d2 <= max_distance * max_distance && fabs(sqrt(n2) - 1.0) <= TRACKER_QUAT_TOL;
+}
+
 void tracker_put(struct tracker *t, int sensor, const struct dq *local, uint64_t t_ns, uint64_t arrival_ns)
 {
 	struct sensor_slot *s = &t->slot[sensor];
-	struct dq at;
+	struct dq at, world;
 
 	/* the tracked point is the mount offset away from the sensor, in the sensor's frame */
 	if (t->mounted[sensor]) {
@@ -141,9 +175,15 @@ void tracker_put(struct tracker *t, int sensor, const struct dq *local, uint64_t
 		local = &at;
 	}
 	if (t->world_identity)
-		s->pose = *local;
+		world = *local;
 	else
-		dq_mul(&t->world, local, &s->pose);
+		dq_mul(&t->world, local, &world);
+	if (!publishable(&world, t->cfg->max_distance)) {
+		/* malformed: the sensor keeps its last good sample, which ages into STALE */
+		ctr_add(&t->st.malformed, 1);
+		return;
+	}
+	s->pose = world;
 	s->t_ns = t_ns;
 	s->arrival_ns = arrival_ns;
 	s->count++;

@@ -45,6 +45,8 @@ port = {vport}
 client_buffer = 8192
 client_timeout = 1
 max_clients = 6
+; every test client comes from 127.0.0.1: no limit per address but max_clients
+clients_per_address = 0
 """
 
 
