@@ -114,6 +114,7 @@ LIBS = $(DEP_LIBS) -lpthread -lm
 GW_SRC = $(filter-out src/daemon/main.c $(LEFT_OUT),$(wildcard src/base/*.c src/wire/*.c src/config/*.c src/trackers/*.c \
 	src/frames/*.c src/publish/*.c src/record/*.c src/daemon/*.c))
 GW_OBJ = $(patsubst src/%.c,$(BUILD)/obj/%.o,$(GW_SRC)) $(BUILD)/obj/gen/builtin.o
+include src/sites/sites.mk
 # files compiled into the daemon: the demo configuration and its clip
 BUILTIN_FILES = config/demo.conf config/clips/cmu_141_16.csv
 

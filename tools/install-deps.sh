@@ -39,6 +39,14 @@ can-utils
 iproute2
 zlib1g-dev
 valgrind
+cyclonedds-dev
+libddsc0debian
+cyclonedds-tools
+libfastrtps-dev
+libfastcdr-dev
+fastddsgen
+default-jre-headless
+openssl
 "
 
 missing=""

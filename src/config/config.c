@@ -31,8 +31,8 @@
 
 const char *const cfg_sensor_roles[3] = { "head", "left_hand", "right_hand" };
 
-enum sect { S_DAEMON, S_SOURCE, S_AVATAR, S_OUTPUT, S_COUNT };
-static const char *const sect_names[S_COUNT] = { "daemon", "source", "avatar", "output" };
+enum sect { S_DAEMON, S_SOURCE, S_AVATAR, S_OUTPUT, S_SITE, S_COUNT };
+static const char *const sect_names[S_COUNT] = { "daemon", "source", "avatar", "output", "site" };
 
 static const char *const e_mode[] = { "deadline", "events", NULL };
 static const char *const e_log[] = { "err", "warning", "info", "debug", NULL };
@@ -413,14 +413,100 @@ static const struct cfg_key output_keys[] = {
 	  .doc = "avatar names to publish (space separated), or all" },
 };
 
+/* [site] (docs/SITES.md): one section without a name, like [daemon] */
+static const struct cfg_key site_keys[] = {
+	{ .name = "name",
+	  .kind = CFG_STR,
+	  CFG_AT(struct cfg_site, name),
+	  .def = NULL,
+	  .missing = "this site's name, unique in the session",
+	  .doc = "this site's name, unique in the session (1-31 of A-Z a-z 0-9 _ - .): the others see its avatars "
+		 "as SITE/NAME" },
+	{ .name = "session",
+	  .kind = CFG_STR,
+	  CFG_AT(struct cfg_site, session),
+	  .def = "avatargw",
+	  .doc = "only sites of the same session see each other (a DDS partition, at most 63 characters)" },
+	{ .name = "domain",
+	  .kind = CFG_INT,
+	  CFG_AT(struct cfg_site, domain),
+	  .min = 0,
+	  .max = 230,
+	  .def = "0",
+	  .doc = "DDS domain id" },
+	{ .name = "peers",
+	  .kind = CFG_STR,
+	  CFG_AT(struct cfg_site, peers),
+	  .def = "",
+	  .doc = "addresses of the other sites, separated by spaces (unicast discovery, multicast off); empty: "
+		 "multicast discovery on the local network" },
+	{ .name = "interface",
+	  .kind = CFG_STR,
+	  CFG_AT(struct cfg_site, interface),
+	  .def = "",
+	  .doc = "network interface (or its address) DDS uses; empty: Cyclone DDS chooses" },
+	{ .name = "publish",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct cfg_site, publish),
+	  .def = "yes",
+	  .doc = "share this site's avatars" },
+	{ .name = "subscribe",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct cfg_site, subscribe),
+	  .def = "yes",
+	  .doc = "show the other sites' avatars here, through every output" },
+	{ .name = "security",
+	  .kind = CFG_PATH,
+	  CFG_AT(struct cfg_site, security),
+	  .def = "",
+	  .doc = "directory with DDS Security's ca.pem, cert.pem, key.pem, governance.p7s, permissions.p7s "
+		 "(tools/site-security.sh makes them); empty: none, anyone on the network can read and inject" },
+	{ .name = "ros2",
+	  .kind = CFG_BOOL,
+	  CFG_AT(struct cfg_site, ros2),
+	  .def = "no",
+	  .doc = "also publish each local avatar for ROS 2: sensor_msgs/JointState on rt/SITE/AVATAR/joint_states, "
+		 "tf2_msgs/TFMessage on rt/tf (frames SITE/AVATAR/SEGMENT in world), outside the session's "
+		 "partition" },
+	{ .name = "max_remote",
+	  .kind = CFG_INT,
+	  CFG_AT(struct cfg_site, max_remote),
+	  .min = 0,
+	  .max = 1024,
+	  .def = "64",
+	  .doc = "remote avatars shown at most (their slots are reserved at start-up)" },
+	{ .name = "remote_id",
+	  .kind = CFG_INT,
+	  CFG_AT(struct cfg_site, remote_id),
+	  .min = 0,
+	  .max = 65535,
+	  .def = "1000",
+	  .doc = "the id of the first remote avatar; the others follow (remote_id + max_remote - 1 at most 65535)" },
+	{ .name = "deadline_ms",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_site, deadline_ms),
+	  .min = 10,
+	  .max = 60000,
+	  .def = "500",
+	  .unit = "ms",
+	  .doc = "a remote avatar without a new sample for this long is MISSING (STALE after [daemon] stale_ms)" },
+	{ .name = "lease",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_site, lease),
+	  .min = 0.2,
+	  .max = 3600,
+	  .def = "2",
+	  .unit = "s",
+	  .doc = "a site that stops (crash, network) is gone at the others after this long" },
+};
+
 static const struct {
 	const struct cfg_key *keys;
 	int n;
 } common[S_COUNT] = {
-	[S_DAEMON] = { daemon_keys, CFG_N(daemon_keys) },
-	[S_SOURCE] = { source_keys, CFG_N(source_keys) },
-	[S_AVATAR] = { avatar_keys, CFG_N(avatar_keys) },
-	[S_OUTPUT] = { output_keys, CFG_N(output_keys) },
+	[S_DAEMON] = { daemon_keys, CFG_N(daemon_keys) }, [S_SOURCE] = { source_keys, CFG_N(source_keys) },
+	[S_AVATAR] = { avatar_keys, CFG_N(avatar_keys) }, [S_OUTPUT] = { output_keys, CFG_N(output_keys) },
+	[S_SITE] = { site_keys, CFG_N(site_keys) },
 };
 
 /* ---- errors ----------------------------------------------------------------------- */
@@ -1328,6 +1414,44 @@ static int resolve_output_avatars(struct parse *p, const char *full, struct cfg_
 	return 0;
 }
 
+/* [site] (docs/SITES.md): one section without a name, checked once every avatar is known */
+static int build_site(struct parse *p, const struct cfg_entry *e, const char *name)
+{
+	struct config *c = p->c;
+	struct cfg_site *st = &c->site;
+	struct section_ctx s = { p, S_SITE, "", "site", st, NULL, NULL, e->where };
+	const struct cfg_entry *k;
+
+	if (name[0])
+		return failf(p, e->where, "[%s]: the site section has no name ([site], then name = ...)", e->section);
+	memset(st, 0, sizeof(*st));
+	st->present = true;
+	st->where = e->where;
+	if (apply_section(&s))
+		return -1;
+	k = entry_of(c, "site", "name");
+	if (!valid_name(st->name))
+		return failf(p, k ? k->where : e->where,
+			     "[site] name: '%s' is not a valid site name (1-%d of A-Z a-z 0-9 _ - .)", st->name,
+			     CFG_SITE_NAME_MAX - 1);
+	k = entry_of(c, "site", "session");
+	if (!st->session[0] || strpbrk(st->session, "*?[]\\"))
+		return failf(p, k ? k->where : e->where,
+			     "[site] session: '%s' is not a session name (1-63 characters, no * ? [ ] \\)",
+			     st->session);
+	k = entry_of(c, "site", "remote_id");
+	if ((long)st->remote_id + st->max_remote - 1 > 65535)
+		return failf(p, k ? k->where : e->where, "[site] remote_id: %d + max_remote %d goes past 65535",
+			     st->remote_id, st->max_remote);
+	for (int i = 0; i < c->n_avatars && st->subscribe; i++)
+		if (c->avatar[i].id >= st->remote_id && c->avatar[i].id < st->remote_id + st->max_remote)
+			return failf(p, k ? k->where : e->where,
+				     "[site] remote_id: avatar %s has id %u, among the remote ids %d-%d",
+				     c->avatar[i].name, c->avatar[i].id, st->remote_id,
+				     st->remote_id + st->max_remote - 1);
+	return 0;
+}
+
 static int build(struct parse *p)
 {
 	struct config *c = p->c;
@@ -1369,15 +1493,20 @@ static int build(struct parse *p)
 				seen[n_seen++] = e->section;
 			if (kind < 0) {
 				if (pass == 0)
-					return failf(
-						p, e->where,
-						"[%s]: unknown section (daemon, source NAME, avatar NAME, output NAME)",
-						e->section);
+					return failf(p, e->where,
+						     "[%s]: unknown section (daemon, source NAME, avatar NAME, output "
+						     "NAME, site)",
+						     e->section);
 				continue;
 			}
 			if (kind != pass || kind == S_DAEMON) {
 				if (kind == S_DAEMON && pass == 0 && name[0])
 					return failf(p, e->where, "[%s]: the daemon section has no name", e->section);
+				continue;
+			}
+			if (kind == S_SITE) {
+				if (build_site(p, e, name))
+					return -1;
 				continue;
 			}
 			if (!valid_name(name))
@@ -1682,6 +1811,8 @@ void config_print(const struct config *c, FILE *out)
 		snprintf(full, sizeof(full), "output %s", o->name);
 		print_section(out, c, S_OUTPUT, full, full, cfg_output_type(o->type), (void *)o, o->opt);
 	}
+	if (c->site.present)
+		print_section(out, c, S_SITE, "site", "site", NULL, (void *)&c->site, NULL);
 }
 
 static const char *kind_names[] = {
@@ -1729,7 +1860,7 @@ static void print_kind(FILE *out, int sect, const struct cfg_type *(*type)(int i
 	char doc[2048], types[512];
 	size_t n = 0;
 
-	fprintf(out, "[%s%s]\n", sect_names[sect], sect == S_DAEMON ? "" : " NAME");
+	fprintf(out, "[%s%s]\n", sect_names[sect], sect == S_DAEMON || sect == S_SITE ? "" : " NAME");
 	doc[0] = '\0';
 	for (int t = 0; type && type(t); t++)
 		n += (size_t)snprintf(doc + n, n < sizeof(doc) ? sizeof(doc) - n : 0, "%s%s (%s%s)", t ? ", " : "",
@@ -1769,4 +1900,5 @@ void config_print_reference(FILE *out)
 	print_kind(out, S_SOURCE, cfg_source_type);
 	print_kind(out, S_AVATAR, NULL);
 	print_kind(out, S_OUTPUT, cfg_output_type);
+	print_kind(out, S_SITE, NULL);
 }

@@ -204,6 +204,26 @@ struct cfg_output {
 	void *opt; /* the output type's options (its cfg_type's keys) */
 };
 
+/* [site]: this daemon's place in a telecollaboration over DDS (docs/SITES.md) */
+#define CFG_SITE_NAME_MAX 32 /* a site's name, with its NUL */
+struct cfg_site {
+	bool present;		      /* a [site] section was given: without one, no DDS at all */
+	struct cfg_where where;	      /* its first line */
+	char name[CFG_SITE_NAME_MAX]; /* unique per site, 1-31 characters, no '/' */
+	char session[64];	      /* the DDS partition: only sites of one session see each other */
+	int domain;		      /* DDS domain id */
+	char peers[CFG_PATH_MAX];     /* static unicast peers, separated by spaces; set: multicast off */
+	char interface[CFG_NAME_MAX]; /* network interface DDS uses, empty: Cyclone's choice */
+	bool publish;		      /* share this site's avatars */
+	bool subscribe;		      /* show the other sites' avatars here */
+	char security[CFG_PATH_MAX];  /* directory of the DDS Security files, empty: none */
+	bool ros2;		      /* also JointState and TF for ROS 2 */
+	int max_remote;		      /* remote avatars this site shows at most (slots reserved at start-up) */
+	int remote_id;		      /* the id of the first remote slot; slot k has remote_id + k */
+	double deadline_ms;	      /* a remote avatar without a sample for this long is MISSING */
+	double lease;		      /* s: a site that stops is gone after this long */
+};
+
 /* one key=value as read, kept to print the effective configuration */
 struct cfg_entry {
 	char *section;
@@ -220,6 +240,7 @@ struct config {
 	struct cfg_avatar *avatar;
 	int n_outputs;
 	struct cfg_output output[CFG_MAX_OUTPUTS];
+	struct cfg_site site;
 
 	/* the files read, in order */
 	int n_files;

@@ -10,6 +10,7 @@
 #include "publish/listen.h"
 
 #include "record/recorder.h"
+#include "sites/site.h"
 #include "trackers/replay.h"
 
 #include <errno.h>
@@ -339,6 +340,7 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 			fputc('}', out);
 		}
 		fputs("]", out);
+		site_report(g->site, out, true);
 		if (g->rec) {
 			const struct recorder_stats *rs = recorder_stats(g->rec);
 			char file[CFG_PATH_MAX + 64];
@@ -422,6 +424,7 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 	for (int i = 0; i < g->n_outputs; i++)
 		if (g->out[i].ops->report)
 			g->out[i].ops->report(&g->out[i], out, false);
+	site_report(g->site, out, false);
 	if (g->rec) {
 		const struct recorder_stats *rs = recorder_stats(g->rec);
 		char file[CFG_PATH_MAX + 64];

@@ -9,6 +9,7 @@
 #include "publish/encode.h"
 #include "record/recfile.h"
 #include "record/recorder.h"
+#include "sites/site.h"
 
 #include <errno.h>
 #include <math.h>
@@ -85,11 +86,11 @@ static bool describe_changed(const struct gw_avatar *a, const struct gw_avatar *
 
 static void describe_soon(struct gateway *g, uint64_t now_ns)
 {
-	for (int i = 0; i < g->n_avatars; i++)
+	int n = g->n_avatars + g->n_remote;
+
+	for (int i = 0; i < n; i++)
 		g->av[i].next_describe_ns =
-			g->n_avatars <= GW_DESCRIBE_AT_ONCE
-				? 0
-				: now_ns + GW_DESCRIBE_BURST_NS * (uint64_t)i / (uint64_t)g->n_avatars;
+			n <= GW_DESCRIBE_AT_ONCE ? 0 : now_ns + GW_DESCRIBE_BURST_NS * (uint64_t)i / (uint64_t)n;
 }
 
 /*
@@ -120,6 +121,7 @@ static size_t frame_slot(void)
 int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t source_id, char *err, size_t errlen)
 {
 	uint16_t *ids;
+	size_t n_all;
 	int rc = 0;
 
 	memset(g, 0, sizeof(*g));
@@ -135,15 +137,23 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 		g->n_trackers++;
 	}
 	g->frame_slot = frame_slot();
-	g->av = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*g->av));
-	g->arena = malloc(((size_t)g->cfg.n_avatars + 1) * g->frame_slot);
-	g->describe = malloc(((size_t)g->cfg.n_avatars + 1) * WIRE_MAX_MSG);
+	if (g->cfg.site.present) {
+		/* the other sites' avatars: slots reserved now, after the configured ones */
+		rc = site_open(&g->site, &g->cfg, source_id, err, errlen);
+		if (rc)
+			goto fail;
+		g->n_remote = site_n_remote(g->site);
+	}
+	n_all = (size_t)g->cfg.n_avatars + (size_t)g->n_remote;
+	g->av = calloc(n_all + 1, sizeof(*g->av));
+	g->arena = malloc((n_all + 1) * g->frame_slot);
+	g->describe = malloc((n_all + 1) * WIRE_MAX_MSG);
 	g->bodies = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*g->bodies));
-	g->msgs = calloc((size_t)g->cfg.n_avatars * 2 + 1, sizeof(*g->msgs));
-	g->frames = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*g->frames));
-	g->wframes = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*g->wframes));
-	g->describes = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*g->describes));
-	ids = calloc((size_t)g->cfg.n_avatars + 1, sizeof(*ids));
+	g->msgs = calloc(n_all * 2 + 1, sizeof(*g->msgs));
+	g->frames = calloc(n_all + 1, sizeof(*g->frames));
+	g->wframes = calloc(n_all + 1, sizeof(*g->wframes));
+	g->describes = calloc(n_all + 1, sizeof(*g->describes));
+	ids = calloc(n_all + 1, sizeof(*ids));
 	if (!g->av || !g->arena || !g->describe || !g->bodies || !g->msgs || !g->frames || !g->wframes ||
 	    !g->describes || !ids) {
 		free(ids);
@@ -152,10 +162,12 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 		goto fail;
 	}
 	/* written now, so that the loop never takes a first-touch page fault in them */
-	touch(g->arena, ((size_t)g->cfg.n_avatars + 1) * g->frame_slot);
-	touch(g->msgs, ((size_t)g->cfg.n_avatars * 2 + 1) * sizeof(*g->msgs));
-	touch(g->frames, ((size_t)g->cfg.n_avatars + 1) * sizeof(*g->frames));
-	touch(g->wframes, ((size_t)g->cfg.n_avatars + 1) * sizeof(*g->wframes));
+	touch(g->arena, (n_all + 1) * g->frame_slot);
+	touch(g->describe, (n_all + 1) * WIRE_MAX_MSG);
+	touch(g->msgs, (n_all * 2 + 1) * sizeof(*g->msgs));
+	touch(g->frames, (n_all + 1) * sizeof(*g->frames));
+	touch(g->wframes, (n_all + 1) * sizeof(*g->wframes));
+	touch(g->describes, (n_all + 1) * sizeof(*g->describes));
 	for (int i = 0; i < g->cfg.n_avatars; i++) {
 		struct gw_avatar *a = &g->av[i];
 
@@ -170,7 +182,17 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 			a->dseq = o->dseq;
 			a->describe_rev = o->describe_rev + (describe_changed(a, o) ? 1 : 0);
 		}
+		if (g->site)
+			site_describe_local(g->site, i, a->describe);
 		g->n_avatars++;
+	}
+	for (int k = 0; k < g->n_remote; k++) {
+		struct gw_avatar *a = &g->av[g->n_avatars + k];
+
+		a->id = site_remote_id(g->site, k);
+		a->describe_msg = g->describe + (size_t)(g->n_avatars + k) * WIRE_MAX_MSG;
+		a->describe = &g->describes[g->n_avatars + k];
+		ids[g->n_avatars + k] = a->id;
 	}
 	describe_soon(g, mono_ns());
 	for (int i = 0; i < g->cfg.n_outputs; i++) {
@@ -179,7 +201,7 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 		for (int j = 0; old && j < old->n_outputs; j++)
 			if (!strcmp(old->out[j].name, g->cfg.output[i].name))
 				prev = &old->out[j];
-		rc = output_open(&g->out[i], &g->cfg.output[i], ids, g->n_avatars, prev, err, errlen);
+		rc = output_open(&g->out[i], &g->cfg.output[i], ids, g->n_avatars + g->n_remote, prev, err, errlen);
 		if (rc)
 			break;
 		g->n_outputs++;
@@ -193,6 +215,8 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 					output_unadopt(&g->out[i], &old->out[j]);
 		goto fail;
 	}
+	if (g->site && (rc = site_start(g->site, err, errlen)))
+		goto fail;
 	return 0;
 fail:
 	gw_close(g);
@@ -205,6 +229,7 @@ void gw_close(struct gateway *g)
 		output_close(&g->out[i]);
 	for (int i = g->n_trackers - 1; i >= 0; i--)
 		tracker_close(&g->trk[i]);
+	site_close(g->site);
 	free(g->msgs);
 	free(g->frames);
 	free(g->wframes);
@@ -352,6 +377,71 @@ static void probe_write(struct gateway *g, int idx, const struct pose_frame *pf,
 	seqlock_write(&g->probe.seq, g->probe.words, w, GW_PROBE_WORDS);
 }
 
+/* avatar i's DESCRIBE into the batch when its time has come; returns the batch's new length */
+static int queue_describe(struct gateway *g, struct gw_avatar *a, int i, uint64_t now_ns, int n)
+{
+	if (now_ns < a->next_describe_ns)
+		return n;
+	/* encoded at start-up (a remote avatar's: when it changed): only its sequence number and revision change */
+	a->describe->h.seq = a->dseq;
+	a->describe->h.describe_rev = a->describe_rev;
+	wire_restamp(a->describe_msg, a->dseq++, a->describe_rev);
+	g->msgs[n++] =
+		(struct out_msg){ a->describe_msg, a->describe_len, WIRE_DESCRIBE, (uint16_t)i, NULL, a->describe };
+	/*
+	 * Each avatar keeps its own phase within the period, i/n of it,
+	 * so that the DESCRIBEs of many avatars spread over the second
+	 * instead of all leaving in one cycle; after a burst (start, a
+	 * new subscriber) each goes back to its phase.
+	 */
+	{
+		uint64_t phase = g->describe_ns * (uint64_t)i / (uint64_t)(g->n_avatars + g->n_remote);
+		uint64_t k = now_ns > phase ? (now_ns - phase) / g->describe_ns : 0;
+
+		a->next_describe_ns = phase + (k + 1) * g->describe_ns;
+	}
+	return n;
+}
+
+/*
+ * The other sites' avatars ([site]): their frames come solved, the joint
+ * angles as the sending site published them; only the header is ours
+ * (source, id, sequence, revision). A newcomer's DESCRIBE goes out at once.
+ */
+static int remote_frames(struct gateway *g, uint64_t now_ns, int n, int *frames)
+{
+	for (int k = 0; k < g->n_remote; k++) {
+		int i = g->n_avatars + k;
+		struct gw_avatar *a = &g->av[i];
+		struct wire_frame *wf = &g->wframes[i];
+		bool described, fresh;
+
+		if (!site_remote(g->site, k, now_ns, wf, a->describe, &described, &fresh))
+			continue;
+		if (described) {
+			a->describe->h.source_id = g->source_id;
+			a->describe->h.avatar_id = a->id;
+			a->describe_rev++;
+			a->describe_len = (uint16_t)wire_encode_describe(a->describe, a->describe_msg);
+			a->next_describe_ns = 0;
+		}
+		wf->h.source_id = g->source_id;
+		wf->h.seq = a->seq++;
+		wf->h.describe_rev = a->describe_rev;
+		wf->h.avatar_id = a->id;
+		g->msgs[n++] = out_msg_frame(wf, slot_of(g, *frames), (uint16_t)i);
+		(*frames)++;
+		ctr_add(&a->st.frames, 1);
+		if (fresh)
+			ctr_add(&a->st.new_frames, 1);
+		if (wf->h.flags & WIRE_F_STALE)
+			ctr_add(&a->st.stale_frames, 1);
+		atomic_store_explicit(&a->st.state, wf->sensor[0].state, memory_order_relaxed);
+		n = queue_describe(g, a, i, now_ns, n);
+	}
+	return n;
+}
+
 int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 {
 	static const struct dq nan_dq = { { NAN, NAN, NAN, NAN }, { NAN, NAN, NAN, NAN } };
@@ -435,27 +525,13 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 		}
 		if (wf->h.flags & WIRE_F_STALE)
 			ctr_add(&a->st.stale_frames, 1);
-		if (now->mono_ns >= a->next_describe_ns) {
-			/* encoded at start-up: only its sequence number and revision change */
-			a->describe->h.seq = a->dseq;
-			a->describe->h.describe_rev = a->describe_rev;
-			wire_restamp(a->describe_msg, a->dseq++, a->describe_rev);
-			g->msgs[n++] =
-				(struct out_msg){ a->describe_msg, a->describe_len, WIRE_DESCRIBE, (uint16_t)i, NULL,
-						  a->describe };
-			/*
-			 * Each avatar keeps its own phase within the period, i/n of it,
-			 * so that the DESCRIBEs of many avatars spread over the second
-			 * instead of all leaving in one cycle; after a burst (start, a
-			 * new subscriber) each goes back to its phase.
-			 */
-			{
-				uint64_t phase = g->describe_ns * (uint64_t)i / (uint64_t)g->n_avatars;
-				uint64_t k = now->mono_ns > phase ? (now->mono_ns - phase) / g->describe_ns : 0;
-
-				a->next_describe_ns = phase + (k + 1) * g->describe_ns;
-			}
-		}
+		if (g->site)
+			site_put(g->site, i, g->msgs[n - 1].data, g->msgs[n - 1].len);
+		n = queue_describe(g, a, i, now->mono_ns, n);
+	}
+	if (g->site) {
+		site_flush(g->site);
+		n = remote_frames(g, now->mono_ns, n, &frames);
 	}
 	for (int i = 0; g->rec && i < n; i++)
 		recorder_message(g->rec, now->mono_ns, g->msgs[i].data, g->msgs[i].len);

@@ -86,12 +86,21 @@ struct gw_probe {
 	_Atomic uint32_t words[GW_PROBE_WORDS];
 };
 
+struct site;
+
 struct gateway {
 	struct config cfg;
 	int n_trackers;
 	struct tracker trk[CFG_MAX_SOURCES];
 	int n_avatars;
+	/*
+	 * av[0, n_avatars): the configured avatars, solved here; then n_remote
+	 * slots for the other sites' avatars ([site], src/sites/site.h), whose
+	 * frames come solved from the site (cfg and av are NULL in them).
+	 */
 	struct gw_avatar *av;
+	int n_remote;
+	struct site *site; /* [site]: this daemon in a telecollaboration, or NULL */
 	int n_outputs;
 	struct output out[CFG_MAX_OUTPUTS];
 	uint8_t *arena; /* one FRAME per avatar and cycle, frame_slot bytes apart */

@@ -1,0 +1,521 @@
+# SPDX-License-Identifier: MIT
+"""Telecollaboration between sites over Cyclone DDS (docs/SITES.md): several
+daemons, each a separate process with its own ports, on loopback with unicast
+discovery (peers = 127.0.0.1, multicast off), each in a DDS domain and session
+of its own test run so that concurrent runs do not meet.
+
+Run from the repository root: python3 -m unittest tests/e2e/test_sites.py"""
+import os
+import random
+import signal
+import socket
+import struct
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+
+sys.path.insert(0, os.path.dirname(__file__))
+from test_daemon import DAEMON, Daemon, free_port  # noqa: E402
+from wireframe import decode_frame  # noqa: E402
+
+PEER = os.path.join(os.path.dirname(DAEMON), "tests", "fastdds-peer")
+REMOTE_ID = 1000
+LEASE = 1.0
+DEADLINE_MS = 300
+
+
+def built_with_dds():
+    out = subprocess.run([DAEMON, "--keys"], capture_output=True, text=True)
+    if out.returncode != 0 or "[site]" not in out.stdout:
+        return False
+    # the daemon built with Cyclone DDS calls it (site_none.c otherwise)
+    p = subprocess.run(["nm", "-D", "--undefined-only", DAEMON], capture_output=True, text=True)
+    return "dds_create_participant" in p.stdout
+
+
+def describe_name(buf):
+    """the avatar name of a DESCRIBE, or None"""
+    magic, version, mtype, hlen = struct.unpack_from("<IBBH", buf, 0)
+    if magic != 0x57475641 or mtype != 2:
+        return None
+    avatar = struct.unpack_from("<H", buf, 32)[0]
+    p = hlen + 4 + 16 + 12
+    n = buf[p]
+    return avatar, buf[p + 1:p + 1 + n].decode()
+
+
+class Listener:
+    """FRAMEs and DESCRIBEs sent to a UDP port, read on demand"""
+
+    def __init__(self):
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
+        self.sock.bind(("127.0.0.1", 0))
+        self.port = self.sock.getsockname()[1]
+        self.sock.setblocking(False)
+        self.frames = []
+        self.names = {}
+
+    def drain(self):
+        while True:
+            try:
+                data = self.sock.recv(2048)
+            except BlockingIOError:
+                return
+            f = decode_frame(data)
+            if f:
+                f["rx"] = time.monotonic()
+                f["raw_joints"] = data
+                self.frames.append(f)
+                continue
+            d = describe_name(data)
+            if d:
+                self.names[d[0]] = d[1]
+
+    def wait(self, cond, timeout, what):
+        t_end = time.monotonic() + timeout
+        while time.monotonic() < t_end:
+            self.drain()
+            if cond():
+                return
+            time.sleep(0.02)
+        self.drain()
+        if not cond():
+            raise AssertionError("not within %.1f s: %s" % (timeout, what))
+
+    def of(self, avatar, since=0.0):
+        return [f for f in self.frames if f["avatar"] == avatar and f["rx"] >= since]
+
+    def close(self):
+        self.sock.close()
+
+
+def joints_bits(f):
+    return struct.pack("<17f", *f["joints"])
+
+
+@unittest.skipUnless(built_with_dds(), "avatargw was built without Cyclone DDS (install cyclonedds-dev, "
+                     "cyclonedds-tools: tools/install-deps.sh)")
+class SitesTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        # a domain and sessions of this run only
+        cls.domain = random.randint(100, 200)
+        cls.tag = "%d-%d" % (os.getpid(), random.randint(0, 1 << 30))
+
+    def setUp(self):
+        self.daemons = []
+        self.listeners = []
+        self.peers = []
+        self.tmp = tempfile.TemporaryDirectory()
+
+    def tearDown(self):
+        for d in self.daemons:
+            if d.proc.poll() is None:
+                d.stop()
+            else:
+                d.err.close()
+        for lst in self.listeners:
+            lst.close()
+        for p in self.peers:
+            if p.poll() is None:
+                p.kill()
+            p.communicate()
+        self.tmp.cleanup()
+
+    def listener(self):
+        lst = Listener()
+        self.listeners.append(lst)
+        return lst
+
+    def site(self, name, port, people=0, session="s", extra=""):
+        """a daemon at site NAME sending to a UDP port; people simulated persons of its own"""
+        d = os.path.join(self.tmp.name, "%s-%d" % (name, len(self.daemons)))
+        os.mkdir(d)
+        text = "[daemon]\nrate = 240\nlock_memory = no\n"
+        if people:
+            text += "[source sim]\ntype = sim\npeople = %d\n" % people
+            for i in range(people):
+                text += "[avatar person%d]\nperson = sim/p%d\n" % (i, i)
+        text += "[output local]\ntype = udp\naddress = 127.0.0.1\nport = %d\n" % port
+        text += ("[site]\nname = %s\nsession = %s-%s\ndomain = %d\ninterface = lo\npeers = 127.0.0.1\n"
+                 "lease = %g\ndeadline_ms = %d\nremote_id = %d\n%s" %
+                 (name, session, self.tag, self.domain, LEASE, DEADLINE_MS, REMOTE_ID, extra))
+        daemon = Daemon(d, text)
+        self.daemons.append(daemon)
+        return daemon
+
+    def test_frames_reach_the_other_site_with_identical_angles(self):
+        la, lb = self.listener(), self.listener()
+        a = self.site("lab-a", la.port, people=1)
+        b = self.site("lab-b", lb.port)
+        lb.wait(lambda: lb.names.get(REMOTE_ID) == "lab-a/person0" and len(lb.of(REMOTE_ID)) >= 100, 15,
+                "lab-a's avatar described and 100 frames at lab-b")
+        la.drain()
+        # the same sample at both sites: the same joint angles, bit for bit
+        at_a = {}
+        for f in la.of(0):
+            at_a.setdefault(f["t_ns"], set()).add(joints_bits(f))
+        matched = 0
+        for f in lb.of(REMOTE_ID):
+            if f["t_ns"] in at_a and f["flags"] & 8:  # NEW_SAMPLE
+                self.assertIn(joints_bits(f), at_a[f["t_ns"]], "joint angles differ for one sample")
+                matched += 1
+        self.assertGreaterEqual(matched, 50, "too few frames of lab-a matched at lab-b by sample time")
+        st = b.status()
+        self.assertIn("site", st)
+        peers = {p["name"]: p for p in st["site"]["peers"]}
+        self.assertEqual(peers["lab-a"]["state"], "present")
+        self.assertEqual(peers["lab-a"]["avatars"], 1)
+        # the clock offset comes from a round trip every second
+        t_end = time.monotonic() + 5
+        while b.status()["site"]["peers"][0]["rtt_ms"] < 0 and time.monotonic() < t_end:
+            time.sleep(0.1)
+        p = b.status()["site"]["peers"][0]
+        self.assertGreaterEqual(p["rtt_ms"], 0)
+        self.assertLess(abs(p["clock_offset_ms"]), 5, "one host: the clocks are the same")
+        self.assertGreater(a.status()["site"]["written"], 0)
+
+    def test_killed_site_goes_stale_then_away_then_comes_back(self):
+        la, lb = self.listener(), self.listener()
+        a = self.site("lab-a", la.port, people=1)
+        b = self.site("lab-b", lb.port)
+        lb.wait(lambda: len(lb.of(REMOTE_ID)) >= 50, 15, "lab-a's frames at lab-b")
+        a.proc.send_signal(signal.SIGKILL)
+        a.proc.wait()
+        killed = time.monotonic()
+        # STALE, then MISSING at the deadline, then no more frames once the lease has run out
+        lb.wait(lambda: any(f["sensors"][0]["state"] == 1 for f in lb.of(REMOTE_ID, killed)), 5,
+                "lab-a's avatar STALE at lab-b")
+        lb.wait(lambda: any(f["sensors"][0]["state"] == 2 for f in lb.of(REMOTE_ID, killed)), 5,
+                "lab-a's avatar MISSING at lab-b")
+
+        def gone():
+            st = b.status()["site"]["peers"][0]
+            return st["avatars"] == 0 and st["departures"] >= 1
+
+        t_end = killed + 10
+        while not gone() and time.monotonic() < t_end:
+            time.sleep(0.05)
+        self.assertTrue(gone(), "lab-a's avatar still there 10 s after the kill")
+        seen_gone = time.monotonic()
+        # the lease (1 s) plus the scheduling of a loaded host
+        self.assertLess(seen_gone - killed, LEASE + 1.5, "departure seen late")
+        lb.drain()
+        time.sleep(0.3)  # frames already in the socket before the departure
+        lb.drain()
+        n = len(lb.of(REMOTE_ID))
+        t = time.monotonic()
+        lb.wait(lambda: time.monotonic() - t > 0.5, 2, "a quiet half second")
+        self.assertEqual(len(lb.of(REMOTE_ID)), n, "frames of a departed avatar still sent")
+        # lab-a again: back by itself, same id, DESCRIBE again
+        lb.names.clear()
+        back = time.monotonic()
+        self.site("lab-a", la.port, people=1)
+        lb.wait(lambda: lb.names.get(REMOTE_ID) == "lab-a/person0" and
+                any(f["sensors"][0]["state"] == 0 for f in lb.of(REMOTE_ID, back)), 15,
+                "lab-a's avatar back at lab-b")
+
+    def test_late_site_gets_every_description_at_once(self):
+        la, lb, lc = self.listener(), self.listener(), self.listener()
+        self.site("lab-a", la.port, people=2)
+        self.site("lab-b", lb.port, people=1)
+        lb.wait(lambda: len(lb.of(REMOTE_ID)) + len(lb.of(REMOTE_ID + 1)) >= 100, 15, "lab-a at lab-b")
+        start = time.monotonic()
+        self.site("lab-c", lc.port)
+        want = {"lab-a/person0", "lab-a/person1", "lab-b/person0"}
+        lc.wait(lambda: want <= set(lc.names.values()), 10, "every description at lab-c")
+        # well before a second DESCRIBE period of the senders would have brought them
+        self.assertLess(time.monotonic() - start, 8)
+        ids = {v: k for k, v in lc.names.items()}
+        self.assertEqual(len({ids[n] for n in want}), 3, "each remote avatar has its own id")
+        for n in want:
+            self.assertGreaterEqual(ids[n], REMOTE_ID)
+            lc.wait(lambda: len(lc.of(ids[n])) > 10, 5, "frames of " + n)
+
+    def test_sessions_do_not_see_each_other(self):
+        la, lb, lc = self.listener(), self.listener(), self.listener()
+        self.site("lab-a", la.port, people=1, session="one")
+        b = self.site("lab-b", lb.port, session="two")
+        self.site("lab-c", lc.port, session="one")
+        # lab-c, in lab-a's session, sees it: by then lab-b would have too
+        lc.wait(lambda: len(lc.of(REMOTE_ID)) >= 100, 15, "lab-a at lab-c")
+        lb.drain()
+        self.assertEqual(lb.frames, [], "lab-b (another session) received lab-a's frames")
+        self.assertEqual(lb.names, {})
+        self.assertEqual([p for p in b.status()["site"]["peers"] if p["frames"]], [])
+
+    def test_fast_dds_reads_the_frame_topic_and_ros2(self):
+        """another vendor's DDS (eProsima Fast DDS), its types from the same IDL by fastddsgen"""
+        if not os.path.exists(PEER):
+            self.skipTest("%s not built (needs libfastrtps-dev and fastddsgen: tools/install-deps.sh)" % PEER)
+        la = self.listener()
+        self.site("lab-a", la.port, people=1, extra="ros2 = yes\n")
+
+        def peer(*args):
+            p = subprocess.Popen([PEER, str(self.domain)] + list(args), stdout=subprocess.PIPE,
+                                 stderr=subprocess.PIPE, text=True)
+            self.peers.append(p)
+            return p
+
+        pf = peer("s-" + self.tag, "frame", "100")
+        pj = peer("-", "joint_states", "rt/lab_a/person0/joint_states", "50")
+        out_f, err_f = pf.communicate(timeout=40)
+        out_j, err_j = pj.communicate(timeout=40)
+        self.assertEqual(pf.returncode, 0, "Fast DDS read no frames: " + err_f[-2000:])
+        self.assertEqual(pj.returncode, 0, "Fast DDS read no JointState: " + err_j[-2000:])
+        la.drain()
+        by_seq = {f["seq"]: f for f in la.of(0)}
+        by_t = {}
+        for f in la.of(0):
+            by_t.setdefault(f["t_ns"], set()).add(f["joints"])
+        matched = 0
+        for line in out_f.split("\n")[1:]:
+            w = line.split()
+            if len(w) != 21:
+                continue
+            self.assertEqual(w[:2], ["lab-a", "person0"])
+            f = by_seq.get(int(w[2]))
+            if f:
+                self.assertEqual(int(w[3]), f["t_ns"])
+                self.assertEqual(bytes.fromhex("".join(w[4:])), struct.pack(">17f", *f["joints"]),
+                                 "Fast DDS read other joint angles than the UDP stream's")
+                matched += 1
+        self.assertGreaterEqual(matched, 50, "too few Fast DDS frames matched the UDP stream by seq")
+        matched = 0
+        for line in out_j.split("\n")[1:]:
+            w = line.split()
+            if len(w) != 19:
+                continue
+            t = int(w[0]) * 1000000000 + int(w[1])
+            names = [x.split("=")[0] for x in w[2:]]
+            self.assertEqual(names[0], "chest_yaw")
+            pos = tuple(struct.unpack(">d", bytes.fromhex(x.split("=")[1]))[0] for x in w[2:])
+            if t in by_t:
+                self.assertIn(pos, by_t[t], "JointState positions differ from the UDP stream's")
+                matched += 1
+        self.assertGreaterEqual(matched, 20, "too few JointState samples matched the UDP stream by stamp")
+
+    def test_site_without_sources_and_no_site_section(self):
+        # [site] and an output only: a valid configuration (a CAVE that shows the others)
+        lb = self.listener()
+        b = self.site("lab-b", lb.port)
+        st = b.status()
+        self.assertEqual(st["avatars"], [])
+        self.assertEqual(st["site"]["name"], "lab-b")
+        # no [site]: no DDS, no site in the status
+        d = os.path.join(self.tmp.name, "plain")
+        os.mkdir(d)
+        plain = Daemon(d, "[daemon]\nlock_memory = no\n[output local]\ntype = udp\nport = %d\n" % free_port())
+        self.daemons.append(plain)
+        self.assertNotIn("site", plain.status())
+
+
+SECURITY = os.path.join(os.path.dirname(DAEMON), "..", "tools", "site-security.sh")
+
+
+@unittest.skipUnless(built_with_dds(), "avatargw was built without Cyclone DDS")
+class SecurityTest(SitesTest):
+    """DDS Security with files from tools/site-security.sh: one session's CA admits its sites only"""
+
+    @classmethod
+    def setUpClass(cls):
+        super().setUpClass()
+        cls.keys = tempfile.TemporaryDirectory()
+        tool = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "site-security.sh")
+        k = cls.keys.name
+
+        def run(*args):
+            subprocess.run([tool] + list(args), check=True, capture_output=True)
+
+        run("ca", k + "/ca")
+        run("ca", k + "/other-ca")
+        run("site", k + "/ca", "lab-a", k + "/a")
+        run("site", k + "/ca", "lab-b", k + "/b")
+        run("site", k + "/other-ca", "lab-x", k + "/x")
+        run("site", k + "/ca", "lab-e", k + "/e", "--expired")
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.keys.cleanup()
+
+    def secure(self, name, port, people, files):
+        return self.site(name, port, people=people, session="sec",
+                         extra="security = %s/%s\n" % (self.keys.name, files))
+
+    def test_certificates_of_the_session_ca_only(self):
+        la, lb, lx = self.listener(), self.listener(), self.listener()
+        self.secure("lab-a", la.port, 1, "a")
+        b = self.secure("lab-b", lb.port, 0, "b")
+        x = self.secure("lab-x", lx.port, 1, "x")
+        lb.wait(lambda: lb.names.get(REMOTE_ID) == "lab-a/person0" and len(lb.of(REMOTE_ID)) >= 100, 30,
+                "lab-a's avatar at lab-b, both with certificates of the session's CA")
+        # lab-x (another CA) has been running all along: it neither sees nor injects
+        lx.drain()
+        self.assertEqual(len([f for f in lx.frames if f["avatar"] >= REMOTE_ID]), 0,
+                         "a site of another CA received avatars")
+        lb.drain()
+        self.assertNotIn("lab-x/person0", lb.names.values())
+        self.assertEqual({f["avatar"] for f in lb.frames}, {REMOTE_ID}, "lab-x injected an avatar")
+        self.assertEqual([p["name"] for p in b.status()["site"]["peers"] if p["frames"]], ["lab-a"])
+        self.assertTrue(b.status()["site"]["security"])
+        self.assertEqual([p for p in x.status()["site"]["peers"] if p["frames"]], [])
+
+    def test_expired_certificate_refused(self):
+        with self.assertRaises(AssertionError) as cm:
+            self.secure("lab-e", free_port(), 1, "e")
+        self.assertIn("expired", str(cm.exception))
+        self.assertIn("[site]", str(cm.exception))
+
+    # the tests of the base class, without security, are not run again here
+    test_frames_reach_the_other_site_with_identical_angles = None
+    test_killed_site_goes_stale_then_away_then_comes_back = None
+    test_late_site_gets_every_description_at_once = None
+    test_sessions_do_not_see_each_other = None
+    test_fast_dds_reads_the_frame_topic_and_ros2 = None
+    test_site_without_sources_and_no_site_section = None
+
+
+RECV = """
+import socket, sys
+s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
+s.bind(("127.0.0.1", int(sys.argv[1])))
+s.settimeout(float(sys.argv[3]))
+print("ready", flush=True)
+n = 0
+while n < int(sys.argv[2]):
+    d = s.recv(2048)
+    if d[5] == 1:
+        print(d.hex(), flush=True)
+        n += 1
+"""
+
+
+def netns_possible():
+    if os.geteuid() != 0:
+        return "not root: ip netns needs CAP_SYS_ADMIN"
+    name = "agwprobe%d" % os.getpid()
+    p = subprocess.run(["ip", "netns", "add", name], capture_output=True, text=True)
+    if p.returncode != 0:
+        return "ip netns add refused here: " + p.stderr.strip()
+    subprocess.run(["ip", "netns", "del", name])
+    return None
+
+
+@unittest.skipUnless(built_with_dds(), "avatargw was built without Cyclone DDS")
+class NamespacesTest(unittest.TestCase):
+    """two sites in two network namespaces joined by a veth pair: multicast off, peers set"""
+
+    def setUp(self):
+        why = netns_possible()
+        if why:
+            self.skipTest(why)
+        tag = "%d" % (os.getpid() % 100000)
+        self.ns = ["agwa" + tag, "agwb" + tag]
+        self.veth = ["va" + tag, "vb" + tag]
+        self.addr = ["10.213.77.1", "10.213.77.2"]
+        self.procs = []
+        self.tmp = tempfile.TemporaryDirectory()
+        for n in self.ns:
+            self.ip("netns", "add", n)
+        self.ip("link", "add", self.veth[0], "type", "veth", "peer", "name", self.veth[1])
+        for i in range(2):
+            self.ip("link", "set", self.veth[i], "netns", self.ns[i])
+            self.ip("-n", self.ns[i], "addr", "add", self.addr[i] + "/24", "dev", self.veth[i])
+            self.ip("-n", self.ns[i], "link", "set", self.veth[i], "up")
+            self.ip("-n", self.ns[i], "link", "set", "lo", "up")
+
+    def tearDown(self):
+        for p in self.procs:
+            if p.poll() is None:
+                p.kill()
+            p.wait()
+        for n in getattr(self, "ns", []):
+            subprocess.run(["ip", "netns", "del", n], capture_output=True)
+        if hasattr(self, "tmp"):
+            self.tmp.cleanup()
+
+    def ip(self, *args):
+        subprocess.run(["ip"] + list(args), check=True, capture_output=True)
+
+    def run_in(self, i, args, **kw):
+        p = subprocess.Popen(["ip", "netns", "exec", self.ns[i]] + args, **kw)
+        self.procs.append(p)
+        return p
+
+    def daemon(self, i, name, people, port):
+        text = "[daemon]\nrate = 240\nlock_memory = no\ncontrol_socket = %s/%s.ctl\n" % (self.tmp.name, name)
+        if people:
+            text += "[source sim]\ntype = sim\npeople = 1\n[avatar person0]\nperson = sim/p0\n"
+        text += "[output local]\ntype = udp\nport = %d\n" % port
+        text += ("[site]\nname = %s\nsession = ns\ninterface = %s\npeers = %s\nlease = 1\n" %
+                 (name, self.veth[i], self.addr[1 - i]))
+        conf = os.path.join(self.tmp.name, name + ".conf")
+        with open(conf, "w") as f:
+            f.write(text)
+        with open(os.path.join(self.tmp.name, name + ".err"), "w") as err:
+            return self.run_in(i, [DAEMON, "-c", conf], stdout=subprocess.DEVNULL, stderr=err)
+
+    def receiver(self, i, port, count):
+        p = self.run_in(i, [sys.executable, "-c", RECV, str(port), str(count), "15"], stdout=subprocess.PIPE,
+                        text=True)
+        self.assertEqual(p.stdout.readline().strip(), "ready")
+        return p
+
+    def test_two_namespaces(self):
+        # fixed ports: each namespace is this test's own, nothing else listens in it
+        ra = self.receiver(0, 17001, 600)
+        rb = self.receiver(1, 17002, 300)
+        a = self.daemon(0, "ns-a", True, 17001)
+        self.daemon(1, "ns-b", False, 17002)
+        out_b, _ = rb.communicate(timeout=30)
+        out_a, _ = ra.communicate(timeout=30)
+        with open(os.path.join(self.tmp.name, "ns-b.err")) as f:
+            self.assertEqual(rb.returncode, 0, "ns-b received no frames of ns-a: " + f.read())
+        at_a = {}
+        for line in out_a.split():
+            f = decode_frame(bytes.fromhex(line))
+            at_a.setdefault(f["t_ns"], set()).add(joints_bits(f))
+        matched = 0
+        for line in out_b.split():
+            f = decode_frame(bytes.fromhex(line))
+            self.assertEqual(f["avatar"], 1000)
+            if f["t_ns"] in at_a and f["flags"] & 8:
+                self.assertIn(joints_bits(f), at_a[f["t_ns"]])
+                matched += 1
+        self.assertGreaterEqual(matched, 50, "too few frames matched by sample time across the namespaces")
+        a.kill()
+
+
+class SiteConfigTest(unittest.TestCase):
+    def check(self, text):
+        with tempfile.TemporaryDirectory() as d:
+            conf = os.path.join(d, "c.conf")
+            with open(conf, "w") as f:
+                f.write(text)
+            p = subprocess.run([DAEMON, "-c", conf, "--check-config"], capture_output=True, text=True)
+            return p.returncode, p.stderr
+
+    def test_name_required(self):
+        rc, err = self.check("[site]\nsession = x\n")
+        self.assertEqual(rc, 78)
+        self.assertIn("c.conf:2", err)  # the section's first line
+        self.assertIn("[site] name: missing", err)
+
+    def test_bad_name(self):
+        rc, err = self.check("[site]\nname = a/b\n")
+        self.assertEqual(rc, 78)
+        self.assertIn("c.conf:2", err)
+
+    def test_remote_ids_clash_with_an_avatar(self):
+        rc, err = self.check("[source sim]\ntype = sim\n[avatar p]\nperson = sim/p0\nid = 5\n"
+                             "[site]\nname = a\nremote_id = 0\n")
+        self.assertEqual(rc, 78, err)
+        self.assertIn("remote_id", err)
+
+
+if __name__ == "__main__":
+    unittest.main()
