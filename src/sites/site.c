@@ -36,7 +36,7 @@ const bool site_built_in = true;
 #define TAKE_MAX 32			   /* samples taken at once */
 #define PING_NS 1000000000ull		   /* clock pings: one a second */
 #define CLOCK_KEEP_NS 10000000000ull	   /* a clock estimate is replaced by a worse one after 10 s */
-#define MAX_AUTO_INDEX 32		   /* participants per host with unicast discovery */
+#define MAX_AUTO_INDEX 9 /* participants per host with unicast discovery: each peer's ports 0-9 are probed */
 
 _Static_assert(FRAME_MAX % 4 == 0 && WIRE_MAX_MSG % 4 == 0, "whole words");
 
@@ -68,7 +68,7 @@ struct rslot {
 	bool used;
 	bool live;
 	int peer;
-	uint32_t last_sent;
+	uint32_t last_seq;
 	bool have_seq;
 	dds_instance_handle_t writer; /* the remote writer of its last frame */
 	uint64_t last_use;	      /* for reuse of a gone slot: the oldest goes first */
@@ -311,10 +311,10 @@ static int make_xml(const struct cfg_site *c, char *x, size_t n, char *err, size
 		}
 		xml_add(x, n, "%s", "</Peers>");
 	}
-	/* a site that stops is gone after its lease; announcements four times per lease */
+	/* a site that stops is gone after its lease; announcements twice per lease (frames renew it too) */
 	snprintf(buf, sizeof(buf), "%.0fms", c->lease * 1000);
 	xml_add(x, n, "<LeaseDuration>%s</LeaseDuration>", buf);
-	snprintf(buf, sizeof(buf), "%.0fms", c->lease * 250);
+	snprintf(buf, sizeof(buf), "%.0fms", c->lease * 500);
 	xml_add(x, n, "<SPDPInterval>%s</SPDPInterval>", buf);
 	xml_add(x, n, "%s", "</Discovery>");
 	if (c->security[0]) {
@@ -417,10 +417,7 @@ static void pose_from(const avatargw_sites_Pose *d, struct wire_pose *w)
 
 static void frame_to_dds(const struct wire_frame *f, avatargw_sites_Frame *d)
 {
-	d->seq = f->h.seq;
 	d->flags = f->h.flags;
-	d->describe_rev = f->h.describe_rev;
-	d->sample_time_ns = f->h.sample_time_ns;
 	for (int i = 0; i < WIRE_SENSORS; i++) {
 		d->sensor[i].state = f->sensor[i].state;
 		d->sensor[i].age_100us = f->sensor[i].age_100us;
@@ -434,18 +431,23 @@ static void frame_to_dds(const struct wire_frame *f, avatargw_sites_Frame *d)
 	memcpy(d->joint, f->joint, sizeof(d->joint));
 	for (int i = 0; i < WIRE_SEGMENTS; i++)
 		pose_to(&f->segment[i], &d->segment[i]);
-	d->inputs = f->h.flags & WIRE_F_INPUTS ? f->in.present : 0;
-	memcpy(d->buttons, f->in.buttons, sizeof(d->buttons));
-	memcpy(d->analog, f->in.analog, sizeof(d->analog));
+	d->inputs._d = (f->h.flags & WIRE_F_INPUTS) != 0;
+	if (d->inputs._d) {
+		d->inputs._u.block.present = f->in.present;
+		memcpy(d->inputs._u.block.buttons, f->in.buttons, sizeof(d->inputs._u.block.buttons));
+		memcpy(d->inputs._u.block.analog, f->in.analog, sizeof(d->inputs._u.block.analog));
+	} else {
+		d->inputs._u.none = 0;
+	}
 }
 
-static void frame_from_dds(const avatargw_sites_Frame *d, struct wire_frame *f)
+/* t_ns: the sample's source timestamp, the FRAME's sample time */
+static void frame_from_dds(const avatargw_sites_Frame *d, uint64_t t_ns, struct wire_frame *f)
 {
 	memset(f, 0, sizeof(*f));
 	f->h.seq = d->seq;
-	f->h.flags = d->flags;
-	f->h.describe_rev = d->describe_rev;
-	f->h.sample_time_ns = d->sample_time_ns;
+	f->h.flags = d->flags & (uint16_t)~WIRE_F_INPUTS;
+	f->h.sample_time_ns = t_ns;
 	for (int i = 0; i < WIRE_SENSORS; i++) {
 		f->sensor[i].state =
 			d->sensor[i].state <= WIRE_SENSOR_MISSING ? d->sensor[i].state : WIRE_SENSOR_MISSING;
@@ -460,10 +462,11 @@ static void frame_from_dds(const avatargw_sites_Frame *d, struct wire_frame *f)
 	memcpy(f->joint, d->joint, sizeof(f->joint));
 	for (int i = 0; i < WIRE_SEGMENTS; i++)
 		pose_from(&d->segment[i], &f->segment[i]);
-	if (f->h.flags & WIRE_F_INPUTS) {
-		f->in.present = d->inputs;
-		memcpy(f->in.buttons, d->buttons, sizeof(f->in.buttons));
-		memcpy(f->in.analog, d->analog, sizeof(f->in.analog));
+	if (d->inputs._d) {
+		f->h.flags |= WIRE_F_INPUTS;
+		f->in.present = d->inputs._u.block.present;
+		memcpy(f->in.buttons, d->inputs._u.block.buttons, sizeof(f->in.buttons));
+		memcpy(f->in.analog, d->inputs._u.block.analog, sizeof(f->in.analog));
 	}
 }
 
@@ -581,7 +584,7 @@ static void publish_all(struct site *s)
 		snprintf(d->site, sizeof(d->site), "%.31s", s->cfg.name);
 		snprintf(d->avatar, sizeof(d->avatar), "%s", s->local_name[i]);
 		frame_to_dds(&f, d);
-		d->sent = ++o->samples;
+		d->seq = ++o->samples;
 		/* the sample time is the source timestamp (a frame without any sample yet: now) */
 		if (dds_write_ts(s->w_frame, d, f.h.sample_time_ns ? (dds_time_t)f.h.sample_time_ns : dds_time()) < 0)
 			ctr_add(&s->write_errors, 1);
@@ -734,7 +737,7 @@ static void take_frames(struct site *s)
 				ctr_add(&s->no_slot, 1);
 				continue;
 			}
-			frame_from_dds(d, &f);
+			frame_from_dds(d, (uint64_t)info[i].source_timestamp, &f);
 			if (!frame_finite(&f)) {
 				ctr_add(&s->bad_samples, 1);
 				continue;
@@ -745,15 +748,15 @@ static void take_frames(struct site *s)
 
 				ctr_add(&p->frames, 1);
 				atomic_store_explicit(&p->last_mono, arrival, memory_order_relaxed);
-				if (r->have_seq && d->sent - r->last_sent > 1 && d->sent - r->last_sent < 1000000)
-					ctr_add(&p->lost, d->sent - r->last_sent - 1);
-				if (atomic_load_explicit(&p->rtt_ns, memory_order_relaxed) >= 0 && d->sample_time_ns) {
-					int64_t delay = (int64_t)(arrival_real - d->sample_time_ns) + off;
+				if (r->have_seq && d->seq - r->last_seq > 1 && d->seq - r->last_seq < 1000000)
+					ctr_add(&p->lost, d->seq - r->last_seq - 1);
+				if (atomic_load_explicit(&p->rtt_ns, memory_order_relaxed) >= 0 && f.h.sample_time_ns) {
+					int64_t delay = (int64_t)(arrival_real - f.h.sample_time_ns) + off;
 
 					hist_add(&p->delay, delay > 0 ? (uint64_t)delay : 0);
 				}
 			}
-			r->last_sent = d->sent;
+			r->last_seq = d->seq;
 			r->have_seq = true;
 			r->writer = info[i].publication_handle;
 			len = wire_encode_frame(&f, (uint8_t *)(w + IN_HEAD));

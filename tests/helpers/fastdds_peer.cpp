@@ -7,8 +7,9 @@
  *
  *   fastdds-peer DOMAIN SESSION frame COUNT
  *       reads COUNT samples of the frame topic in partition SESSION and
- *       prints one line each: "site avatar seq sample_time_ns" and the 17
- *       joint angles as the hex of their float bits;
+ *       prints one line each: "site avatar seq t_ns" (t_ns: the source
+ *       timestamp, the sample time) and the 17 joint angles as the hex of
+ *       their float bits;
  *   fastdds-peer DOMAIN - joint_states TOPIC COUNT
  *       reads COUNT ROS 2 JointState samples of TOPIC (no partition), one
  *       line each: "sec nanosec" and "name=hex of the double" per joint.
@@ -126,8 +127,8 @@ int main(int argc, char **argv)
 		if (!info.valid_data)
 			continue;
 		if (frames) {
-			std::printf("%s %s %" PRIu32 " %" PRIu64, f.site().c_str(), f.avatar().c_str(), f.seq(),
-				    f.sample_time_ns());
+			std::printf("%s %s %" PRIu32 " %" PRId64, f.site().c_str(), f.avatar().c_str(), f.seq(),
+				    info.source_timestamp.to_ns());
 			for (float v : f.joint())
 				hex_float(v);
 		} else {
