@@ -31,8 +31,9 @@
 
 const char *const cfg_sensor_roles[3] = { "head", "left_hand", "right_hand" };
 
-enum sect { S_DAEMON, S_SOURCE, S_AVATAR, S_OUTPUT, S_SITE, S_COUNT };
-static const char *const sect_names[S_COUNT] = { "daemon", "source", "avatar", "output", "site" };
+/* built in this order: [site] after the avatars (their ids), before the outputs (which carry its avatars too) */
+enum sect { S_DAEMON, S_SOURCE, S_AVATAR, S_SITE, S_OUTPUT, S_COUNT };
+static const char *const sect_names[S_COUNT] = { "daemon", "source", "avatar", "site", "output" };
 
 static const char *const e_mode[] = { "deadline", "events", NULL };
 static const char *const e_log[] = { "err", "warning", "info", "debug", NULL };

@@ -275,7 +275,9 @@ const char *config_where(const struct config *c, struct cfg_where w, char *buf, 
 /* the avatars an output carries */
 static inline int cfg_output_avatars(const struct config *c, const struct cfg_output *o)
 {
-	return o->n_avatars ? o->n_avatars : c->n_avatars;
+	/* all: this site's avatars and the other sites' ([site] subscribe: max_remote slots) */
+	return o->n_avatars ? o->n_avatars
+			    : c->n_avatars + (c->site.present && c->site.subscribe ? c->site.max_remote : 0);
 }
 
 /* the output is of this type (its type's name) */
