@@ -28,6 +28,12 @@ $(BUILD)/obj/sites/site.o: $(SITES_GEN)/avatargw.h $(SITES_GEN)/ros2.h
 $(BUILD)/obj/sites/site.o: ALL_CFLAGS += -I$(SITES_GEN) $(shell pkg-config --cflags CycloneDDS) \
 	-DSITES_PLUGINS='"$(SITES_PLUGINS)"'
 
+# make bench: the sites' added delay, bandwidth and load (tools/bench-sites.py, docs/SITES.md)
+.PHONY: bench-sites
+bench-sites: $(BUILD)/avatargw $(BUILD)/avatargw-ctl
+	@python3 tools/bench-sites.py $(BUILD)
+bench: bench-sites
+
 # the tests' independent peer (tests/helpers/fastdds_peer.cpp): eProsima Fast DDS (libfastrtps-dev) with
 # the types fastddsgen (a Java program) generates from the same IDL files
 FASTDDSGEN ?= fastddsgen
