@@ -361,10 +361,17 @@ class SecurityTest(SitesTest):
         self.assertEqual([p for p in x.status()["site"]["peers"] if p["frames"]], [])
 
     def test_expired_certificate_refused(self):
-        with self.assertRaises(AssertionError) as cm:
-            self.secure("lab-e", free_port(), 1, "e")
-        self.assertIn("expired", str(cm.exception))
-        self.assertIn("[site]", str(cm.exception))
+        d = os.path.join(self.tmp.name, "lab-e")
+        os.mkdir(d)
+        conf = os.path.join(d, "c.conf")
+        with open(conf, "w") as f:
+            f.write("[daemon]\nlock_memory = no\ncontrol_socket = %s/ctl\n[output o]\ntype = udp\nport = %d\n"
+                    "[site]\nname = lab-e\nsession = sec-%s\ndomain = %d\ninterface = lo\npeers = 127.0.0.1\n"
+                    "security = %s/e\n" % (d, free_port(), self.tag, self.domain, self.keys.name))
+        p = subprocess.run([DAEMON, "-c", conf], capture_output=True, text=True, timeout=30)
+        self.assertNotEqual(p.returncode, 0, "a site with an expired certificate started")
+        self.assertIn("expired", p.stderr)
+        self.assertIn("[site]", p.stderr)
 
     # the tests of the base class, without security, are not run again here
     test_frames_reach_the_other_site_with_identical_angles = None
