@@ -197,6 +197,7 @@ def bench_three_sites():
                         "work_us_p50": loop["work_us"]["p50"], "work_us_p99": loop["work_us"]["p99"],
                         "work_cpu_us_p50": loop["work_cpu_us"]["p50"], "cycles": loop["cycles"] - s0["loop"]["cycles"],
                         "overruns": loop["overruns"] - s0["loop"]["overruns"],
+                        "remote_frames": sum(p["frames"] for p in s1["site"]["peers"]),
                         "lost": sum(p["lost"] for p in s1["site"]["peers"])})
 
 

@@ -175,7 +175,8 @@ class SitesTest(unittest.TestCase):
             time.sleep(0.1)
         p = b.status()["site"]["peers"][0]
         self.assertGreaterEqual(p["rtt_ms"], 0)
-        self.assertLess(abs(p["clock_offset_ms"]), 5, "one host: the clocks are the same")
+        # one host, one clock: the estimate is off by at most half its round trip (the NTP bound)
+        self.assertLessEqual(abs(p["clock_offset_ms"]), p["rtt_ms"] / 2 + 0.01, "offset beyond its bound")
         self.assertGreater(a.status()["site"]["written"], 0)
 
     def test_killed_site_goes_stale_then_away_then_comes_back(self):
