@@ -121,7 +121,8 @@ struct site {
 	bool pub_started, sub_started;
 	bool put_any; /* loop: a FRAME was put this cycle */
 	/* the threads' buffers, allocated at start-up */
-	avatargw_sites_Frame *fbuf;
+	avatargw_sites_Frame *fbuf; /* the receiving thread's */
+	avatargw_sites_Frame *pbuf; /* the publishing thread's sample */
 	avatargw_sites_Description *dbuf;
 	avatargw_sites_Clock *cbuf;
 	/* counters */
@@ -560,7 +561,7 @@ static void bytes_to_words(uint32_t *w, const uint8_t *b, size_t len)
 static void publish_all(struct site *s)
 {
 	uint32_t w[OUT_WORDS];
-	avatargw_sites_Frame *d = s->fbuf;
+	avatargw_sites_Frame *d = s->pbuf;
 	struct wire_frame f;
 
 	for (int i = 0; i < s->n_local; i++) {
@@ -964,11 +965,12 @@ int site_open(struct site **out, const struct config *cfg, uint32_t source_id, c
 	s->local_described = calloc((size_t)s->n_local + 1, sizeof(bool));
 	s->rs = calloc((size_t)s->n_remote + 1, sizeof(*s->rs));
 	s->fbuf = calloc(TAKE_MAX, sizeof(*s->fbuf));
+	s->pbuf = calloc(1, sizeof(*s->pbuf));
 	s->dbuf = calloc(TAKE_MAX, sizeof(*s->dbuf));
 	s->cbuf = calloc(TAKE_MAX, sizeof(*s->cbuf));
 	*out = s;
-	if (!s->local_name || !s->out || !s->local_desc || !s->local_described || !s->rs || !s->fbuf || !s->dbuf ||
-	    !s->cbuf)
+	if (!s->local_name || !s->out || !s->local_desc || !s->local_described || !s->rs || !s->fbuf || !s->pbuf ||
+	    !s->dbuf || !s->cbuf)
 		return snprintf(err, errlen, "out of memory"), -ENOMEM;
 	for (int i = 0; i < s->n_local; i++) {
 		/* a local avatar's name on the wire: its first 15 bytes */
@@ -1105,6 +1107,7 @@ void site_close(struct site *s)
 	free(s->local_described);
 	free(s->rs);
 	free(s->fbuf);
+	free(s->pbuf);
 	free(s->dbuf);
 	free(s->cbuf);
 	ros2_free(s);
