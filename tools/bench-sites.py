@@ -166,13 +166,16 @@ def bench_bandwidth(security):
                                      capture_output=True, text=True)
                 return int(out.stdout)
 
-            b0, t0 = tx(), time.time()
+            b0, t0, w0 = tx(), time.time(), status(tmp, "lab-a")["site"]["written"]
             time.sleep(10)
-            b1, t1 = tx(), time.time()
+            b1, t1, w1 = tx(), time.time(), status(tmp, "lab-a")["site"]["written"]
             frames = status(tmp, "lab-b")["site"]["peers"]
             stop(procs)
+            # per frame written, and at the full rate (a loaded host's loop may have written fewer)
+            per_frame = (b1 - b0) / max(1, w1 - w0)
             results.append({"bench": "sites_bandwidth_240hz", "security": security,
-                            "bytes_per_s": (b1 - b0) / (t1 - t0),
+                            "bytes_per_s": (b1 - b0) / (t1 - t0), "frames_per_s": (w1 - w0) / (t1 - t0),
+                            "bytes_per_frame": per_frame, "bytes_per_s_at_240hz": per_frame * RATE,
                             "received_at_b": frames[0]["frames"] if frames else 0})
         finally:
             for n in ns:
