@@ -22,6 +22,7 @@ from wireframe import decode_frame  # noqa: E402
 
 PEER = os.path.join(os.path.dirname(DAEMON), "tests", "fastdds-peer")
 REMOTE_ID = 1000
+PEOPLE = 10  # avatars per site where several are needed
 LEASE = 1.0
 DEADLINE_MS = 300
 
@@ -148,27 +149,40 @@ class SitesTest(unittest.TestCase):
         return daemon
 
     def test_frames_reach_the_other_site_with_identical_angles(self):
+        # both sites publish and receive, many avatars (their writing and reading threads work at once)
         la, lb = self.listener(), self.listener()
-        a = self.site("lab-a", la.port, people=1)
-        b = self.site("lab-b", lb.port)
-        lb.wait(lambda: lb.names.get(REMOTE_ID) == "lab-a/person0" and len(lb.of(REMOTE_ID)) >= 100, 15,
-                "lab-a's avatar described and 100 frames at lab-b")
+        a = self.site("lab-a", la.port, people=PEOPLE)
+        b = self.site("lab-b", lb.port, people=PEOPLE)
+        names = ["lab-a/person%d" % i for i in range(PEOPLE)] + ["person%d" % i for i in range(PEOPLE)]
+        lb.wait(lambda: sorted(lb.names.values()) == sorted(names) and len(lb.of(REMOTE_ID)) >= 100, 15,
+                "lab-a's avatars described and 100 frames at lab-b")
+        la.wait(lambda: "lab-b/person0" in la.names.values(), 15, "lab-b's avatar at lab-a")
+        time.sleep(0.5)  # more frames of every avatar: each must be its sender's
+        lb.drain()
+        self.assertEqual(sorted(lb.names.values()), sorted(names))
         la.drain()
         # the same sample at both sites: the same joint angles, bit for bit
-        at_a = {}
-        for f in la.of(0):
-            at_a.setdefault(f["t_ns"], set()).add(joints_bits(f))
+        # every avatar's frames: by its id at lab-a and at lab-b (its slot, from lab-b's DESCRIBEs)
+        ids_b = {v: k for k, v in lb.names.items()}
         matched = 0
-        for f in lb.of(REMOTE_ID):
-            if f["t_ns"] in at_a and f["flags"] & 8:  # NEW_SAMPLE
-                self.assertIn(joints_bits(f), at_a[f["t_ns"]], "joint angles differ for one sample")
-                matched += 1
-        self.assertGreaterEqual(matched, 50, "too few frames of lab-a matched at lab-b by sample time")
+        for i in range(PEOPLE):
+            at_a = {}
+            for f in la.of(i):
+                at_a.setdefault(f["t_ns"], set()).add(joints_bits(f))
+            for f in lb.of(ids_b["lab-a/person%d" % i]):
+                if f["flags"] & 8:  # NEW_SAMPLE
+                    self.assertIn(f["t_ns"], at_a, "a sample time lab-a never sent")
+                    self.assertIn(joints_bits(f), at_a[f["t_ns"]], "joint angles differ for one sample")
+                    matched += 1
+        self.assertGreaterEqual(matched, 50 * PEOPLE, "too few frames of lab-a matched at lab-b by sample time")
         st = b.status()
         self.assertIn("site", st)
         peers = {p["name"]: p for p in st["site"]["peers"]}
+        self.assertEqual(list(peers), ["lab-a"], "remote sites other than lab-a")
         self.assertEqual(peers["lab-a"]["state"], "present")
-        self.assertEqual(peers["lab-a"]["avatars"], 1)
+        self.assertEqual(peers["lab-a"]["avatars"], PEOPLE)
+        self.assertEqual(st["site"]["no_slot"], 0)
+        self.assertEqual(st["site"]["bad_samples"], 0)
         # the clock offset comes from a round trip every second
         t_end = time.monotonic() + 5
         while b.status()["site"]["peers"][0]["rtt_ms"] < 0 and time.monotonic() < t_end:
