@@ -49,7 +49,7 @@ struct out_slot {
 	_Atomic uint32_t seq;
 	_Atomic uint32_t w[OUT_WORDS];
 	uint32_t sent;	   /* publishing thread: the sequence written last */
-	uint32_t samples;  /* publishing thread: samples written (the Frame's `sent`) */
+	uint32_t samples;  /* publishing thread: samples written (the Frame's seq) */
 	uint32_t last_seq; /* publishing thread: the FRAME sequence written last */
 	bool have_last;
 };
@@ -127,7 +127,6 @@ struct site {
 	avatargw_sites_Clock *cbuf;
 	/* counters */
 	_Atomic uint64_t written, write_errors, wakeups, no_slot, bad_samples, coalesced;
-	_Atomic uint64_t deadline_missed;
 	uint64_t last_ping;
 };
 
