@@ -1436,10 +1436,13 @@ static int build_site(struct parse *p, const struct cfg_entry *e, const char *na
 			     "[site] name: '%s' is not a valid site name (1-%d of A-Z a-z 0-9 _ - .)", st->name,
 			     CFG_SITE_NAME_MAX - 1);
 	k = entry_of(c, "site", "session");
-	if (!st->session[0] || strpbrk(st->session, "*?[]\\"))
-		return failf(p, k ? k->where : e->where,
-			     "[site] session: '%s' is not a session name (1-63 characters, no * ? [ ] \\)",
-			     st->session);
+	for (const char *ch = st->session; *ch; ch++)
+		if ((unsigned char)*ch < 0x20 || *ch == 0x7f || strchr("*?[]\\\"", *ch))
+			return failf(p, k ? k->where : e->where,
+				     "[site] session: '%s' is not a session name (1-63 characters, no * ? [ ] \\ \")",
+				     st->session);
+	if (!st->session[0])
+		return failf(p, k ? k->where : e->where, "[site] session: empty");
 	k = entry_of(c, "site", "remote_id");
 	if ((long)st->remote_id + st->max_remote - 1 > 65535)
 		return failf(p, k ? k->where : e->where, "[site] remote_id: %d + max_remote %d goes past 65535",

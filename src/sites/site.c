@@ -9,6 +9,7 @@
 #include "ros2.h"
 #include "base/clock.h"
 #include "base/counter.h"
+#include "base/json.h"
 #include "base/hist.h"
 #include "base/seqlock.h"
 
@@ -1286,14 +1287,17 @@ void site_report(struct site *s, FILE *out, bool json)
 		rtt = atomic_load_explicit(&p->rtt_ns, memory_order_relaxed);
 		state = avatars ? "present" : last && now - last < s->lease_ns ? "present" : "gone";
 		if (json) {
+			/* a remote site's name is what the network said: escaped */
+			fprintf(out, "%s{\"name\":", np ? "," : "");
+			json_string(out, p->name);
 			fprintf(out,
-				"%s{\"name\":\"%s\",\"state\":\"%s\",\"avatars\":%llu,\"rate_hz\":%.2f,\"frames\":%llu,"
+				",\"state\":\"%s\",\"avatars\":%llu,\"rate_hz\":%.2f,\"frames\":%llu,"
 				"\"lost\":%llu,\"joins\":%llu,\"departures\":%llu,\"descriptions\":%llu,"
 				"\"clock_offset_ms\":%.3f,\"rtt_ms\":%.3f,"
 				"\"delay_ms\":{\"n\":%llu,\"p50\":%.3f,\"p99\":%.3f,\"max\":%.3f}}",
-				np ? "," : "", p->name, state, (unsigned long long)avatars, p->rate,
-				(unsigned long long)ctr_get(&p->frames), (unsigned long long)ctr_get(&p->lost),
-				(unsigned long long)ctr_get(&p->joins), (unsigned long long)ctr_get(&p->departures),
+				state, (unsigned long long)avatars, p->rate, (unsigned long long)ctr_get(&p->frames),
+				(unsigned long long)ctr_get(&p->lost), (unsigned long long)ctr_get(&p->joins),
+				(unsigned long long)ctr_get(&p->departures),
 				(unsigned long long)ctr_get(&p->descriptions),
 				rtt >= 0 ? ms(atomic_load_explicit(&p->offset_ns, memory_order_relaxed)) : 0.0,
 				rtt >= 0 ? ms(rtt) : -1.0, (unsigned long long)ctr_get(&p->delay.n),
