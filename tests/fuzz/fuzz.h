@@ -1,0 +1,117 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * fuzz.h - what every harness of tests/fuzz shares (docs/FUZZING.md): the
+ * libFuzzer entry points, the invariants checked on what a decoder lets
+ * out, and a private scratch directory for harnesses that need files.
+ *
+ * A broken invariant prints what and where, then aborts: libFuzzer (and
+ * the corpus driver of make test) report the input as a crash.
+ */
+#ifndef AGW_FUZZ_H
+#define AGW_FUZZ_H
+
+#include "ik/dq.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+int LLVMFuzzerInitialize(int *argc, char ***argv);
+
+#define FUZZ_CHECK(cond, ...)                                                                                          \
+	do {                                                                                                           \
+		if (!(cond)) {                                                                                         \
+			fprintf(stderr, "%s:%d: invariant broken: %s: ", __FILE__, __LINE__, #cond);                   \
+			fprintf(stderr, __VA_ARGS__);                                                                  \
+			fputc('\n', stderr);                                                                           \
+			abort();                                                                                       \
+		}                                                                                                      \
+	} while (0)
+
+/* the tolerance of "a unit quaternion" for what a decoder lets out */
+#define FUZZ_UNIT_TOL 1e-3
+
+/* every value finite */
+static inline void fuzz_finite(const double *v, int n, const char *what)
+{
+	for (int i = 0; i < n; i++)
+		FUZZ_CHECK(isfinite(v[i]), "%s[%d] = %g", what, i, v[i]);
+}
+
+static inline void fuzz_finite_f(const float *v, int n, const char *what)
+{
+	for (int i = 0; i < n; i++)
+		FUZZ_CHECK(isfinite(v[i]), "%s[%d] = %g", what, i, (double)v[i]);
+}
+
+/* a unit quaternion w x y z of finite numbers */
+static inline void fuzz_unit_quat(const double q[4], const char *what)
+{
+	double n;
+
+	fuzz_finite(q, 4, what);
+	n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+	FUZZ_CHECK(fabs(n - 1) < FUZZ_UNIT_TOL, "%s: |q| = %.9g", what, n);
+}
+
+/* a pose: finite position, unit rotation */
+static inline void fuzz_pose(const struct dq *d, const char *what)
+{
+	struct vec3 p;
+	double q[4] = { sc_to_double(d->r.w), sc_to_double(d->r.x), sc_to_double(d->r.y), sc_to_double(d->r.z) };
+	double t[3];
+
+	fuzz_unit_quat(q, what);
+	dq_translation(d, &p);
+	t[0] = sc_to_double(p.x);
+	t[1] = sc_to_double(p.y);
+	t[2] = sc_to_double(p.z);
+	fuzz_finite(t, 3, what);
+}
+
+/* a directory of this process's own for harnesses that need files ($TMPDIR/agw-fuzz-PID), removed at exit */
+static char fuzz_scratch_dir[256];
+
+static inline void fuzz_scratch_rm(void)
+{
+	char cmd[300];
+
+	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", fuzz_scratch_dir);
+	if (system(cmd))
+		fprintf(stderr, "fuzz: could not remove %s\n", fuzz_scratch_dir);
+}
+
+static inline const char *fuzz_scratch(void)
+{
+	if (!fuzz_scratch_dir[0]) {
+		const char *tmp = getenv("TMPDIR");
+
+		snprintf(fuzz_scratch_dir, sizeof(fuzz_scratch_dir), "%s/agw-fuzz-%d", tmp && *tmp ? tmp : "/tmp",
+			 (int)getpid());
+		if (mkdir(fuzz_scratch_dir, 0700)) {
+			perror(fuzz_scratch_dir);
+			abort();
+		}
+		atexit(fuzz_scratch_rm);
+	}
+	return fuzz_scratch_dir;
+}
+
+/* writes len bytes to path; 0 or -1 */
+static inline int fuzz_write_file(const char *path, const void *data, size_t len)
+{
+	FILE *f = fopen(path, "wb");
+	int rc;
+
+	if (!f)
+		return -1;
+	rc = len && fwrite(data, 1, len, f) != len ? -1 : 0;
+	return fclose(f) || rc ? -1 : 0;
+}
+
+#endif /* AGW_FUZZ_H */
