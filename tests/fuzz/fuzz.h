@@ -59,7 +59,7 @@ static inline void fuzz_unit_quat(const double q[4], const char *what)
 	FUZZ_CHECK(fabs(n - 1) < FUZZ_UNIT_TOL, "%s: |q| = %.9g", what, n);
 }
 
-/* a pose: finite position, unit rotation */
+/* a pose: finite position, unit rotation; both are published as float32, so each must be finite as one too */
 static inline void fuzz_pose(const struct dq *d, const char *what)
 {
 	struct vec3 p;
@@ -72,6 +72,8 @@ static inline void fuzz_pose(const struct dq *d, const char *what)
 	t[1] = sc_to_double(p.y);
 	t[2] = sc_to_double(p.z);
 	fuzz_finite(t, 3, what);
+	for (int i = 0; i < 3; i++)
+		FUZZ_CHECK(isfinite((float)t[i]), "%s: position[%d] = %g is not finite as a float", what, i, t[i]);
 }
 
 /* a directory of this process's own for harnesses that need files ($TMPDIR/agw-fuzz-PID), removed at exit */

@@ -20,7 +20,7 @@ $(FUZZ_REGRESS): $(BUILD)/fuzz/%: $(BUILD)/obj/tests/fuzz/%.o $(BUILD)/obj/tests
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) -o $@ $^ $(LIBS)
 
-$(FUZZ_SEEDS_STAMP): tools/fuzz-seeds.sh $(DAEMON) $(wildcard tests/data/*) $(wildcard config/*.conf) \
+$(FUZZ_SEEDS_STAMP): tools/fuzz-seeds.sh $(wildcard tests/data/*) $(wildcard config/*.conf) \
 	$(wildcard docs/*.md)
 	tools/fuzz-seeds.sh $(BUILD) $(BUILD)/fuzz/seeds
 	@touch $@
