@@ -39,6 +39,9 @@ can-utils
 iproute2
 zlib1g-dev
 valgrind
+clang-14
+libclang-rt-14-dev
+libfuzzer-14-dev
 "
 
 missing=""
