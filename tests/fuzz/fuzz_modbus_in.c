@@ -26,9 +26,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	static const char *const fmt[] = { "int16", "uint16", "int32", "uint32", "float32" };
 	static const char *const ori[] = { "rotvec", "quat_wxyz", "quat_xyzw", "rpy", "none" };
 	static const char *const word[] = { "abcd", "cdab", "badc", "dcba" };
-	static const char *const scale[] = {
-		"0.001", "1e-9", "1000", "1", "0.0001", "1e-12", "3.0517578125e-05", "0.01"
-	};
+	/* the ends of each scale's range in the configuration, and values of real devices */
+	static const char *const pscale[] = { "0.001", "1e-9", "1000", "1", "0.0001", "1e-05", "0.1", "0.01" };
+	static const char *const oscale[] = { "0.001", "1e-12", "1000", "1", "0.0001", "3.0517578125e-05",
+					      "1e-06", "0.01" };
 	static struct config cfg;
 	uint16_t img[REGS] = { 0 };
 	char text[512], err[256];
@@ -44,7 +45,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		 "position_register = 0\nposition_format = %s\nposition_scale = %s\n"
 		 "orientation_register = %d\norientation_format = %s\norientation_scale = %s\n"
 		 "orientation = %s\nword_order = %s\n",
-		 fmt[pf], scale[data[2] & 7], pf >= 2 ? 6 : 3, fmt[of], scale[(data[2] >> 3) & 7],
+		 fmt[pf], pscale[data[2] & 7], pf >= 2 ? 6 : 3, fmt[of], oscale[(data[2] >> 3) & 7],
 		 ori[(data[1] / 5) % 5], word[(data[0] / 5) % 4]);
 	if (config_load_text(&cfg, "fuzz", text, err, sizeof(err))) {
 		fprintf(stderr, "fuzz: %s\n%s", err, text);

@@ -25,6 +25,27 @@ static void check_names(const struct wire_describe *d)
 		FUZZ_CHECK(memchr(d->sensor[i], 0, sizeof(d->sensor[i])), "sensor %d name", i);
 }
 
+/* a name is a C string: what follows its first NUL is not part of it (nor encoded again) */
+static void clean(char *s, size_t n)
+{
+	char *z = memchr(s, 0, n);
+
+	if (z)
+		memset(z, 0, n - (size_t)(z - s));
+}
+
+static void clean_names(struct wire_describe *d)
+{
+	clean(d->avatar_name, sizeof(d->avatar_name));
+	clean(d->conventions, sizeof(d->conventions));
+	for (int i = 0; i < WIRE_JOINTS; i++)
+		clean(d->joint[i].name, sizeof(d->joint[i].name));
+	for (int i = 0; i < WIRE_SEGMENTS; i++)
+		clean(d->segment[i].name, sizeof(d->segment[i].name));
+	for (int i = 0; i < WIRE_SENSORS; i++)
+		clean(d->sensor[i], sizeof(d->sensor[i]));
+}
+
 /* what the encoder writes of its own (version, lengths, counts) may differ from a later version's */
 static void same_header(const struct wire_header *a, const struct wire_header *b, const char *what)
 {
@@ -71,6 +92,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 			size_t n;
 
 			check_names(&d);
+			clean_names(&d);
 			n = wire_encode_describe(&d, buf);
 			FUZZ_CHECK(n <= WIRE_MAX_MSG, "DESCRIBE encoded to %zu bytes", n);
 			memset(&d2, 0, sizeof(d2));
