@@ -3,7 +3,9 @@
  * test_recfile.c - the recording format (record/recfile.h, docs/RECORDING.md)
  * and its reader (record/recload.h): byte layouts, round trips, and what a
  * reader does with damage: a flipped byte, a record cut off at the end,
- * garbage between records, a bad header, a second SESSION after a reload.
+ * garbage between records, a bad header, a second SESSION after a reload;
+ * and the replay source naming the sensors of a file whose first record is
+ * damaged.
  */
 #include <math.h>
 #include <setjmp.h>
@@ -17,7 +19,11 @@
 
 #include <zlib.h>
 
+#include "config/config.h"
 #include "record/recload.h"
+#include "trackers/tracker.h"
+
+#include <unistd.h>
 
 #define BUF (1 << 16)
 
@@ -393,14 +399,67 @@ static void test_no_session(void **state)
 	assert_non_null(strstr(err, "SESSION"));
 }
 
+/*
+ * The replay source names a recording's sensors at configuration time from
+ * the first record alone; when that one is damaged, the loader finds the
+ * next good SESSION. Both must agree (found by tests/fuzz/fuzz_replay.c:
+ * the configuration said 0 sensors, open() then failed with "changed while
+ * the configuration was read").
+ */
+static void test_replay_damaged_first_session(void **state)
+{
+	static struct rec_buf r;
+	static struct config cfg;
+	char path[] = "/tmp/avatargw-test-recfile-XXXXXX", text[256], err[512];
+	struct tracker t;
+	const struct tracker_driver *drv;
+	FILE *f;
+	int fd;
+
+	(void)state;
+	put_header(&r);
+	put_session(&r, false);
+	r.b[r.off[0] + 30] ^= 0x01; /* the first SESSION's CRC no longer holds */
+	put_session(&r, false);
+	for (int i = 0; i < 6; i++)
+		put_sample(&r, 0, (uint16_t)(i % 3), 1000 + 1000000 * (uint64_t)i, false);
+	fd = mkstemp(path);
+	assert_true(fd >= 0);
+	f = fdopen(fd, "wb");
+	assert_non_null(f);
+	assert_int_equal(fwrite(r.b, 1, r.len, f), r.len);
+	assert_int_equal(fclose(f), 0);
+	snprintf(text, sizeof(text), "[source r]\ntype = replay\nfile = %s\nstep = yes\n", path);
+	assert_int_equal(config_load_text(&cfg, "t.conf", text, err, sizeof(err)), 0);
+	drv = trackers_table[cfg.source[0].driver];
+	assert_int_equal(drv->sensor_count(&cfg.source[0]), 9);
+	{
+		char name[64];
+
+		drv->sensor_name(&cfg.source[0], 4, name, sizeof(name));
+		assert_string_equal(name, "sim.p0.left_hand");
+	}
+	assert_int_equal(tracker_open(&t, &cfg.source[0], err, sizeof(err)), 0);
+	assert_int_equal(t.n_sensors, 9);
+	tracker_close(&t);
+	config_free(&cfg);
+	unlink(path);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_layout),		cmocka_unit_test(test_layout_crc),
-		cmocka_unit_test(test_header),		cmocka_unit_test(test_sample_round_trip),
-		cmocka_unit_test(test_index),		cmocka_unit_test(test_damage_resync),
-		cmocka_unit_test(test_truncated),	cmocka_unit_test(test_second_session),
-		cmocka_unit_test(test_gap_unknown_bad), cmocka_unit_test(test_no_session),
+		cmocka_unit_test(test_layout),
+		cmocka_unit_test(test_layout_crc),
+		cmocka_unit_test(test_header),
+		cmocka_unit_test(test_sample_round_trip),
+		cmocka_unit_test(test_index),
+		cmocka_unit_test(test_damage_resync),
+		cmocka_unit_test(test_truncated),
+		cmocka_unit_test(test_second_session),
+		cmocka_unit_test(test_gap_unknown_bad),
+		cmocka_unit_test(test_no_session),
+		cmocka_unit_test(test_replay_damaged_first_session),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

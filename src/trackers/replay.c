@@ -183,7 +183,7 @@ static void cache_drop(struct name_cache *c)
 	memset(c, 0, sizeof(*c));
 }
 
-/* reads the magic and, for a recording, its first SESSION's sensor names */
+/* reads the magic and, for a recording, its first good SESSION's sensor names */
 static struct name_cache *file_kind(const char *path)
 {
 	struct name_cache *c, *old = &cache[0];
@@ -232,6 +232,18 @@ static struct name_cache *file_kind(const char *path)
 				rec_index_free(&ix);
 			}
 			free(rec);
+		}
+		/*
+		 * The first record damaged or not a SESSION that parses: the loader
+		 * resynchronises to the first good one, so the names are that one's
+		 * (read the way the loader reads them, else config and open disagree)
+		 */
+		if (!c->names && !rec_index_load(path, &ix, (char[64]){ 0 }, 64)) {
+			c->n = ix.n_sensors;
+			c->names = ix.names;
+			ix.names = NULL;
+			ix.n_sensors = 0;
+			rec_index_free(&ix);
 		}
 	}
 	close(fd);
