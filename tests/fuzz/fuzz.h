@@ -18,6 +18,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -75,6 +76,17 @@ static inline void fuzz_pose(const struct dq *d, const char *what)
 	for (int i = 0; i < 3; i++)
 		FUZZ_CHECK(isfinite((float)t[i]), "%s: position[%d] = %g is not finite as a float", what, i, t[i]);
 }
+
+/* CLOCK_MONOTONIC, ns: deadlines of the harnesses that wait on a server (generous: a loaded host) */
+static inline uint64_t fuzz_mono_ns(void)
+{
+	struct timespec ts;
+
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
+}
+
+#define FUZZ_WAIT_NS 30000000000ull /* 30 s */
 
 /* a directory of this process's own for harnesses that need files ($TMPDIR/agw-fuzz-PID), removed at exit */
 static char fuzz_scratch_dir[256];

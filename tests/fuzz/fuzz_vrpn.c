@@ -125,7 +125,7 @@ static void client_stream(const uint8_t *data, size_t size)
 	struct sockaddr_in a = { .sin_family = AF_INET,
 				 .sin_port = htons((uint16_t)port),
 				 .sin_addr.s_addr = htonl(INADDR_LOOPBACK) };
-	int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0), k;
+	int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0), k = 0;
 	size_t cut[5] = { 0, 0, 0, 0, size };
 	bool open = true;
 
@@ -154,7 +154,7 @@ static void client_stream(const uint8_t *data, size_t size)
 	}
 	shutdown(fd, SHUT_WR);
 	/* the server reads up to the end, then lets the client go */
-	for (k = 0; k < 2000 && atomic_load(&out.st.clients); k++) {
+	for (uint64_t end = fuzz_mono_ns() + FUZZ_WAIT_NS; atomic_load(&out.st.clients) && fuzz_mono_ns() < end; k++) {
 		struct pollfd p = { fd, POLLIN, 0 };
 
 		cycle();
