@@ -65,9 +65,13 @@ static void check_config(const struct config *c)
 		fuzz_finite(&a->tol_rot_deg, 1, "ik_tolerance_rot");
 		for (int r = 0; r < 3; r++) {
 			const struct cfg_sensor_ref *ref = &a->sensor[r];
+			int n;
 
 			FUZZ_CHECK(ref->source >= 0 && ref->source < c->n_sources, "avatar %d sensor %d: source %d", i,
 				   r, ref->source);
+			n = trackers_table[c->source[ref->source].driver]->sensor_count(&c->source[ref->source]);
+			FUZZ_CHECK(ref->sensor >= 0 && ref->sensor < n, "avatar %d sensor %d: sensor %d of %d", i, r,
+				   ref->sensor, n);
 		}
 	}
 	for (int i = 0; i < c->n_outputs; i++) {
