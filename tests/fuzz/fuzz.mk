@@ -83,3 +83,9 @@ fuzz: fuzz-build $(FUZZ_SEEDS_STAMP)
 	@FUZZ_TIME=$(FUZZ_TIME) tools/fuzz-run.sh $(FUZZ_BUILD) $(BUILD)/fuzz/seeds $(FUZZ_ONLY)
 
 -include $(shell find $(FUZZ_BUILD) -name '*.d' 2>/dev/null)
+
+# make clean removes the fuzz build too
+.PHONY: clean-fuzz
+clean: clean-fuzz
+clean-fuzz:
+	rm -rf $(FUZZ_BUILD)
