@@ -12,11 +12,16 @@
 
 #include "ik/dq.h"
 
+#include <errno.h>
 #include <math.h>
+#include <netinet/in.h>
+#include <poll.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -87,6 +92,42 @@ static inline uint64_t fuzz_mono_ns(void)
 }
 
 #define FUZZ_WAIT_NS 30000000000ull /* 30 s */
+
+/*
+ * A TCP connection to 127.0.0.1:port, non-blocking, from a loopback address
+ * of its own (127.0.0.2 to 127.0.0.251 in turn): thousands of connections a
+ * second leave their ports in TIME_WAIT, and one source address would run
+ * out of ports within seconds.
+ */
+static inline int fuzz_connect(int port)
+{
+	static unsigned serial;
+	struct sockaddr_in a = { .sin_family = AF_INET,
+				 .sin_port = htons((uint16_t)port),
+				 .sin_addr.s_addr = htonl(INADDR_LOOPBACK) };
+	struct sockaddr_in from = { .sin_family = AF_INET,
+				    .sin_addr.s_addr = htonl(INADDR_LOOPBACK + 1 + serial++ % 250) };
+	int fd = socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0), one = 1, e = 0;
+	socklen_t el = sizeof(e);
+	uint64_t end = fuzz_mono_ns() + FUZZ_WAIT_NS;
+
+	FUZZ_CHECK(fd >= 0, "socket: %s", strerror(errno));
+	setsockopt(fd, IPPROTO_IP, IP_BIND_ADDRESS_NO_PORT, &one, sizeof(one));
+	FUZZ_CHECK(bind(fd, (struct sockaddr *)&from, sizeof(from)) == 0, "bind: %s", strerror(errno));
+	if (connect(fd, (struct sockaddr *)&a, sizeof(a)) == 0)
+		return fd;
+	FUZZ_CHECK(errno == EINPROGRESS || errno == EINTR, "connect: %s", strerror(errno));
+	for (;;) {
+		struct pollfd p = { fd, POLLOUT, 0 };
+
+		if (poll(&p, 1, 100) == 1)
+			break;
+		FUZZ_CHECK(fuzz_mono_ns() < end, "connect: no connection in 30 s");
+	}
+	getsockopt(fd, SOL_SOCKET, SO_ERROR, &e, &el);
+	FUZZ_CHECK(e == 0, "connect: %s", strerror(e));
+	return fd;
+}
 
 /* a directory of this process's own for harnesses that need files ($TMPDIR/agw-fuzz-PID), removed at exit */
 static char fuzz_scratch_dir[256];

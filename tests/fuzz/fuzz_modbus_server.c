@@ -109,7 +109,6 @@ static void check_answers(const uint8_t *buf, size_t len)
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
 	static uint8_t ans[1 << 20];
-	struct sockaddr_in a = { .sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK) };
 	size_t off = 1, got = 0;
 	int fd, k;
 	bool eof = false;
@@ -121,9 +120,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		setup(k);
 	if (data[0] & 2)
 		publish(&out[k]);
-	a.sin_port = htons((uint16_t)port[k]);
-	fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-	FUZZ_CHECK(fd >= 0 && connect(fd, (struct sockaddr *)&a, sizeof(a)) == 0, "connect: %s", strerror(errno));
+	fd = fuzz_connect(port[k]);
 	/* send it all (taking answers meanwhile, so that neither side waits on the other), then shut */
 	for (uint64_t end = fuzz_mono_ns() + FUZZ_WAIT_NS; !eof && fuzz_mono_ns() < end;) {
 		struct pollfd p = { fd, POLLIN | (off < size ? POLLOUT : 0), 0 };

@@ -122,14 +122,10 @@ static void cycle(void)
 
 static void client_stream(const uint8_t *data, size_t size)
 {
-	struct sockaddr_in a = { .sin_family = AF_INET,
-				 .sin_port = htons((uint16_t)port),
-				 .sin_addr.s_addr = htonl(INADDR_LOOPBACK) };
-	int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0), k = 0;
+	int fd = fuzz_connect(port), k = 0;
 	size_t cut[5] = { 0, 0, 0, 0, size };
 	bool open = true;
 
-	FUZZ_CHECK(fd >= 0 && connect(fd, (struct sockaddr *)&a, sizeof(a)) == 0, "connect: %s", strerror(errno));
 	for (int i = 1; i < 4; i++)
 		cut[i] = size > 3 ? 3 + (size - 3) * data[i - 1] / 255 : size;
 	for (int i = 1; i < 5; i++)
