@@ -412,7 +412,7 @@ static void test_replay_damaged_first_session(void **state)
 	static struct config cfg;
 	char path[] = "/tmp/avatargw-test-recfile-XXXXXX", text[256], err[512];
 	struct tracker t;
-	const struct tracker_driver *drv;
+	const struct cfg_type *drv;
 	FILE *f;
 	int fd;
 
@@ -431,7 +431,7 @@ static void test_replay_damaged_first_session(void **state)
 	assert_int_equal(fclose(f), 0);
 	snprintf(text, sizeof(text), "[source r]\ntype = replay\nfile = %s\nstep = yes\n", path);
 	assert_int_equal(config_load_text(&cfg, "t.conf", text, err, sizeof(err)), 0);
-	drv = trackers_table[cfg.source[0].driver];
+	drv = cfg_source_type(cfg.source[0].driver);
 	assert_int_equal(drv->sensor_count(&cfg.source[0]), 9);
 	{
 		char name[64];

@@ -66,7 +66,7 @@ static int codec_run(const char *driver, const uint8_t *data, size_t size)
 		}
 		loaded[v] = true;
 	}
-	ctx.n_sensors = trackers_table[cfg[v].source[0].driver]->sensor_count(&cfg[v].source[0]);
+	ctx.n_sensors = cfg_source_type(cfg[v].source[0].driver)->sensor_count(&cfg[v].source[0]);
 	st = calloc(1, codec->size);
 	FUZZ_CHECK(st, "out of memory");
 	FUZZ_CHECK(codec->init(st, &cfg[v].source[0], err, sizeof(err)) == 0, "init: %s", err);

@@ -20,10 +20,46 @@
 #include "fuzz/fuzz.h"
 
 #include "config/config.h"
-#include "trackers/tracker.h"
 
 #include <errno.h>
 #include <string.h>
+
+/* every number a type's keys put in its options is finite; strings end within their buffers */
+static void check_keys(const struct cfg_key *keys, int n, const void *opt, const char *what)
+{
+	const char *base = opt;
+
+	for (int i = 0; keys && i < n; i++) {
+		const struct cfg_key *k = &keys[i];
+
+		switch (k->kind) {
+		case CFG_DOUBLE:
+		case CFG_DEG:
+			fuzz_finite((const double *)(base + k->off), 1, k->name);
+			break;
+		case CFG_VEC3:
+			fuzz_finite((const double *)(base + k->off), 3, k->name);
+			break;
+		case CFG_RANGE:
+			fuzz_finite((const double *)(base + k->off), 1, k->name);
+			fuzz_finite((const double *)(base + k->off2), 1, k->name);
+			break;
+		case CFG_STR:
+		case CFG_PATH:
+			FUZZ_CHECK(memchr(base + k->off, 0, k->size), "%s %s: not terminated", what, k->name);
+			break;
+		default:
+			break;
+		}
+	}
+}
+
+static void check_type(const struct cfg_type *t, const void *opt, const char *what)
+{
+	FUZZ_CHECK(t && (opt || !t->opt_size), "%s: no type or no options", what);
+	check_keys(t->shared, t->n_shared, opt, what);
+	check_keys(t->keys, t->n_keys, opt, what);
+}
 
 static void check_config(const struct config *c)
 {
@@ -40,14 +76,11 @@ static void check_config(const struct config *c)
 	FUZZ_CHECK(c->n_sources >= 0 && c->n_sources <= CFG_MAX_SOURCES, "%d sources", c->n_sources);
 	for (int i = 0; i < c->n_sources; i++) {
 		const struct cfg_source *s = &c->source[i];
-		double v[] = { s->origin[0],   s->origin[1],	 s->origin[2],	   s->yaw,
-			       s->sample_rate, s->spacing,	 s->speed,	   s->start,
-			       s->pos_scale,   s->ori_scale,	 s->poll_rate,	   s->timeout_ms,
-			       s->quat_scale,  s->hemisphere[0], s->hemisphere[1], s->hemisphere[2] };
 
-		fuzz_finite(v, (int)(sizeof(v) / sizeof(v[0])), "[source]");
-		FUZZ_CHECK(memchr(s->name, 0, sizeof(s->name)) && s->driver >= 0 && s->driver < trackers_count,
-			   "source %d", i);
+		FUZZ_CHECK(memchr(s->name, 0, sizeof(s->name)), "source %d's name", i);
+		fuzz_finite(s->origin, 3, "origin");
+		fuzz_finite(&s->yaw, 1, "yaw");
+		check_type(cfg_source_type(s->driver), s->opt, s->name);
 		FUZZ_CHECK(s->n_mounts >= 0 && s->n_mounts <= CFG_MAX_MOUNTS, "%d mounts", s->n_mounts);
 		for (int m = 0; m < s->n_mounts; m++) {
 			fuzz_finite(s->mount[m].p, 3, "mount position");
@@ -69,16 +102,15 @@ static void check_config(const struct config *c)
 
 			FUZZ_CHECK(ref->source >= 0 && ref->source < c->n_sources, "avatar %d sensor %d: source %d", i,
 				   r, ref->source);
-			n = trackers_table[c->source[ref->source].driver]->sensor_count(&c->source[ref->source]);
+			n = cfg_source_type(c->source[ref->source].driver)->sensor_count(&c->source[ref->source]);
 			FUZZ_CHECK(ref->sensor >= 0 && ref->sensor < n, "avatar %d sensor %d: sensor %d of %d", i, r,
 				   ref->sensor, n);
 		}
 	}
 	for (int i = 0; i < c->n_outputs; i++) {
 		const struct cfg_output *o = &c->output[i];
-		double v[] = { o->idle_timeout, o->max_speed, o->client_timeout, o->rate, o->torso };
 
-		fuzz_finite(v, (int)(sizeof(v) / sizeof(v[0])), "[output]");
+		check_type(cfg_output_type(o->type), o->opt, o->name);
 		FUZZ_CHECK(o->n_avatars >= 0 && (!o->n_avatars || o->avatar_ids), "output %d avatars", i);
 	}
 }

@@ -56,7 +56,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	for (int k = 0; k < 2; k++) {
 		double q[4], p[3];
 
-		if (!modbus_in_decode_pose(&cfg.source[0], img, 0, k, q, p))
+		if (!modbus_in_decode_pose(cfg.source[0].opt, img, 0, k, q, p))
 			continue;
 		fuzz_unit_quat(q, "orientation");
 		fuzz_finite(p, 3, "position");

@@ -74,17 +74,17 @@ static void setup(int k)
 static void publish(struct output *o)
 {
 	static uint8_t buf[2][WIRE_MAX_MSG];
+	static struct wire_frame f[2];
 	struct out_msg m[2];
-	struct wire_frame f;
 
 	for (int a = 0; a < 2; a++) {
-		memset(&f, 0, sizeof(f));
-		f.h.avatar_id = a ? 7 : 0;
-		f.h.seq = 42;
-		f.h.sample_time_ns = 1700000000123456789ull;
+		memset(&f[a], 0, sizeof(f[a]));
+		f[a].h.avatar_id = a ? 7 : 0;
+		f[a].h.seq = 42;
+		f[a].h.sample_time_ns = 1700000000123456789ull;
 		for (int j = 0; j < WIRE_JOINTS; j++)
-			f.joint[j] = a ? (float)j * 0.1f : NAN;
-		m[a] = (struct out_msg){ buf[a], (uint16_t)wire_encode_frame(&f, buf[a]), (uint16_t)a, NULL };
+			f[a].joint[j] = a ? (float)j * 0.1f : NAN;
+		m[a] = out_msg_frame(&f[a], buf[a], (uint16_t)a);
 	}
 	o->ops->send(o, m, 2);
 }

@@ -37,8 +37,7 @@ static struct config cfg;
 static struct output out;
 static int port;
 static uint8_t frame[2][WIRE_MAX_MSG];
-static struct out_msg msgs[2];
-static struct pose_frame pf[2];
+static struct wire_frame wf[2];
 
 static int free_port(void)
 {
@@ -57,8 +56,6 @@ static void setup(void)
 {
 	static const uint16_t ids[2] = { 0, 7 };
 	char text[512], err[256];
-	struct wire_frame f;
-
 	for (int tries = 0;; tries++) {
 		port = free_port();
 		snprintf(text, sizeof(text),
@@ -79,17 +76,16 @@ static void setup(void)
 		}
 	}
 	for (int a = 0; a < 2; a++) {
-		memset(&f, 0, sizeof(f));
-		f.h.avatar_id = ids[a];
-		f.h.flags = WIRE_F_INPUTS;
+		struct wire_frame *f = &wf[a];
+
+		memset(f, 0, sizeof(*f));
+		f->h.avatar_id = ids[a];
+		f->h.flags = WIRE_F_INPUTS;
+		f->in.present = 7;
 		for (int s = 0; s < WIRE_SEGMENTS; s++)
-			f.segment[s].q[0] = 1;
+			f->segment[s].q[0] = 1;
 		for (int s = 0; s < WIRE_SENSORS; s++)
-			f.sensor[s].pose.q[0] = 1;
-		msgs[a].len = (uint16_t)wire_encode_frame(&f, frame[a]);
-		msgs[a].data = frame[a];
-		msgs[a].avatar = (uint16_t)a;
-		msgs[a].frame = &pf[a];
+			f->sensor[s].pose.q[0] = 1;
 	}
 }
 
@@ -111,13 +107,16 @@ static bool drain(int fd)
 static void cycle(void)
 {
 	static uint32_t buttons;
+	struct out_msg m[2];
 
 	/* a button changes at every cycle: Change messages, and the states again when one did not fit */
 	buttons = buttons * 1103515245u + 12345u;
-	for (int a = 0; a < 2; a++)
-		pf[a].buttons[a] = buttons;
+	for (int a = 0; a < 2; a++) {
+		wf[a].in.buttons[a] = buttons;
+		m[a] = out_msg_frame(&wf[a], frame[a], (uint16_t)a);
+	}
 	out.ops->service(&out);
-	out.ops->send(&out, msgs, 2);
+	out.ops->send(&out, m, 2);
 }
 
 static void client_stream(const uint8_t *data, size_t size)
