@@ -509,8 +509,12 @@ static int load_recording(struct replay *rp, const char *path, char *err, size_t
 		struct quat q = { s->q[0], s->q[1], s->q[2], s->q[3] }, qn;
 		struct vec3 p = { s->p[0], s->p[1], s->p[2] };
 
-		if (!quat_normalize(&q, &qn) || !isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z)) {
-			/* a good CRC around numbers that are not a pose: counted, never played */
+		bool analog_ok = true;
+
+		for (int k = 0; k < SENSOR_ANALOG_MAX; k++)
+			analog_ok &= isfinite(s->analog[k]) != 0;
+		if (!quat_normalize(&q, &qn) || !isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z) || !analog_ok) {
+			/* a good CRC around numbers that are not a pose or analog values: counted, never played */
 			rp->malformed++;
 			continue;
 		}
