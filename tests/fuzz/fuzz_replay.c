@@ -12,7 +12,8 @@
  * (tests/fuzz/recframe.h); clear: the rest is the file as it is.
  *
  * Invariant: every sample the source puts in its slots is a finite pose
- * with a unit quaternion, with finite analog values.
+ * with a unit quaternion within the source's max_distance of the origin,
+ * with finite analog values.
  */
 #include "fuzz/fuzz.h"
 #include "fuzz/recframe.h"
@@ -32,6 +33,15 @@ static void check_slots(const struct tracker *t, uint32_t *seen)
 			continue;
 		seen[i] = s->count;
 		fuzz_pose(&s->pose, "replayed pose");
+		{
+			struct vec3 p;
+			double d;
+
+			dq_translation(&s->pose, &p);
+			d = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+			FUZZ_CHECK(d <= t->cfg->max_distance * (1 + 1e-6),
+				   "replayed pose %g m from the origin (max_distance %g)", d, t->cfg->max_distance);
+		}
 		fuzz_finite_f(s->analog, SENSOR_ANALOG_MAX, "replayed analog");
 	}
 }
