@@ -263,6 +263,8 @@ CHECK_SCRIPTS = $(wildcard tests/check-*.sh) tests/service/verify-unit.sh
 
 # the core cross-built for microcontrollers and aarch64, and its self-test (docs/EMBEDDED.md)
 include tools/embedded.mk
+# the fuzz harnesses: make fuzz, and their corpus run in make check and make test (docs/FUZZING.md)
+include tests/fuzz/fuzz.mk
 
 # ---- top-level targets --------------------------------------------------------
 .SECONDARY:

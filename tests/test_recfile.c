@@ -3,7 +3,9 @@
  * test_recfile.c - the recording format (record/recfile.h, docs/RECORDING.md)
  * and its reader (record/recload.h): byte layouts, round trips, and what a
  * reader does with damage: a flipped byte, a record cut off at the end,
- * garbage between records, a bad header, a second SESSION after a reload.
+ * garbage between records, a bad header, a second SESSION after a reload;
+ * and the replay source naming the sensors of a file whose first record is
+ * damaged, and refusing samples whose analog values are not finite.
  */
 #include <math.h>
 #include <setjmp.h>
@@ -17,7 +19,12 @@
 
 #include <zlib.h>
 
+#include "config/config.h"
 #include "record/recload.h"
+#include "trackers/replay.h"
+#include "trackers/tracker.h"
+
+#include <unistd.h>
 
 #define BUF (1 << 16)
 
@@ -393,14 +400,129 @@ static void test_no_session(void **state)
 	assert_non_null(strstr(err, "SESSION"));
 }
 
+/* r written to a new temporary file: its name in path (char[] "/tmp/avatargw-test-recfile-XXXXXX") */
+static void write_temp(const struct rec_buf *r, char *path)
+{
+	int fd = mkstemp(path);
+	FILE *f;
+
+	assert_true(fd >= 0);
+	f = fdopen(fd, "wb");
+	assert_non_null(f);
+	assert_int_equal(fwrite(r->b, 1, r->len, f), r->len);
+	assert_int_equal(fclose(f), 0);
+}
+
+/*
+ * The replay source names a recording's sensors at configuration time from
+ * the first record alone; when that one is damaged, the loader finds the
+ * next good SESSION. Both must agree (found by tests/fuzz/fuzz_replay.c:
+ * the configuration said 0 sensors, open() then failed with "changed while
+ * the configuration was read").
+ */
+static void test_replay_damaged_first_session(void **state)
+{
+	static struct rec_buf r;
+	static struct config cfg;
+	char path[] = "/tmp/avatargw-test-recfile-XXXXXX", text[256], err[512];
+	struct tracker t;
+	const struct cfg_type *drv;
+
+	(void)state;
+	put_header(&r);
+	put_session(&r, false);
+	r.b[r.off[0] + 30] ^= 0x01; /* the first SESSION's CRC no longer holds */
+	put_session(&r, false);
+	for (int i = 0; i < 6; i++)
+		put_sample(&r, 0, (uint16_t)(i % 3), 1000 + 1000000 * (uint64_t)i, false);
+	write_temp(&r, path);
+	snprintf(text, sizeof(text), "[source r]\ntype = replay\nfile = %s\nstep = yes\n", path);
+	assert_int_equal(config_load_text(&cfg, "t.conf", text, err, sizeof(err)), 0);
+	drv = cfg_source_type(cfg.source[0].driver);
+	assert_int_equal(drv->sensor_count(&cfg.source[0]), 9);
+	{
+		char name[64];
+
+		drv->sensor_name(&cfg.source[0], 4, name, sizeof(name));
+		assert_string_equal(name, "sim.p0.left_hand");
+	}
+	assert_int_equal(tracker_open(&t, &cfg.source[0], err, sizeof(err)), 0);
+	assert_int_equal(t.n_sensors, 9);
+	tracker_close(&t);
+	config_free(&cfg);
+	unlink(path);
+}
+
+/*
+ * A sample of a recording whose analog values are not finite is malformed:
+ * counted and never played, like one whose pose is not a pose (found by
+ * tests/fuzz/fuzz_replay.c: a NaN went into the sensor's slot, and from
+ * there into the FRAME's input block).
+ */
+static void test_replay_nonfinite_analog(void **state)
+{
+	static struct rec_buf r;
+	static struct config cfg;
+	char path[] = "/tmp/avatargw-test-recfile-XXXXXX", text[256], err[512];
+	struct tracker_clock now = { 1000000000000ull, 0 };
+	struct tracker t;
+	int played = 0;
+
+	(void)state;
+	put_header(&r);
+	put_session(&r, false);
+	for (int i = 0; i < 6; i++) {
+		struct recfile_sample s = {
+			0,    (uint16_t)(i % 3),     0, 7, 1000 + 1000000 * (uint64_t)i, { 1, 2, 3 }, { 1, 0, 0, 0 },
+			true, { 0.5f, -1, 0, 0.25f }
+		};
+		uint8_t p[RECFILE_SAMPLE_LEN_ANALOG];
+
+		if (i == 2)
+			s.analog[1] = NAN;
+		if (i == 4)
+			s.analog[3] = INFINITY;
+		put_record(&r, RECFILE_SAMPLE, p, (uint32_t)recfile_sample_encode(&s, p));
+	}
+	write_temp(&r, path);
+	snprintf(text, sizeof(text), "[source r]\ntype = replay\nfile = %s\nstep = yes\nloop = no\n", path);
+	assert_int_equal(config_load_text(&cfg, "t.conf", text, err, sizeof(err)), 0);
+	assert_int_equal(tracker_open(&t, &cfg.source[0], err, sizeof(err)), 0);
+	assert_int_equal(atomic_load(&t.st.malformed), 2);
+	for (int k = 0; k < 8; k++) {
+		int n;
+
+		if (k)
+			assert_int_equal(replay_step(&t, 1), 0);
+		n = t.drv->poll(&t, &now);
+		assert_true(n >= 0);
+		played += n;
+		for (int i = 0; i < t.n_sensors; i++)
+			for (int a = 0; a < SENSOR_ANALOG_MAX; a++)
+				assert_true(isfinite(t.slot[i].analog[a]));
+	}
+	assert_int_equal(played, 4);
+	assert_true(t.slot[0].analog[0] == 0.5f && t.slot[0].analog[3] == 0.25f);
+	tracker_close(&t);
+	config_free(&cfg);
+	unlink(path);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_layout),		cmocka_unit_test(test_layout_crc),
-		cmocka_unit_test(test_header),		cmocka_unit_test(test_sample_round_trip),
-		cmocka_unit_test(test_index),		cmocka_unit_test(test_damage_resync),
-		cmocka_unit_test(test_truncated),	cmocka_unit_test(test_second_session),
-		cmocka_unit_test(test_gap_unknown_bad), cmocka_unit_test(test_no_session),
+		cmocka_unit_test(test_layout),
+		cmocka_unit_test(test_layout_crc),
+		cmocka_unit_test(test_header),
+		cmocka_unit_test(test_sample_round_trip),
+		cmocka_unit_test(test_index),
+		cmocka_unit_test(test_damage_resync),
+		cmocka_unit_test(test_truncated),
+		cmocka_unit_test(test_second_session),
+		cmocka_unit_test(test_gap_unknown_bad),
+		cmocka_unit_test(test_no_session),
+		cmocka_unit_test(test_replay_damaged_first_session),
+		cmocka_unit_test(test_replay_nonfinite_analog),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

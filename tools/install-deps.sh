@@ -47,6 +47,9 @@ libfastcdr-dev
 fastddsgen
 default-jre-headless
 openssl
+clang-14
+libclang-rt-14-dev
+libfuzzer-14-dev
 "
 
 missing=""

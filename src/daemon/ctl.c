@@ -557,8 +557,7 @@ static void ctl_step(FILE *out, const struct ctl_info *info, const char *args)
 			name[0] ? name : "");
 }
 
-/* the answer to one request line */
-static char *answer(const char *line, const struct ctl_info *info, bool *want_reload, size_t *len)
+char *ctl_answer(const char *line, const struct ctl_info *info, bool *want_reload, size_t *len)
 {
 	char req[128], *text = NULL;
 	FILE *out;
@@ -633,7 +632,7 @@ static void client_read(struct ctl_client *c, const struct ctl_info *info, bool 
 		client_end(c);
 		return;
 	}
-	c->text = answer(c->req, info, want_reload, &c->len);
+	c->text = ctl_answer(c->req, info, want_reload, &c->len);
 	c->off = 0;
 	/* the answer gets its own second to be taken */
 	c->deadline = mono_s() + CTL_DEADLINE_S;

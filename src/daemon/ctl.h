@@ -63,6 +63,12 @@ void ctl_close(struct ctl_server *s);
  * lowers *wait_s to the next client's deadline. Returns how many.
  */
 int ctl_pollfds(struct ctl_server *s, struct pollfd *pf, int max, double *wait_s);
+/*
+ * The answer to one request line (up to its first CR or LF, at most 127
+ * bytes): malloc'd text of *len bytes, or NULL without memory; want_reload
+ * set when it asks for one.
+ */
+char *ctl_answer(const char *line, const struct ctl_info *info, bool *want_reload, size_t *len);
 /* after poll(): accepts, reads, answers, closes what is late; want_reload set when a client asked */
 void ctl_serve(struct ctl_server *s, const struct pollfd *pf, int n, const struct ctl_info *info, bool *want_reload);
 /* renders the status (human or JSON) */

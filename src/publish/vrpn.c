@@ -822,6 +822,16 @@ static bool vrpn_adopt(struct output *o, struct output *old)
 	return true;
 }
 
+int vrpn_parse_request(const char *msg, char host[128], int *port)
+{
+	if (sscanf(msg, "%127s %d", host, port) != 2 || *port < 1024 || *port > 65535)
+		return -1;
+	for (const char *h = host; *h; h++)
+		if (!isalnum((unsigned char)*h) && *h != '.' && *h != ':' && *h != '-')
+			return -1;
+	return 0;
+}
+
 /* a UDP datagram "<host> <port>": a client waiting for us to connect to it */
 static void vrpn_lob(struct output *o, struct vrpn *v, const char *msg, const struct sockaddr_storage *from,
 		     socklen_t from_len, uint64_t now)
@@ -831,15 +841,10 @@ static void vrpn_lob(struct output *o, struct vrpn *v, const char *msg, const st
 	struct sockaddr_storage to;
 	bool drop;
 
-	if (sscanf(msg, "%127s %d", host, &port) != 2 || port < 1024 || port > 65535) {
+	if (vrpn_parse_request(msg, host, &port)) {
 		ctr_add(&o->st.malformed, 1);
 		return;
 	}
-	for (const char *h = host; *h; h++)
-		if (!isalnum((unsigned char)*h) && *h != '.' && *h != ':' && *h != '-') {
-			ctr_add(&o->st.malformed, 1);
-			return;
-		}
 	/* connect to the address the request came from (as VRPN does: the client may have several) */
 	memcpy(&to, from, sizeof(to));
 	if (to.ss_family == AF_INET)

@@ -337,35 +337,30 @@ static double reg_value(const uint16_t *r, int fmt, int order)
 	}
 }
 
-/* the pose of sensor k from the register image; false: malformed */
-static bool decode_pose(const struct modbus_in *m, int k, struct modbus_in_pose *out)
+bool modbus_in_decode_pose(const struct modbus_in_opts *o, const uint16_t *img, int lo, int k, double q[4], double p[3])
 {
-	const struct cfg_source *cfg = m->cfg;
-	int pw = width(opts_of(cfg)->pos_format), ow = width(opts_of(cfg)->ori_format),
-	    nv = ori_values(opts_of(cfg)->orientation);
-	const uint16_t *pr = m->img + (opts_of(cfg)->pos_register + k * opts_of(cfg)->sensor_stride - m->lo);
-	const uint16_t *orr = m->img + (opts_of(cfg)->ori_register + k * opts_of(cfg)->sensor_stride - m->lo);
+	int pw = width(o->pos_format), ow = width(o->ori_format), nv = ori_values(o->orientation);
+	const uint16_t *pr = img + (o->pos_register + k * o->sensor_stride - lo);
+	const uint16_t *orr = img + (o->ori_register + k * o->sensor_stride - lo);
 	double v[4] = { 0, 0, 0, 0 }, n;
 
 	for (int i = 0; i < 3; i++) {
-		out->p[i] = reg_value(pr + i * pw, opts_of(cfg)->pos_format, opts_of(cfg)->word_order) *
-			    opts_of(cfg)->pos_scale;
-		if (!isfinite(out->p[i]))
+		p[i] = reg_value(pr + i * pw, o->pos_format, o->word_order) * o->pos_scale;
+		if (!isfinite(p[i]))
 			return false;
 	}
 	for (int i = 0; i < nv; i++) {
-		v[i] = reg_value(orr + i * ow, opts_of(cfg)->ori_format, opts_of(cfg)->word_order) *
-		       opts_of(cfg)->ori_scale;
+		v[i] = reg_value(orr + i * ow, o->ori_format, o->word_order) * o->ori_scale;
 		if (!isfinite(v[i]))
 			return false;
 	}
-	switch (opts_of(cfg)->orientation) {
+	switch (o->orientation) {
 	case CFG_ORI_ROTVEC:
 		/* axis times angle, radians (Universal Robots' rx ry rz) */
 		n = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-		out->q[0] = cos(n / 2);
+		q[0] = cos(n / 2);
 		for (int i = 0; i < 3; i++)
-			out->q[1 + i] = n > 1e-12 ? sin(n / 2) * v[i] / n : 0;
+			q[1 + i] = n > 1e-12 ? sin(n / 2) * v[i] / n : 0;
 		return true;
 	case CFG_ORI_QUAT_WXYZ:
 	case CFG_ORI_QUAT_XYZW:
@@ -373,24 +368,30 @@ static bool decode_pose(const struct modbus_in *m, int k, struct modbus_in_pose 
 		if (!(n > 0.8 && n < 1.2))
 			return false;
 		for (int i = 0; i < 4; i++)
-			out->q[i] = (opts_of(cfg)->orientation == CFG_ORI_QUAT_XYZW ? v[(i + 3) % 4] : v[i]) / n;
+			q[i] = (o->orientation == CFG_ORI_QUAT_XYZW ? v[(i + 3) % 4] : v[i]) / n;
 		return true;
 	case CFG_ORI_RPY: {
 		/* R = Rz(yaw) Ry(pitch) Rx(roll): roll, pitch, yaw about the fixed x, y, z axes */
 		double cr = cos(v[0] / 2), sr = sin(v[0] / 2), cp = cos(v[1] / 2), sp = sin(v[1] / 2);
 		double cy = cos(v[2] / 2), sy = sin(v[2] / 2);
 
-		out->q[0] = cy * cp * cr + sy * sp * sr;
-		out->q[1] = cy * cp * sr - sy * sp * cr;
-		out->q[2] = cy * sp * cr + sy * cp * sr;
-		out->q[3] = sy * cp * cr - cy * sp * sr;
+		q[0] = cy * cp * cr + sy * sp * sr;
+		q[1] = cy * cp * sr - sy * sp * cr;
+		q[2] = cy * sp * cr + sy * cp * sr;
+		q[3] = sy * cp * cr - cy * sp * sr;
 		return true;
 	}
 	default:
-		out->q[0] = 1;
-		out->q[1] = out->q[2] = out->q[3] = 0;
+		q[0] = 1;
+		q[1] = q[2] = q[3] = 0;
 		return true;
 	}
+}
+
+/* the pose of sensor k from the register image; false: malformed */
+static bool decode_pose(const struct modbus_in *m, int k, struct modbus_in_pose *out)
+{
+	return modbus_in_decode_pose(opts_of(m->cfg), m->img, m->lo, k, out->q, out->p);
 }
 
 static uint64_t clock_ns(clockid_t id)

@@ -1,11 +1,15 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * modbus_in.h - the options of modbus_in.c's configuration sections (its keys' values).
+ * modbus_in.h - the options of modbus_in.c's configuration sections (its keys' values),
+ * and its conversion of registers to a pose (for tests and the fuzz harness).
  */
 #ifndef AGW_MODBUS_IN_H
 #define AGW_MODBUS_IN_H
 
 #include "config/config.h"
+
+#include <stdbool.h>
+#include <stdint.h>
 
 enum cfg_reg_type { CFG_REGS_HOLDING, CFG_REGS_INPUT };
 enum cfg_reg_format { CFG_REG_INT16, CFG_REG_UINT16, CFG_REG_INT32, CFG_REG_UINT32, CFG_REG_FLOAT32 };
@@ -29,5 +33,14 @@ struct modbus_in_opts {
 	double poll_rate; /* Hz */
 	double timeout_ms;
 };
+
+/*
+ * Sensor k's pose from the source's register map: img holds the registers
+ * from lo on (every register the map names for sensor k). q: w x y z, p:
+ * metres. False: malformed (a value not finite, a quaternion far from unit
+ * length).
+ */
+bool modbus_in_decode_pose(const struct modbus_in_opts *o, const uint16_t *img, int lo, int k, double q[4],
+			   double p[3]);
 
 #endif /* AGW_MODBUS_IN_H */

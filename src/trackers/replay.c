@@ -183,7 +183,7 @@ static void cache_drop(struct name_cache *c)
 	memset(c, 0, sizeof(*c));
 }
 
-/* reads the magic and, for a recording, its first SESSION's sensor names */
+/* reads the magic and, for a recording, its first good SESSION's sensor names */
 static struct name_cache *file_kind(const char *path)
 {
 	struct name_cache *c, *old = &cache[0];
@@ -232,6 +232,18 @@ static struct name_cache *file_kind(const char *path)
 				rec_index_free(&ix);
 			}
 			free(rec);
+		}
+		/*
+		 * The first record damaged or not a SESSION that parses: the loader
+		 * resynchronises to the first good one, so the names are that one's
+		 * (read the way the loader reads them, else config and open disagree)
+		 */
+		if (!c->names && !rec_index_load(path, &ix, (char[64]){ 0 }, 64)) {
+			c->n = ix.n_sensors;
+			c->names = ix.names;
+			ix.names = NULL;
+			ix.n_sensors = 0;
+			rec_index_free(&ix);
 		}
 	}
 	close(fd);
@@ -497,8 +509,12 @@ static int load_recording(struct replay *rp, const char *path, char *err, size_t
 		struct quat q = { s->q[0], s->q[1], s->q[2], s->q[3] }, qn;
 		struct vec3 p = { s->p[0], s->p[1], s->p[2] };
 
-		if (!quat_normalize(&q, &qn) || !isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z)) {
-			/* a good CRC around numbers that are not a pose: counted, never played */
+		bool analog_ok = true;
+
+		for (int k = 0; k < SENSOR_ANALOG_MAX; k++)
+			analog_ok &= isfinite(s->analog[k]) != 0;
+		if (!quat_normalize(&q, &qn) || !isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z) || !analog_ok) {
+			/* a good CRC around numbers that are not a pose or analog values: counted, never played */
 			rp->malformed++;
 			continue;
 		}
