@@ -34,6 +34,7 @@
 #include "publish/listen.h"
 
 #include "avatargw/wire.h"
+#include "wire/vrpn_proto.h"
 
 #include <arpa/inet.h>
 #include <ctype.h>
@@ -116,32 +117,10 @@ static const struct vrpn_opts *opts_of(const struct cfg_output *c)
 	return c->opt;
 }
 
-/* the protocol (facts from VRPN's vrpn_Connection.[Ch], vrpn_Tracker.C, vrpn_Analog.C, vrpn_Button.C) */
-#define VRPN_MAGIC "vrpn: ver. 07.35" /* 16 bytes; peers compare up to the last '.' */
-#define VRPN_MAGIC_LEN 16
-#define VRPN_MAJOR_LEN 14  /* "vrpn: ver. 07." */
-#define VRPN_COOKIE_LEN 24 /* magic, two spaces, the log mode digit, padding */
-#define VRPN_HEADER_LEN 24 /* five be32 (length, sec, usec, sender, type), padded to 8 */
-#define VRPN_ALIGN 8
-#define VRPN_NAME_MAX 100  /* a name with its NUL (VRPN's cName) */
-#define VRPN_DEVICE_MAX 95 /* a peer refuses a description (length + name + NUL) over 100 */
-#define VRPN_ID_MAX 2000   /* VRPN's translation tables */
-#define VRPN_LONGEST 64000 /* no VRPN peer sends a longer message (its TCP buffer) */
-#define VRPN_UDP_MAX 1472  /* one Ethernet frame, as VRPN sends */
-
-enum {
-	VRPN_SENDER_DESCRIPTION = -1,
-	VRPN_TYPE_DESCRIPTION = -2,
-	VRPN_UDP_DESCRIPTION = -3,
-	VRPN_LOG_DESCRIPTION = -4,
-	VRPN_DISCONNECT = -5,
-};
-
 /* our type ids, announced to every client */
 enum { T_POS_QUAT, T_ANALOG, T_BUTTON_CHANGE, T_BUTTON_STATES, T_PONG, T_PING, T_COUNT };
 static const char *const vrpn_types[T_COUNT] = {
-	"vrpn_Tracker Pos_Quat", "vrpn_Analog Channel",	   "vrpn_Button Change",
-	"vrpn_Button States",	 "vrpn_Base pong_message", "vrpn_Base ping_message",
+	VRPN_T_POS_QUAT, VRPN_T_ANALOG, VRPN_T_BUTTON_CHANGE, VRPN_T_BUTTON_STATES, VRPN_T_PONG, VRPN_T_PING,
 };
 
 /* what a device carries (docs/VRPN.md) */
@@ -149,11 +128,11 @@ static const char *const vrpn_types[T_COUNT] = {
 #define VRPN_CHANNELS (WIRE_JOINTS + FRAME_SENSORS * SENSOR_ANALOG_MAX)
 #define VRPN_BUTTONS (FRAME_SENSORS * 32)
 
-#define POS_QUAT_LEN 64
+#define POS_QUAT_LEN VRPN_POS_QUAT_LEN
 #define ANALOG_LEN (8 * (1 + VRPN_CHANNELS))
 #define STATES_LEN (4 * (1 + VRPN_BUTTONS))
 /* one avatar's reports of one cycle: low-latency part, then the reliable button changes */
-#define MSG_LEN(payload) (VRPN_HEADER_LEN + (((payload) + VRPN_ALIGN - 1) & ~(size_t)(VRPN_ALIGN - 1)))
+#define MSG_LEN(payload) VRPN_MSG_LEN(payload)
 #define LOW_MAX (VRPN_SENSORS * MSG_LEN(POS_QUAT_LEN) + MSG_LEN(ANALOG_LEN))
 #define REL_MAX (VRPN_BUTTONS * MSG_LEN(8))
 
@@ -216,62 +195,15 @@ struct vrpn {
 	uint8_t dgram[VRPN_UDP_MAX];
 };
 
-/* ---- encoding: big-endian, 8-byte aligned --------------------------------------------- */
-
-static void put32(uint8_t *p, uint32_t v)
-{
-	v = htobe32(v);
-	memcpy(p, &v, 4);
-}
-
-static uint32_t get32(const uint8_t *p)
-{
-	uint32_t v;
-
-	memcpy(&v, p, 4);
-	return be32toh(v);
-}
-
-static void put_f64(uint8_t *p, double d)
-{
-	uint64_t v;
-
-	memcpy(&v, &d, 8);
-	v = htobe64(v);
-	memcpy(p, &v, 8);
-}
-
-/* a message's header; returns where its payload goes. The length counts no padding. */
-static uint8_t *msg_header(uint8_t *p, int32_t type, int32_t sender, uint64_t t_ns, size_t payload)
-{
-	put32(p, (uint32_t)(VRPN_HEADER_LEN + payload));
-	put32(p + 4, (uint32_t)(t_ns / 1000000000ull));
-	put32(p + 8, (uint32_t)(t_ns % 1000000000ull / 1000u));
-	put32(p + 12, (uint32_t)sender);
-	put32(p + 16, (uint32_t)type);
-	put32(p + 20, 0); /* VRPN puts a sequence number for sniffers here; no peer reads it */
-	memset(p + VRPN_HEADER_LEN, 0, MSG_LEN(payload) - VRPN_HEADER_LEN);
-	return p + VRPN_HEADER_LEN;
-}
-
-/* a sender or type description: the id described goes in the sender field */
-static size_t msg_description(uint8_t *p, int32_t kind, int32_t id, const char *name, uint64_t t_ns)
-{
-	size_t n = strlen(name) + 1;
-	uint8_t *q = msg_header(p, kind, id, t_ns, 4 + n);
-
-	put32(q, (uint32_t)n);
-	memcpy(q + 4, name, n);
-	return MSG_LEN(4 + n);
-}
+/* ---- encoding: big-endian, 8-byte aligned (wire/vrpn_proto.h) --------------------------- */
 
 static size_t msg_states(uint8_t *p, int32_t sender, const uint32_t buttons[FRAME_SENSORS], uint64_t t_ns)
 {
-	uint8_t *q = msg_header(p, T_BUTTON_STATES, sender, t_ns, STATES_LEN);
+	uint8_t *q = vrpn_msg_header(p, T_BUTTON_STATES, sender, t_ns, STATES_LEN);
 
-	put32(q, VRPN_BUTTONS);
+	vrpn_put32(q, VRPN_BUTTONS);
 	for (int b = 0; b < VRPN_BUTTONS; b++)
-		put32(q + 4 + 4 * b, (buttons[b / 32] >> (b % 32)) & 1u);
+		vrpn_put32(q + 4 + 4 * b, (buttons[b / 32] >> (b % 32)) & 1u);
 	return MSG_LEN(STATES_LEN);
 }
 
@@ -289,29 +221,30 @@ static size_t encode_low(uint8_t *p, int32_t sender, const struct wire_frame *f)
 		/* an unknown pose is not sent: VRPN has no way to say unknown, and NaN is never published */
 		if (!wire_pose_finite(pose))
 			continue;
-		q = msg_header(p + n, T_POS_QUAT, sender, t, POS_QUAT_LEN);
-		put32(q, (uint32_t)s);
-		put32(q + 4, 0);
+		q = vrpn_msg_header(p + n, T_POS_QUAT, sender, t, POS_QUAT_LEN);
+		vrpn_put32(q, (uint32_t)s);
+		vrpn_put32(q + 4, 0);
 		for (int i = 0; i < 3; i++)
-			put_f64(q + 8 + 8 * i, pose->p[i]);
+			vrpn_put_f64(q + 8 + 8 * i, pose->p[i]);
 		/* VRPN stores x, y, z, w; the wire stores w, x, y, z */
 		for (int i = 0; i < 4; i++)
-			put_f64(q + 32 + 8 * i, pose->q[(i + 1) % 4]);
+			vrpn_put_f64(q + 32 + 8 * i, pose->q[(i + 1) % 4]);
 		n += MSG_LEN(POS_QUAT_LEN);
 	}
 	for (int j = 0; j < WIRE_JOINTS; j++)
 		joints &= isfinite(f->joint[j]) != 0;
 	if (joints) {
-		uint8_t *q = msg_header(p + n, T_ANALOG, sender, t, ANALOG_LEN);
+		uint8_t *q = vrpn_msg_header(p + n, T_ANALOG, sender, t, ANALOG_LEN);
 
-		put_f64(q, VRPN_CHANNELS);
+		vrpn_put_f64(q, VRPN_CHANNELS);
 		for (int j = 0; j < WIRE_JOINTS; j++)
-			put_f64(q + 8 + 8 * j, f->joint[j]);
+			vrpn_put_f64(q + 8 + 8 * j, f->joint[j]);
 		for (int s = 0; s < FRAME_SENSORS; s++)
 			for (int i = 0; i < SENSOR_ANALOG_MAX; i++) {
 				float v = f->in.analog[s][i];
 
-				put_f64(q + 8 + 8 * (WIRE_JOINTS + s * SENSOR_ANALOG_MAX + i), isfinite(v) ? v : 0.0);
+				vrpn_put_f64(q + 8 + 8 * (WIRE_JOINTS + s * SENSOR_ANALOG_MAX + i),
+					     isfinite(v) ? v : 0.0);
 			}
 		n += MSG_LEN(ANALOG_LEN);
 	}
@@ -502,7 +435,7 @@ static void vcl_ping(struct vrpn *v, struct vcl *c, const struct vmap *m, int av
 
 	if (!p)
 		return; /* it pings again in a second */
-	msg_header(p, T_PONG, avatar, t, 0);
+	vrpn_msg_header(p, T_PONG, avatar, t, 0);
 	c->len += MSG_LEN(0);
 	c->len += msg_states(p + MSG_LEN(0), avatar, m->buttons[avatar], t);
 }
@@ -519,15 +452,9 @@ static bool vcl_dispatch(struct vrpn *v, struct vcl *c, const struct vmap *m, in
 {
 	if (type == VRPN_SENDER_DESCRIPTION || type == VRPN_TYPE_DESCRIPTION) {
 		char name[VRPN_NAME_MAX];
-		uint32_t n;
 
-		if (plen < 4 || sender < 0 || sender >= VRPN_ID_MAX)
+		if (sender < 0 || sender >= VRPN_ID_MAX || !vrpn_description_name(pl, plen, name))
 			return false;
-		n = get32(pl);
-		if (n < 1 || n > VRPN_NAME_MAX || 4 + (size_t)n > plen)
-			return false;
-		memcpy(name, pl + 4, n);
-		name[n - 1] = '\0';
 		if (type == VRPN_TYPE_DESCRIPTION) {
 			if (!strcmp(name, vrpn_types[T_PING]))
 				c->ping_type = sender;
@@ -570,13 +497,6 @@ static bool vcl_dispatch(struct vrpn *v, struct vcl *c, const struct vmap *m, in
 	return true; /* other messages (text, requests to the tracker) need no answer */
 }
 
-static bool cookie_ok(const uint8_t *ck)
-{
-	/* the major version must match; a different minor only makes VRPN warn */
-	return !memcmp(ck, VRPN_MAGIC, VRPN_MAJOR_LEN) && ck[VRPN_MAGIC_LEN + 2] >= '0' &&
-	       ck[VRPN_MAGIC_LEN + 2] <= '3';
-}
-
 /* what it sent; false: drop it (closed, or malformed said by *bad) */
 static bool vcl_read(struct vrpn *v, struct vcl *c, const struct vmap *m, uint64_t now, bool *bad)
 {
@@ -594,7 +514,7 @@ static bool vcl_read(struct vrpn *v, struct vcl *c, const struct vmap *m, uint64
 		if (c->state == VC_COOKIE) {
 			if (c->in_len < VRPN_COOKIE_LEN)
 				continue;
-			if (!cookie_ok(c->in)) {
+			if (!vrpn_cookie_ok(c->in)) {
 				*bad = true;
 				return false;
 			}
@@ -615,7 +535,7 @@ static bool vcl_read(struct vrpn *v, struct vcl *c, const struct vmap *m, uint64
 			}
 			if (avail < VRPN_HEADER_LEN)
 				break;
-			len = get32(h);
+			len = vrpn_get32(h);
 			if (len < VRPN_HEADER_LEN || len > VRPN_LONGEST) {
 				*bad = true;
 				return false;
@@ -628,8 +548,8 @@ static bool vcl_read(struct vrpn *v, struct vcl *c, const struct vmap *m, uint64
 			}
 			if (avail < total)
 				break;
-			if (!vcl_dispatch(v, c, m, (int32_t)get32(h + 16), (int32_t)get32(h + 12), h + VRPN_HEADER_LEN,
-					  len - VRPN_HEADER_LEN)) {
+			if (!vcl_dispatch(v, c, m, (int32_t)vrpn_get32(h + 16), (int32_t)vrpn_get32(h + 12),
+					  h + VRPN_HEADER_LEN, len - VRPN_HEADER_LEN)) {
 				*bad = true;
 				return false;
 			}
@@ -653,13 +573,13 @@ static void vcl_describe(struct vrpn *v, struct vcl *c, const struct vmap *m)
 		if (k < T_COUNT) {
 			if (!(p = vcl_room(v, c, MSG_LEN(4 + VRPN_NAME_MAX))))
 				return;
-			c->len += msg_description(p, VRPN_TYPE_DESCRIPTION, k, vrpn_types[k], t);
+			c->len += vrpn_msg_description(p, VRPN_TYPE_DESCRIPTION, k, vrpn_types[k], t);
 		} else if (m->wants[k - T_COUNT]) {
 			int a = k - T_COUNT;
 
 			if (!(p = vcl_room(v, c, MSG_LEN(4 + VRPN_NAME_MAX) + MSG_LEN(STATES_LEN))))
 				return;
-			c->len += msg_description(p, VRPN_SENDER_DESCRIPTION, a, m->name[a], t);
+			c->len += vrpn_msg_description(p, VRPN_SENDER_DESCRIPTION, a, m->name[a], t);
 			c->len += msg_states(c->out + c->off + c->len, a, m->buttons[a], t);
 		}
 		c->desc_next++;
@@ -894,9 +814,7 @@ static void vcl_connected(struct output *o, struct vrpn *v, struct vcl *c, uint6
 	setsockopt(c->fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
 	/* a small kernel queue: a slow reader gets recent reports, not seconds-old ones */
 	setsockopt(c->fd, SOL_SOCKET, SO_SNDBUF, &sndbuf, sizeof(sndbuf));
-	memset(p, 0, VRPN_COOKIE_LEN);
-	/* the magic, two spaces, the log mode we ask of the client (none) */
-	memcpy(p, VRPN_MAGIC "  0", VRPN_MAGIC_LEN + 3);
+	vrpn_cookie(p);
 	c->len += VRPN_COOKIE_LEN;
 	c->state = VC_COOKIE;
 	c->since_ns = now;
@@ -1003,9 +921,9 @@ static size_t encode_buttons(uint8_t *p, struct vmap *m, int a, const struct wir
 
 			if (!(diff & (1u << b)))
 				continue;
-			q = msg_header(p + n, T_BUTTON_CHANGE, a, t_ns, 8);
-			put32(q, (uint32_t)(s * 32 + b));
-			put32(q + 4, (now >> b) & 1u);
+			q = vrpn_msg_header(p + n, T_BUTTON_CHANGE, a, t_ns, 8);
+			vrpn_put32(q, (uint32_t)(s * 32 + b));
+			vrpn_put32(q + 4, (now >> b) & 1u);
 			n += MSG_LEN(8);
 		}
 		m->buttons[a][s] = now;
@@ -1080,7 +998,7 @@ static void vrpn_send(struct output *o, const struct out_msg *msgs, int n)
 				size_t dlen = 0;
 
 				for (size_t k = 0; k < low;) {
-					size_t len = MSG_LEN(get32(v->low + k) - VRPN_HEADER_LEN);
+					size_t len = MSG_LEN(vrpn_get32(v->low + k) - VRPN_HEADER_LEN);
 
 					if (dlen + len > sizeof(v->dgram))
 						vcl_udp_flush(o, v, c, &dlen);
