@@ -899,6 +899,8 @@ static void test_err_key_of_other_type(void **state)
 			"e.conf:4: [source clip] people: unknown key for type replay",
 			"(known: type, origin, yaw, max_distance, mount_SENSOR, sample_rate, file, speed, loop, start, "
 			"step, interpolate)",
+			"(known: type, origin, yaw, axes, mount_SENSOR, sample_rate, file, speed, loop, start, step, "
+			"interpolate)",
 			NULL);
 	expect_text_err(*state, "[output o]\ntype = udp\npath = /tmp/x\n",
 			"e.conf:3: [output o] path: unknown key for type udp",
@@ -1012,12 +1014,13 @@ static void test_err_range(void **state)
 
 static void test_err_source_type(void **state)
 {
-	expect_text_err(*state, "[daemon]\nrate = 100\n[source s]\npeople = 2\n",
-			"e.conf:4: [source s] type: missing (sim, replay, modbus, can, hydra or polhemus)", NULL);
 	expect_text_err(
-		*state, "[source s]\n\ntype = vive\n",
-		"e.conf:3: [source s] type: unknown driver 'vive' (known: sim, replay, modbus, can, hydra, polhemus)",
-		NULL);
+		*state, "[daemon]\nrate = 100\n[source s]\npeople = 2\n",
+		"e.conf:4: [source s] type: missing (sim, replay, modbus, can, hydra, polhemus, vrpn or dtrack)", NULL);
+	expect_text_err(*state, "[source s]\n\ntype = vive\n",
+			"e.conf:3: [source s] type: unknown driver 'vive' (known: sim, replay, modbus, can, hydra, "
+			"polhemus, vrpn, dtrack)",
+			NULL);
 }
 
 static void test_err_replay_file(void **state)

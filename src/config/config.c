@@ -209,6 +209,13 @@ static const struct cfg_key source_keys[] = {
 	  .unit = "m",
 	  .doc = "a sample farther than this from the world's origin, or whose orientation is not a unit quaternion, "
 		 "is malformed: dropped and counted (the sensor keeps its last good sample and goes STALE)" },
+	{ .name = "axes",
+	  .kind = CFG_AXES,
+	  CFG_AT(struct cfg_source, axes),
+	  .def = "z-up",
+	  .doc = "the tracker's axes: z-up (as the world's), y-up (x right, y up, z towards the viewer: most CAVE "
+		 "and VRPN set-ups), the world directions of the tracker's x, y and z axes (y-up is x z -y), or a "
+		 "rotation qw qx qy qz; applied before yaw and origin" },
 	{ .name = "mount_SENSOR",
 	  .kind = CFG_MOUNT,
 	  .min = -10,
@@ -216,7 +223,8 @@ static const struct cfg_key source_keys[] = {
 	  .def = "0 0 0",
 	  .unit = "m",
 	  .doc = "SENSOR's tracked point in the sensor's own frame: x y z, optionally followed by a rotation qw "
-		 "qx qy qz (a head sensor on glasses is not the head's centre); one key per sensor" },
+		 "qx qy qz (a head sensor on glasses is not the head's centre); one key per sensor, also written "
+		 "mount.SENSOR (mount.0 for channel 0 of a vrpn or dtrack source)" },
 };
 
 static const struct cfg_key avatar_keys[] = {
@@ -826,7 +834,7 @@ int cfg_sensor_lookup(const struct cfg_source *s, const char *name)
 		if (!strcmp(buf, name))
 			return i;
 	}
-	return -1;
+	return d->sensor_alias ? d->sensor_alias(s, name) : -1;
 }
 
 /*
@@ -940,13 +948,18 @@ static const struct cfg_key *key_at(const struct section_ctx *s, int i, void **o
 	return i < s->type->n_shared ? &s->type->shared[i] : &s->type->keys[i - s->type->n_shared];
 }
 
-/* the key called name in the section (mount_SENSOR: the key's name ends in a sensor's name), or NULL */
+/*
+ * The key called name in the section, or NULL. mount_SENSOR (or mount.SENSOR): the key's name ends in a
+ * sensor's name; a CFG_PER key NAME.N matches NAME. followed by anything.
+ */
 static const struct cfg_key *find_key(const struct section_ctx *s, const char *name, void **obj)
 {
 	const struct cfg_key *k;
 
 	for (int i = 0; (k = key_at(s, i, obj)); i++)
-		if (k->kind == CFG_MOUNT ? !strncmp(name, "mount_", 6) && name[6] : !strcmp(k->name, name))
+		if (k->kind == CFG_MOUNT ? (!strncmp(name, "mount_", 6) || !strncmp(name, "mount.", 6)) && name[6]
+		    : k->kind == CFG_PER ? !strncmp(name, k->name, strlen(k->name) - 1) && name[strlen(k->name) - 1]
+					 : !strcmp(k->name, name))
 			return k;
 	return NULL;
 }
@@ -1020,6 +1033,119 @@ static void list_keys(const struct section_ctx *s, char *buf, size_t len)
 	buf[0] = '\0';
 	for (int i = 0; (k = key_at(s, i, NULL)) && n < len; i++)
 		n += (size_t)snprintf(buf + n, len - n, "%s%s", n ? ", " : "", k->name);
+}
+
+/* NAME.X = VALUE: kept as written, one entry per key, for the type to read */
+static int set_per(struct section_ctx *s, const struct cfg_key *k, void *into, const char *key, const char *value,
+		   struct cfg_where w)
+{
+	struct cfg_per *per = (struct cfg_per *)((char *)into + k->off), *free_one = NULL;
+
+	if (strlen(key) >= sizeof(per->key) || strlen(value) >= sizeof(per->value))
+		return failf(s->p, w, "[%s] %s: too long", s->full, key);
+	for (int i = 0; i < (int)k->max; i++) {
+		if (!strcmp(per[i].key, key)) {
+			free_one = &per[i];
+			break;
+		}
+		if (!per[i].key[0] && !free_one)
+			free_one = &per[i];
+	}
+	if (!free_one)
+		return failf(s->p, w, "[%s] %s: more than %d %s keys", s->full, key, (int)k->max, k->name);
+	snprintf(free_one->key, sizeof(free_one->key), "%s", key);
+	snprintf(free_one->value, sizeof(free_one->value), "%s", value);
+	return 0;
+}
+
+/* axes: the rotation from the tracker's axes to z-up ones, as a quaternion w x y z */
+static int set_axes(struct section_ctx *s, const struct cfg_key *k, double *q, const char *value, struct cfg_where w)
+{
+	double m[3][3] = { { 0 } }, v[4], n;
+	char buf[64], *save, *tok;
+	int col = 0;
+
+	if (!strcmp(value, "z-up")) {
+		q[0] = 1;
+		q[1] = q[2] = q[3] = 0;
+		return 0;
+	}
+	if (!strcmp(value, "y-up")) {
+		/* +90 degrees about x: the tracker's y (up) is the world's z, its z (towards the viewer) the world's -y
+		 */
+		q[0] = q[1] = sqrt(0.5);
+		q[2] = q[3] = 0;
+		return 0;
+	}
+	if (parse_nums(value, v, 4)) {
+		n = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3]);
+		if (n < 1e-6)
+			return failf(s->p, w, "[%s] %s: the rotation qw qx qy qz is zero", s->full, k->name);
+		for (int i = 0; i < 4; i++)
+			q[i] = v[i] / n;
+		return 0;
+	}
+	snprintf(buf, sizeof(buf), "%s", value);
+	for (tok = strtok_r(buf, " \t", &save); tok; tok = strtok_r(NULL, " \t", &save), col++) {
+		int sign = 1, axis;
+
+		if (*tok == '-' || *tok == '+')
+			sign = *tok++ == '-' ? -1 : 1;
+		axis = tok[0] >= 'x' && tok[0] <= 'z' && !tok[1] ? tok[0] - 'x' : -1;
+		if (axis < 0 || col > 2)
+			break;
+		m[axis][col] = sign;
+	}
+	if (col == 3 && !tok) {
+		/* the columns are the world directions of the tracker's axes: a rotation when they are right-handed */
+		double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+			     m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+			     m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+		double t = m[0][0] + m[1][1] + m[2][2];
+
+		if (det < 0.5)
+			return failf(s->p, w,
+				     "[%s] %s: '%s' is not a rotation (the three axes must differ and keep the hand: a "
+				     "left-handed tracker's frame needs an axis negated)",
+				     s->full, k->name, value);
+		/* to a quaternion (entries 0 and +-1: the largest diagonal term keeps the root away from 0) */
+		if (t > 0) {
+			double r = sqrt(1 + t) * 2;
+
+			v[0] = r / 4;
+			v[1] = (m[2][1] - m[1][2]) / r;
+			v[2] = (m[0][2] - m[2][0]) / r;
+			v[3] = (m[1][0] - m[0][1]) / r;
+		} else if (m[0][0] >= m[1][1] && m[0][0] >= m[2][2]) {
+			double r = sqrt(1 + m[0][0] - m[1][1] - m[2][2]) * 2;
+
+			v[0] = (m[2][1] - m[1][2]) / r;
+			v[1] = r / 4;
+			v[2] = (m[0][1] + m[1][0]) / r;
+			v[3] = (m[0][2] + m[2][0]) / r;
+		} else if (m[1][1] >= m[2][2]) {
+			double r = sqrt(1 + m[1][1] - m[0][0] - m[2][2]) * 2;
+
+			v[0] = (m[0][2] - m[2][0]) / r;
+			v[1] = (m[0][1] + m[1][0]) / r;
+			v[2] = r / 4;
+			v[3] = (m[1][2] + m[2][1]) / r;
+		} else {
+			double r = sqrt(1 + m[2][2] - m[0][0] - m[1][1]) * 2;
+
+			v[0] = (m[1][0] - m[0][1]) / r;
+			v[1] = (m[0][2] + m[2][0]) / r;
+			v[2] = (m[1][2] + m[2][1]) / r;
+			v[3] = r / 4;
+		}
+		for (int i = 0; i < 4; i++)
+			q[i] = v[i];
+		return 0;
+	}
+	return failf(s->p, w,
+		     "[%s] %s: '%s' is not z-up, y-up, three axes (the world directions of the tracker's x y z, as in "
+		     "x z -y) or a rotation qw qx qy qz",
+		     s->full, k->name, value);
 }
 
 static int set_value(struct section_ctx *s, const struct cfg_key *k, void *into, const char *value, struct cfg_where w)
@@ -1138,6 +1264,8 @@ static int set_value(struct section_ctx *s, const struct cfg_key *k, void *into,
 		snprintf(obj + k->off, CFG_PATH_MAX, "%s", value);
 		return 0;
 	}
+	case CFG_AXES:
+		return set_axes(s, k, (double *)(obj + k->off), value, w);
 	case CFG_RANGE:
 		if (!parse_nums(value, v, 2))
 			return failf(p, w, "[%s] %s: '%s' is not two numbers (lo hi, degrees)", s->full, k->name,
@@ -1170,7 +1298,7 @@ static int apply_section(struct section_ctx *s)
 	void *into;
 
 	for (int i = 0; (k = key_at(s, i, &into)); i++) {
-		if (!k->def || special_key(s, k) || k->kind == CFG_MOUNT)
+		if (!k->def || special_key(s, k) || k->kind == CFG_MOUNT || k->kind == CFG_PER)
 			continue;
 		if (set_value(s, k, into, k->def, (struct cfg_where){ -1, 0 }))
 			return -1;
@@ -1198,6 +1326,11 @@ static int apply_section(struct section_ctx *s)
 			continue;
 		if (k->kind == CFG_MOUNT) {
 			if (set_mount(s, k, e->key, e->value, e->where))
+				return -1;
+			continue;
+		}
+		if (k->kind == CFG_PER) {
+			if (set_per(s, k, into, e->key, e->value, e->where))
 				return -1;
 			continue;
 		}
@@ -1726,6 +1859,17 @@ static void print_value(FILE *out, const struct cfg_key *k, const void *obj)
 	case CFG_RANGE:
 		fprintf(out, "%.10g %.10g", *(const double *)(o + k->off) / DEG, *(const double *)(o + k->off2) / DEG);
 		break;
+	case CFG_AXES: {
+		const double *q = (const double *)(o + k->off);
+
+		if (q[0] == 1)
+			fputs("z-up", out);
+		else if (q[0] == sqrt(0.5) && q[1] == sqrt(0.5) && !q[2] && !q[3])
+			fputs("y-up", out);
+		else
+			fprintf(out, "%.10g %.10g %.10g %.10g", q[0], q[1], q[2], q[3]);
+		break;
+	}
 	default:
 		break;
 	}
@@ -1769,6 +1913,16 @@ static void print_section(FILE *out, const struct config *c, int sect, const cha
 					mt->sensor, mt->p[0], mt->p[1], mt->p[2], mt->q[0], mt->q[1], mt->q[2],
 					mt->q[3], config_where(c, mt->where, w, sizeof(w)));
 			}
+			continue;
+		}
+		if (k->kind == CFG_PER) {
+			const struct cfg_per *per = (const struct cfg_per *)((const char *)into + k->off);
+
+			for (int m = 0; m < (int)k->max; m++)
+				if (per[m].key[0]) {
+					fprintf(out, "%s = %s", per[m].key, per[m].value);
+					print_origin(out, c, from, per[m].key);
+				}
 			continue;
 		}
 		fprintf(out, "%s = ", k->name);
@@ -1823,7 +1977,8 @@ static const char *kind_names[] = {
 	[CFG_INT] = "int",	[CFG_U32] = "u32",     [CFG_DOUBLE] = "number", [CFG_DEG] = "degrees",
 	[CFG_BOOL] = "bool",	[CFG_ENUM] = "enum",   [CFG_STR] = "string",	[CFG_PATH] = "path",
 	[CFG_VEC3] = "vec3",	[CFG_RANGE] = "range", [CFG_SENSOR] = "sensor", [CFG_PERSON] = "person",
-	[CFG_LIST] = "avatars", [CFG_MOUNT] = "mount", [CFG_NAMES] = "names",
+	[CFG_LIST] = "avatars", [CFG_MOUNT] = "mount", [CFG_NAMES] = "names",	[CFG_AXES] = "axes",
+	[CFG_PER] = "per-key",
 };
 
 static bool same_str(const char *a, const char *b)

@@ -92,6 +92,14 @@ enum cfg_kind {
 	CFG_LIST,   /* avatar names, or all */
 	CFG_MOUNT,  /* mount_SENSOR: x y z [qw qx qy qz], one key per sensor */
 	CFG_NAMES,  /* sensor names separated by spaces, "-" for none; max = how many */
+	CFG_AXES,   /* a tracker's axes: z-up, y-up, three signed axes (x z -y) or qw qx qy qz (double[4]) */
+	CFG_PER,    /* NAME.X = VALUE, one key per X (sensor.3 = glasses): struct cfg_per[max], read by check() */
+};
+
+/* a CFG_PER key as given: the type's check() and driver read it (X and VALUE are the type's to judge) */
+struct cfg_per {
+	char key[24];		      /* the whole key, "sensor.3" ("" = a free entry) */
+	char value[CFG_NAME_MAX * 2]; /* as written */
 };
 
 struct cfg_key {
@@ -140,6 +148,8 @@ struct cfg_type {
 	/* sources: the sensors one of this type has, from its configuration alone */
 	int (*sensor_count)(const struct cfg_source *s);
 	void (*sensor_name)(const struct cfg_source *s, int i, char *buf, size_t len);
+	/* optional: a sensor by another name it answers to (a channel's number under its given name), or -1 */
+	int (*sensor_alias)(const struct cfg_source *s, const char *name);
 };
 
 /* a built type's name, doc, keys and options struct, inside its designated initializer */
@@ -158,6 +168,7 @@ struct cfg_source {
 	double origin[3];	/* world position of the tracker's frame, m */
 	double yaw;		/* rotation of the tracker's frame about world z, rad */
 	double max_distance;	/* m from the world's origin: farther samples are malformed */
+	double axes[4];		/* rotation from the tracker's axes to z-up ones (w x y z): axes = z-up, y-up, ... */
 	int n_mounts;
 	struct cfg_mount mount[CFG_MAX_MOUNTS];
 	void *opt; /* the driver's options (its cfg_type's keys) */

@@ -18,6 +18,7 @@
 #include "daemon/loop.h"
 #include "daemon/notify.h"
 #include "record/recorder.h"
+#include "trackers/probe.h"
 #include "trackers/tracker.h"
 
 #include <errno.h>
@@ -46,7 +47,7 @@ static void usage(FILE *out)
 {
 	fprintf(out,
 		"usage: avatargw [-c FILE | --demo] [--set SECTION.KEY=VALUE]... [--check-config]\n"
-		"       avatargw --list-devices | --keys\n"
+		"       avatargw --list-devices | --keys | --probe URL\n"
 		"\n"
 		"  -c, --config FILE   configuration (default " DEFAULT_CONFIG "), plus FILE's conf.d/*.conf\n"
 		"      --demo          the configuration compiled in (config/demo.conf): a replayed clip, no hardware\n"
@@ -54,6 +55,9 @@ static void usage(FILE *out)
 		"      --check-config  check the configuration, print it with every default, exit (78 if wrong)\n"
 		"      --keys          every configuration key with default, unit and meaning\n"
 		"      --list-devices  the supported trackers plugged in, each with the configuration lines to use it\n"
+		"      --probe URL     look at a network tracker for two seconds (vrpn://Tracker0@host[:port],\n"
+		"                      dtrack://[address]:port): what it sends, and the configuration lines to read "
+		"it\n"
 		"  -V, --version\n"
 		"  -h, --help\n"
 		"\n"
@@ -251,15 +255,11 @@ static int lock_memory(void)
 int main(int argc, char **argv)
 {
 	static const struct option opts[] = {
-		{ "config", required_argument, NULL, 'c' },
-		{ "demo", no_argument, NULL, 'D' },
-		{ "set", required_argument, NULL, 's' },
-		{ "check-config", no_argument, NULL, 'C' },
-		{ "keys", no_argument, NULL, 'K' },
-		{ "version", no_argument, NULL, 'V' },
-		{ "help", no_argument, NULL, 'h' },
-		{ "list-devices", no_argument, NULL, 'L' },
-		{ NULL, 0, NULL, 0 },
+		{ "config", required_argument, NULL, 'c' }, { "demo", no_argument, NULL, 'D' },
+		{ "set", required_argument, NULL, 's' },    { "check-config", no_argument, NULL, 'C' },
+		{ "keys", no_argument, NULL, 'K' },	    { "version", no_argument, NULL, 'V' },
+		{ "help", no_argument, NULL, 'h' },	    { "list-devices", no_argument, NULL, 'L' },
+		{ "probe", required_argument, NULL, 'P' },  { NULL, 0, NULL, 0 },
 	};
 	static struct gateway gws[2];
 	const char *path = DEFAULT_CONFIG;
@@ -305,6 +305,8 @@ int main(int argc, char **argv)
 			return 0;
 		case 'L':
 			return list_devices();
+		case 'P':
+			return tracker_probe(optarg, 2.0, stdout, stderr);
 		case 'V':
 			printf("avatargw %s\n", AVATARGW_VERSION);
 			return 0;

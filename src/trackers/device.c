@@ -86,6 +86,8 @@ const struct device_codec *device_codec_find(const char *name)
 #if !defined(HAVE_LIBUSB) || HAVE_LIBUSB
 		&polhemus_codec,
 #endif
+		&vrpn_in_codec,
+		&dtrack_codec,
 		NULL,
 	};
 
@@ -306,7 +308,7 @@ static void feed_emit(void *ctx, int sensor, const struct device_sample *s)
 		return;
 	sl = &f->d->work.slot[sensor];
 	sl->s = *s;
-	sl->t_ns = f->t_ns;
+	sl->t_ns = s->t_ns ? s->t_ns : f->t_ns;
 	sl->arrival_ns = f->arrival_ns;
 	sl->count++;
 }

@@ -60,7 +60,8 @@ struct device_sample {
 	struct dq pose;
 	uint32_t buttons; /* the driver's button bits (docs/TRACKERS.md) */
 	float analog[SENSOR_ANALOG_MAX];
-	bool inputs; /* the sensor has buttons and analog values */
+	bool inputs;   /* the sensor has buttons and analog values */
+	uint64_t t_ns; /* the device's own sample time, CLOCK_REALTIME (vrpn, dtrack); 0: when it was read */
 };
 
 /* what a codec counted; the first member of every codec's state */
@@ -89,6 +90,8 @@ struct device_codec {
 
 extern const struct device_codec hydra_codec;
 extern const struct device_codec polhemus_codec;
+extern const struct device_codec vrpn_in_codec;
+extern const struct device_codec dtrack_codec;
 /* by driver name, or NULL */
 const struct device_codec *device_codec_find(const char *name);
 

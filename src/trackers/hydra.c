@@ -339,6 +339,7 @@ static int hydra_feed(void *st, const uint8_t *buf, size_t len, device_emit_fn *
 		s[w].analog[HYDRA_AN_TRIGGER] = (float)(b[19] / 255.0);
 		s[w].analog[3] = 0;
 		s[w].inputs = true;
+		s[w].t_ns = 0;
 	}
 	h->c.reports++;
 	for (int w = 0; w < 2; w++)

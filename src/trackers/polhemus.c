@@ -260,6 +260,7 @@ static bool decode_pose(const uint8_t *pl, struct device_sample *s)
 	s->buttons = 0;
 	memset(s->analog, 0, sizeof(s->analog));
 	s->inputs = false;
+	s->t_ns = 0;
 	return true;
 }
 

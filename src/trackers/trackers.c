@@ -26,7 +26,8 @@
 #define HAVE_LIBUSB 1
 #endif
 
-extern const struct tracker_driver sim_driver, replay_driver, modbus_driver, can_driver, hydra_driver, polhemus_driver;
+extern const struct tracker_driver sim_driver, replay_driver, modbus_driver, can_driver, hydra_driver, polhemus_driver,
+	vrpn_in_driver, dtrack_driver;
 
 const struct tracker_driver *const trackers_table[] = {
 	&sim_driver,	  &replay_driver,
@@ -40,6 +41,7 @@ const struct tracker_driver *const trackers_table[] = {
 #if HAVE_LIBUSB
 	&polhemus_driver,
 #endif
+	&vrpn_in_driver,  &dtrack_driver,
 };
 
 const int trackers_count = (int)(sizeof(trackers_table) / sizeof(trackers_table[0]));
@@ -80,16 +82,22 @@ static void free_slots(struct tracker *t)
 
 int tracker_open(struct tracker *t, const struct cfg_source *cfg, char *err, size_t errlen)
 {
-	struct quat r = { cos(cfg->yaw / 2), 0, 0, sin(cfg->yaw / 2) };
+	struct quat yaw = { cos(cfg->yaw / 2), 0, 0, sin(cfg->yaw / 2) }, r;
+	/* the tracker's axes turned into z-up ones first (axes), then about z (yaw), then moved (origin) */
+	struct quat axes = { cfg->axes[0], cfg->axes[1], cfg->axes[2], cfg->axes[3] };
 	struct vec3 o = { cfg->origin[0], cfg->origin[1], cfg->origin[2] };
+	bool axes_identity = axes.w == 1 || (axes.w == 0 && axes.x == 0 && axes.y == 0 && axes.z == 0);
 	int rc;
 
+	if (axes_identity)
+		axes = (struct quat){ 1, 0, 0, 0 };
 	memset(t, 0, sizeof(*t));
 	t->drv = trackers_table[cfg->driver];
 	t->cfg = cfg;
 	snprintf(t->name, sizeof(t->name), "%s", cfg->name);
+	quat_mul(&yaw, &axes, &r);
 	dq_from_rt(&r, &o, &t->world);
-	t->world_identity = cfg->yaw == 0 && o.x == 0 && o.y == 0 && o.z == 0;
+	t->world_identity = cfg->yaw == 0 && axes_identity && o.x == 0 && o.y == 0 && o.z == 0;
 	t->n_sensors = t->drv->type.sensor_count(cfg);
 	t->slot = calloc((size_t)t->n_sensors, sizeof(*t->slot));
 	t->mount = calloc((size_t)t->n_sensors, sizeof(*t->mount));
