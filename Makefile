@@ -295,6 +295,7 @@ bench: $(BUILD)/avatargw-ikbench $(DAEMON) $(BUILD)/avatargw-dump $(BUILD)/avata
 	@tools/bench.sh $(BUILD) $(SHARED)
 	@tools/bench-cycle.sh $(BUILD)
 	@tools/bench-daemon.sh $(BUILD)
+	@tools/bench-cave.sh $(BUILD)
 
 # the avatar against the motion capture of $(SHARED)/mocap: writes docs/FIDELITY.md and docs/fidelity/*.png
 # (minutes, not part of make test; Debian's python3 has matplotlib)
