@@ -62,7 +62,9 @@ awk '
 	/^(; ?)?[a-z][a-z0-9_.]*[ \t]*=/ {
 		key = $0; sub(/^(; ?)?/, "", key); sub(/[ \t]*=.*$/, "", key)
 		# one key per sensor: mount_head, mount_p0.head ... are the key mount_SENSOR
-		if (key ~ /^mount_./) key = "mount_SENSOR"
+		if (key ~ /^mount[_.]./) key = "mount_SENSOR"
+		# one key per channel: sensor.0, buttons.1 ... are the keys sensor.N, buttons.N, analog.N
+		if (key ~ /^(sensor|buttons|analog)\.[a-z0-9]+$/) { sub(/\..*$/, ".N", key) }
 		print (kind == "" ? "(none)" : kind) " " key " " FNR
 	}
 ' "$conf" >"$tmp/lines"

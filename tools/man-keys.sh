@@ -49,7 +49,7 @@ BEGIN {
 	k["int"] = "K_INT"; k["u32"] = "K_U32"; k["number"] = "K_DOUBLE"; k["degrees"] = "K_DEG"; k["bool"] = "K_BOOL"
 	k["enum"] = "K_ENUM"; k["string"] = "K_STR"; k["path"] = "K_PATH"; k["vec3"] = "K_VEC3"; k["range"] = "K_RANGE"
 	k["sensor"] = "K_SENSOR"; k["person"] = "K_PERSON"; k["avatars"] = "K_LIST"; k["mount"] = "K_MOUNT"
-	k["names"] = "K_NAMES"
+	k["names"] = "K_NAMES"; k["axes"] = "K_AXES"; k["per-key"] = "K_PER"
 }
 /^\[/ { S = $0; gsub(/[][]/, "", S); split(S, w, " "); S = toupper(w[1]); next }
 NF >= 9 { printf "%s\t%s\t%s\t%s\t%s\t%s\n", S, $1, k[$6], $7, $8, $9 }
@@ -89,6 +89,8 @@ function kind_text(k, w) {
 	if (k == "K_LIST") return "list of avatar names, or all"
 	if (k == "K_MOUNT") return "x y z, optionally followed by qw qx qy qz"
 	if (k == "K_NAMES") return "sensor names separated by spaces, - for none"
+	if (k == "K_AXES") return "z-up, y-up, three signed axes (x z -y) or qw qx qy qz"
+	if (k == "K_PER") return "one key per channel (NAME.N)"
 	return ""
 }
 BEGIN {
