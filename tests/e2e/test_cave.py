@@ -121,8 +121,10 @@ class VrpnLoopbackTest(unittest.TestCase):
 
     def follow(self, listener, name):
         """the reader's published sensors are the publisher's published sensors, within 1 mm"""
-        wait_for(name + " frames with OK sensors",
-                 lambda: len([f for f in listener.snapshot() if all(s["state"] == 0 for s in f["sensors"])]) > 300)
+        def ok_frames(lst):
+            return len([f for f in lst.snapshot() if all(s["state"] == 0 for s in f["sensors"])])
+        # both streams: a loaded host may start one daemon later than the other
+        wait_for(name + " frames with OK sensors", lambda: ok_frames(listener) > 300 and ok_frames(self.la) > 300)
         pub = sorted((f["t_ns"], tuple(tuple(s["p"]) for s in f["sensors"])) for f in self.la.snapshot()
                      if all(s["state"] == 0 for s in f["sensors"]))
         got = [f for f in listener.snapshot() if all(s["state"] == 0 for s in f["sensors"])][-300:]
