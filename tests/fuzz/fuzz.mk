@@ -39,7 +39,9 @@ FUZZ_TIME ?= 60
 FUZZ_ONLY ?= $(FUZZ_NAMES)
 FUZZ_SAN = -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 FUZZ_CFLAGS = -std=c11 $(WARN) -O1 -g $(FUZZ_SAN) -fsanitize=fuzzer-no-link -Iinclude -MMD -MP
-FUZZ_GW_OBJ = $(patsubst src/%.c,$(FUZZ_BUILD)/obj/%.o,$(GW_SRC)) $(FUZZ_BUILD)/obj/gen/builtin.o
+# the harnesses configure no [site]: the library without DDS (src/sites/site_none.c)
+FUZZ_GW_OBJ = $(patsubst src/%.c,$(FUZZ_BUILD)/obj/%.o,$(GW_SRC)) $(FUZZ_BUILD)/obj/gen/builtin.o \
+	$(FUZZ_BUILD)/obj/sites/site_none.o
 FUZZ_CORE_OBJ = $(foreach t,$(CORE_TYPES),$(patsubst src/%.c,$(FUZZ_BUILD)/obj/%.$(t).o,\
 	$(or $(CORE_SRC_$(t)),$(CORE_SRC))))
 FUZZ_BIN = $(foreach n,$(FUZZ_NAMES),$(FUZZ_BUILD)/fuzz_$(n))
