@@ -35,6 +35,7 @@
 #include <arpa/inet.h>
 #include <ctype.h>
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <netdb.h>
 #include <netinet/in.h>
@@ -328,7 +329,8 @@ static int vin_codec_feed(void *st, const uint8_t *buf, size_t len, device_emit_
 		for (int i = 0; i < (int)nc && i < VRPN_IN_ANALOG; i++) {
 			double a = vrpn_get_f64(pl + 8 + 8 * i);
 
-			v->analog[i] = isfinite(a) ? a : 0.0;
+			/* published as float32: a value past its range (or not finite) is unknown, 0 */
+			v->analog[i] = isfinite(a) && fabs(a) <= FLT_MAX ? a : 0.0;
 		}
 		return 0;
 	}
