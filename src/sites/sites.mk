@@ -35,7 +35,8 @@ bench-sites: $(BUILD)/avatargw $(BUILD)/avatargw-ctl
 bench: bench-sites
 
 # the tests' independent peer (tests/helpers/fastdds_peer.cpp): eProsima Fast DDS (libfastrtps-dev) with
-# the types fastddsgen (a Java program) generates from the same IDL files
+# the types fastddsgen (a Java program) generates from the same IDL files; built without the sanitizers
+# even under SAN=1 (it is someone else's DDS: ASan reports inside Fast DDS 2.9's own teardown)
 FASTDDSGEN ?= fastddsgen
 SITES_FASTDDS := $(shell command -v $(FASTDDSGEN) >/dev/null && \
 	test -r /usr/include/fastdds/dds/domain/DomainParticipantFactory.hpp && echo yes)
@@ -49,7 +50,7 @@ $(FASTDDS_SRC) &: src/sites/avatargw.idl src/sites/ros2.idl
 
 $(BUILD)/tests/fastdds-peer: tests/helpers/fastdds_peer.cpp $(FASTDDS_SRC)
 	@mkdir -p $(dir $@)
-	$(CXX) -std=c++17 $(CFLAGS) $(SANFLAGS) -I$(FASTDDS_GEN) $(LDFLAGS) -o $@ $< $(FASTDDS_SRC) -lfastrtps -lfastcdr
+	$(CXX) -std=c++17 $(CFLAGS) -I$(FASTDDS_GEN) -o $@ $< $(FASTDDS_SRC) -lfastrtps -lfastcdr
 
 test: $(BUILD)/tests/fastdds-peer
 endif
