@@ -216,6 +216,20 @@ static int sim_poll(struct tracker *t, const struct tracker_clock *now)
 	int64_t n;
 	uint64_t t_ns;
 
+	if (s->tfd_used) {
+		/*
+		 * One read takes every expiration since the last; a periodic loop
+		 * never waits on it. Read first, whatever this poll puts: the timer
+		 * fires a little after each period starts (it was armed after t0),
+		 * so a cycle woken by another source may take the period's samples
+		 * before the timer fires; its expiration, left unread, would keep
+		 * an event loop spinning until the next period.
+		 */
+		uint64_t exp;
+		ssize_t rd = read(s->tfd, &exp, sizeof(exp));
+
+		(void)rd;
+	}
 	if (now->mono_ns < s->t0_ns)
 		return 0;
 	n = (int64_t)((now->mono_ns - s->t0_ns) / s->period_ns);
@@ -240,13 +254,6 @@ static int sim_poll(struct tracker *t, const struct tracker_clock *now)
 			placed.d.z += hx * q->y;
 			tracker_put(t, k * SIM_ROLES + r, &placed, t_ns, now->mono_ns);
 		}
-	}
-	if (s->tfd_used) {
-		/* one read takes every expiration since the last; a periodic loop never waits on it */
-		uint64_t exp;
-		ssize_t rd = read(s->tfd, &exp, sizeof(exp));
-
-		(void)rd;
 	}
 	return s->people * SIM_ROLES;
 }
