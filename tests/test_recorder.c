@@ -290,9 +290,13 @@ static void test_unwritable(void **state)
 	open_gateway(&g, "/proc/avatargw-no-such-dir", "record_flush = 0\n");
 	assert_int_equal(gw_record(&g, &rec, err, sizeof(err)), 0);
 	assert_int_equal(loop_start(&l, &g, err, sizeof(err)), 0);
-	sleep_ms(300);
-	loop_stop(l);
 	st = recorder_stats(rec);
+	/* until the loop has run a while and the writer has tried (a loaded host: up to 20 s) */
+	for (int i = 0;
+	     i < 2000 && (ctr_get(&g.st.cycles) <= 30 || !ctr_get(&st->write_errors) || !ctr_get(&st->skipped_records));
+	     i++)
+		sleep_ms(10);
+	loop_stop(l);
 	assert_true(ctr_get(&st->write_errors) > 0);
 	assert_true(ctr_get(&st->skipped_records) > 0);
 	assert_true(ctr_get(&st->files) == 0);

@@ -177,8 +177,13 @@ class VrpnTest(unittest.TestCase):
         self.assertEqual(c.pongs, 1)
         # a ping also brings the button states (as VRPN's button servers do): two of Avatar7 by now
         self.assertGreaterEqual(len(c.of(vc.BUTTON_STATES, "Avatar7")), 2)
-        channels = {e[0] for e in c.of(vc.POS_QUAT)}
-        self.assertEqual(channels, {"udp"})
+        # reports go over UDP once the client's UDP description has reached the server; the ones the
+        # server sent before that (a loaded host may take a while to read it) come over TCP, as VRPN's
+        # own server does: none of a later sample than the first over UDP
+        when = {ch: sorted(e[3] + e[4] * 1e-6 for e in c.of(vc.POS_QUAT) if e[0] == ch) for ch in ("tcp", "udp")}
+        self.assertGreater(len(when["udp"]), 150)
+        if when["tcp"]:
+            self.assertLessEqual(when["tcp"][-1], when["udp"][0], "reports over TCP after the UDP channel was up")
         self.assertGreater(self.check_against_udp(c, "Avatar7", 7, 150), 150)
         self.assertGreater(self.check_against_udp(c, "Avatar0", 0, 150), 150)
 
