@@ -345,9 +345,16 @@ class KeyframeTest(unittest.TestCase):
                 rate = (d.status()["sources"][0]["samples"] - n0) / 3 / (time.monotonic() - t0)
             finally:
                 self.assertEqual(d.stop(), 0)
-            # 120 samples a second per sensor from 10 keyframes a second
-            self.assertGreater(rate, 100)
+            # 120 samples a second per sensor from 10 keyframes a second: never more, and the sample times
+            # a period of 1/120 s apart (a loaded host's loop may skip some: then whole periods apart)
             self.assertLess(rate, 125)
+            ts = sorted({m["t_ns"] for m in frames})
+            steps = [(b - a) / (1e9 / 120) for a, b in zip(ts, ts[1:])]
+            self.assertGreater(len(steps), 20)
+            on_grid = [x for x in steps if x > 0.5 and abs(x - round(x)) < 0.03]
+            self.assertGreater(len(on_grid), 0.9 * len(steps), "sample steps in periods: %s" % steps[:40])
+            self.assertGreater(sum(1 for x in on_grid if round(x) == 1), len(steps) / 4,
+                               "too few steps of one period (1/120 s): %s" % steps[:40])
             clip = td.load_clip()
             errs = []
             for m in frames:
