@@ -521,7 +521,7 @@ static void test_setup_and_published_poses(void **state)
 
 		fake_usb_seek(i);
 		fake_usb_release(1);
-		assert_true(gwt_until(&t, samples_above, &want, 2000) >= 0);
+		assert_true(gwt_until(&t, samples_above, &want, 5000) >= 0);
 		assert_int_equal(stats().last_index, i);
 		for (int s = 0; s < 3; s++) {
 			const struct wire_sensor_sample *ws = &t.f.sensor[s];
@@ -653,7 +653,7 @@ static void test_stops_streaming(void **state)
 	t0 = gwt_ms();
 	assert_true(gwt_until(&t, devtest_stale, &polhemus, 400) >= 0);
 	/* set up again after stall_ms: the device streams once it hears C */
-	assert_true(gwt_until(&t, set_up, &two, 2000) >= 0);
+	assert_true(gwt_until(&t, set_up, &two, 5000) >= 0);
 	ms = gwt_until(&t, devtest_ok, &polhemus, 2000);
 	print_message("stopped streaming: OK again %d ms later (stall_ms 500 + set-up)\n", (int)(gwt_ms() - t0));
 	assert_true(ms >= 0 && gwt_ms() - t0 < 500 + 1000);
@@ -677,7 +677,7 @@ static void test_split_transfers(void **state)
 			uint64_t want = ctr_get(&gwt_tracker(&t, "polhemus")->st.samples) + 3;
 
 			fake_usb_release(1);
-			assert_true(gwt_until(&t, samples_above, &want, 2000) >= 0);
+			assert_true(gwt_until(&t, samples_above, &want, 5000) >= 0);
 		}
 	}
 	assert_int_equal(ctr_get(&gwt_tracker(&t, "polhemus")->st.malformed), 0);

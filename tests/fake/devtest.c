@@ -78,7 +78,7 @@ struct tracker *devtest_up(struct gwt *t, const struct devtest *dev)
 {
 	dev->plug();
 	gwt_open(t, dev->conf);
-	assert_true(gwt_until(t, devtest_ok, (void *)dev, 2000) >= 0);
+	assert_true(gwt_until(t, devtest_ok, (void *)dev, 5000) >= 0);
 	check_inputs(t, dev);
 	return gwt_tracker(t, dev->source);
 }
@@ -199,7 +199,7 @@ void devtest_loop_allocates_nothing(struct gwt *t, const struct devtest *dev)
 	/* and all of that happened while they were counted */
 	assert_true(faulty);
 	assert_true(back);
-	assert_true(gwt_until(t, devtest_ok, (void *)dev, 2000) >= 0);
+	assert_true(gwt_until(t, devtest_ok, (void *)dev, 5000) >= 0);
 	gwt_close(t);
 }
 
@@ -245,10 +245,10 @@ void devtest_list_devices(const struct devtest *dev, const char *const *says)
 void devtest_capture(struct gwt *t, const struct devtest *dev, const char *conf, uint64_t samples)
 {
 	gwt_open(t, conf);
-	assert_true(gwt_until(t, devtest_ok, (void *)dev, 1000) >= 0);
+	assert_true(gwt_until(t, devtest_ok, (void *)dev, 5000) >= 0);
 	check_inputs(t, dev);
 	/* played at its speed to the end: the source ENDS and its last samples go STALE */
-	assert_true(gwt_until(t, gwt_tracker_ended, (void *)dev->source, 2000) >= 0);
+	assert_true(gwt_until(t, gwt_tracker_ended, (void *)dev->source, 10000) >= 0);
 	gwt_run(t, 150);
 	assert_int_equal(gwt_state(t, dev->source), TRACKER_ENDED);
 	assert_int_equal(ctr_get(&gwt_tracker(t, dev->source)->st.samples), samples);
