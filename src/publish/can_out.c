@@ -45,8 +45,7 @@ static const struct cfg_key can_keys[] = {
 	  .kind = CFG_STR,
 	  CFG_AT(struct can_out_opts, interface),
 	  .missing = "a CAN interface such as can0",
-	  .doc = "multicast: network interface (empty: the kernel's choice); can: CAN interface or fd:N "
-		 "(required)" },
+	  .doc = "SocketCAN interface to send on (can0), or fd:N for an inherited descriptor (required)" },
 	{ .name = "base_id",
 	  .kind = CFG_INT,
 	  CFG_AT(struct can_out_opts, base_id),

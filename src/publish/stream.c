@@ -63,15 +63,14 @@ static const struct cfg_key tcp_keys[] = {
 	  .kind = CFG_STR,
 	  CFG_AT(struct stream_opts, address),
 	  .def = "127.0.0.1",
-	  .doc = "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: "
-		 "listen address" },
+	  .doc = "address to listen on (0.0.0.0 or ::: every interface)" },
 	{ .name = "port",
 	  .kind = CFG_INT,
 	  CFG_AT(struct stream_opts, port),
 	  .min = 1,
 	  .max = 65535,
 	  .def = "7770",
-	  .doc = "UDP destination port or TCP listening port (modbus: required)" },
+	  .doc = "TCP port to listen on" },
 };
 
 static const struct cfg_key unix_keys[] = {

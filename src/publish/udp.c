@@ -41,7 +41,7 @@ static const struct cfg_key udp_shared_keys[] = {
 	  .min = 1,
 	  .max = 65535,
 	  .def = "7770",
-	  .doc = "UDP destination port or TCP listening port (modbus: required)" },
+	  .doc = "UDP port to send to" },
 	{ .name = "gso",
 	  .kind = CFG_BOOL,
 	  CFG_AT(struct udp_opts, gso),
@@ -55,8 +55,7 @@ static const struct cfg_key udp_keys[] = {
 	  .kind = CFG_STR,
 	  CFG_AT(struct udp_opts, address),
 	  .def = "127.0.0.1",
-	  .doc = "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: "
-		 "listen address" },
+	  .doc = "host name or address to send to" },
 };
 
 static const struct cfg_key multicast_keys[] = {
@@ -64,14 +63,12 @@ static const struct cfg_key multicast_keys[] = {
 	  .kind = CFG_STR,
 	  CFG_AT(struct udp_opts, address),
 	  .missing = "a multicast group",
-	  .doc = "udp: destination host; multicast: group (239.255.77.70 or ff15::7770 style); tcp, modbus: "
-		 "listen address" },
+	  .doc = "multicast group to send to (239.255.77.70 or ff15::7770 style)" },
 	{ .name = "interface",
 	  .kind = CFG_STR,
 	  CFG_AT(struct udp_opts, interface),
 	  .def = "",
-	  .doc = "multicast: network interface (empty: the kernel's choice); can: CAN interface or fd:N "
-		 "(required)" },
+	  .doc = "network interface to send from (empty: the kernel's choice)" },
 	{ .name = "ttl",
 	  .kind = CFG_INT,
 	  CFG_AT(struct udp_opts, ttl),

@@ -304,37 +304,19 @@ void recfile_w_u8(struct recfile_writer *w, uint8_t v)
 		*p = v;
 }
 
-void recfile_w_u16(struct recfile_writer *w, uint16_t v)
-{
-	uint8_t *p = w_room(w, 2);
-
-	if (p)
-		recfile_put16(p, v);
-}
-
-void recfile_w_u32(struct recfile_writer *w, uint32_t v)
-{
-	uint8_t *p = w_room(w, 4);
-
-	if (p)
-		recfile_put32(p, v);
-}
-
-void recfile_w_u64(struct recfile_writer *w, uint64_t v)
-{
-	uint8_t *p = w_room(w, 8);
-
-	if (p)
-		recfile_put64(p, v);
-}
-
-void recfile_w_f64(struct recfile_writer *w, double v)
-{
-	uint8_t *p = w_room(w, 8);
-
-	if (p)
-		recfile_putf64(p, v);
-}
+/* recfile_w_u16, _u32, _u64, _f64: a little-endian value */
+#define RECFILE_W_FIXED(name, type, size, put)                                                                         \
+	void recfile_w_##name(struct recfile_writer *w, type v)                                                        \
+	{                                                                                                              \
+		uint8_t *p = w_room(w, size);                                                                          \
+                                                                                                                       \
+		if (p)                                                                                                 \
+			put(p, v);                                                                                     \
+	}
+RECFILE_W_FIXED(u16, uint16_t, 2, recfile_put16)
+RECFILE_W_FIXED(u32, uint32_t, 4, recfile_put32)
+RECFILE_W_FIXED(u64, uint64_t, 8, recfile_put64)
+RECFILE_W_FIXED(f64, double, 8, recfile_putf64)
 
 void recfile_w_str(struct recfile_writer *w, const char *s)
 {

@@ -26,21 +26,38 @@
 #define DEVICE_FRESH 4u
 #define DEVICE_IDX 3u
 
-/* the keys of every device source (struct device_opts starts its options) */
+/*
+ * The keys of every device source (struct device_opts starts its options):
+ * the first DEVICE_N_CAPTURE_KEYS are every device driver's (hydra,
+ * polhemus, vrpn, dtrack); `device` is the USB ones' (vrpn names its
+ * server with a key of its own).
+ */
 const struct cfg_key device_keys[DEVICE_N_KEYS] = {
+	{ .name = "capture",
+	  .kind = CFG_PATH,
+	  CFG_AT(struct device_opts, capture),
+	  .def = "",
+	  .doc = "play this capture (hex, a line per report, message or datagram, as record writes it) instead of "
+		 "reading the device, server or network; relative to this file's directory; empty = none" },
+	{ .name = "record",
+	  .kind = CFG_PATH,
+	  CFG_AT(struct device_opts, record),
+	  .def = "",
+	  .doc = "write everything read (the device's raw reports, the VRPN server's messages with its timestamps, "
+		 "DTrack's datagrams) to this capture file with its time, for a bug report or a test (avatargw-decode "
+		 "reads it); relative to this file's directory; empty = none" },
 	{ .name = "speed",
 	  .kind = CFG_DOUBLE,
 	  CFG_AT(struct device_opts, speed),
 	  .min = 0.01,
 	  .max = 100,
 	  .def = "1",
-	  .doc = "playback speed of the recording or capture, 1 = real time" },
+	  .doc = "playback speed of the capture, 1 = real time" },
 	{ .name = "loop",
 	  .kind = CFG_BOOL,
 	  CFG_AT(struct device_opts, loop),
 	  .def = "yes",
-	  .doc = "start the recording or capture again at its end; otherwise the source ENDS and its sensors go "
-		 "STALE" },
+	  .doc = "start the capture again at its end; otherwise the source ENDS and its sensors go STALE" },
 	{ .name = "device",
 	  .kind = CFG_STR,
 	  CFG_AT(struct device_opts, device),
@@ -48,18 +65,6 @@ const struct cfg_key device_keys[DEVICE_N_KEYS] = {
 	  .doc = "which device: auto (the first found); hydra: a hidraw node of its motion interface "
 		 "(/dev/hidraw3, or a udev symlink) or its USB port; polhemus: its USB port; a USB port is "
 		 "BUS-PORT[.PORT...] as avatargw --list-devices shows it" },
-	{ .name = "capture",
-	  .kind = CFG_PATH,
-	  CFG_AT(struct device_opts, capture),
-	  .def = "",
-	  .doc = "play this capture of raw reports (hex, one report per line) instead of reading the device; "
-		 "relative to this file's directory; empty = the device" },
-	{ .name = "record",
-	  .kind = CFG_PATH,
-	  CFG_AT(struct device_opts, record),
-	  .def = "",
-	  .doc = "write every raw report read from the device to this capture file, with timestamps (for a bug "
-		 "report or a test; avatargw-decode reads it); relative to this file's directory; empty = none" },
 };
 
 int device_check(const struct config *c __attribute__((unused)), const void *section, const char **key, char *err,

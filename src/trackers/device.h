@@ -48,9 +48,11 @@ struct device_opts {
 	bool loop;		    /* play the capture again at its end */
 };
 
-/* their keys: shared by the device drivers' types (cfg_type.shared) */
+/* their keys: shared by the device drivers' types (cfg_type.shared); the first four by every one */
 #define DEVICE_N_KEYS 5
+#define DEVICE_N_CAPTURE_KEYS 4 /* capture, record, speed, loop */
 extern const struct cfg_key device_keys[DEVICE_N_KEYS];
+#define DEVICE_CAPTURE_KEYS .shared = device_keys, .n_shared = DEVICE_N_CAPTURE_KEYS
 
 /* the configuration check of every device source (cfg_type.check): a capture it names must load */
 int device_check(const struct config *c, const void *section, const char **key, char *err, size_t errlen);

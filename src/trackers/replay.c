@@ -66,13 +66,12 @@ static const struct cfg_key replay_keys[] = {
 	  .min = 0.01,
 	  .max = 100,
 	  .def = "1",
-	  .doc = "playback speed of the recording or capture, 1 = real time" },
+	  .doc = "playback speed of the recording, 1 = real time" },
 	{ .name = "loop",
 	  .kind = CFG_BOOL,
 	  CFG_AT(struct replay_opts, loop),
 	  .def = "yes",
-	  .doc = "start the recording or capture again at its end; otherwise the source ENDS and its sensors go "
-		 "STALE" },
+	  .doc = "start the recording again at its end; otherwise the source ENDS and its sensors go STALE" },
 	{ .name = "start",
 	  .kind = CFG_DOUBLE,
 	  CFG_AT(struct replay_opts, start),
@@ -183,6 +182,16 @@ static void cache_drop(struct name_cache *c)
 	memset(c, 0, sizeof(*c));
 }
 
+/* the sensor names of an index, kept by the cache; the rest freed */
+static void take_names(struct name_cache *c, struct rec_index *ix)
+{
+	c->n = ix->n_sensors;
+	c->names = ix->names;
+	ix->names = NULL;
+	ix->n_sensors = 0;
+	rec_index_free(ix);
+}
+
 /* reads the magic and, for a recording, its first good SESSION's sensor names */
 static struct name_cache *file_kind(const char *path)
 {
@@ -224,13 +233,8 @@ static struct name_cache *file_kind(const char *path)
 			n = RECFILE_REC_OVERHEAD + recfile_framed_len(hdr + RECFILE_HEADER_LEN);
 			rec = n < 64u << 20 ? malloc(RECFILE_HEADER_LEN + n) : NULL;
 			if (rec && pread(fd, rec, RECFILE_HEADER_LEN + n, 0) == (ssize_t)(RECFILE_HEADER_LEN + n) &&
-			    !rec_index_parse(rec, RECFILE_HEADER_LEN + n, &ix, (char[64]){ 0 }, 64)) {
-				c->n = ix.n_sensors;
-				c->names = ix.names;
-				ix.names = NULL;
-				ix.n_sensors = 0;
-				rec_index_free(&ix);
-			}
+			    !rec_index_parse(rec, RECFILE_HEADER_LEN + n, &ix, (char[64]){ 0 }, 64))
+				take_names(c, &ix);
 			free(rec);
 		}
 		/*
@@ -238,13 +242,8 @@ static struct name_cache *file_kind(const char *path)
 		 * resynchronises to the first good one, so the names are that one's
 		 * (read the way the loader reads them, else config and open disagree)
 		 */
-		if (!c->names && !rec_index_load(path, &ix, (char[64]){ 0 }, 64)) {
-			c->n = ix.n_sensors;
-			c->names = ix.names;
-			ix.names = NULL;
-			ix.n_sensors = 0;
-			rec_index_free(&ix);
-		}
+		if (!c->names && !rec_index_load(path, &ix, (char[64]){ 0 }, 64))
+			take_names(c, &ix);
 	}
 	close(fd);
 	snprintf(c->path, sizeof(c->path), "%s", path);
