@@ -351,33 +351,18 @@ static const uint8_t *r_take(struct reader *r, size_t n)
 	return p;
 }
 
-static uint16_t r_u16(struct reader *r)
-{
-	const uint8_t *p = r_take(r, 2);
-
-	return p ? recfile_get16(p) : 0;
-}
-
-static uint32_t r_u32(struct reader *r)
-{
-	const uint8_t *p = r_take(r, 4);
-
-	return p ? recfile_get32(p) : 0;
-}
-
-static uint64_t r_u64(struct reader *r)
-{
-	const uint8_t *p = r_take(r, 8);
-
-	return p ? recfile_get64(p) : 0;
-}
-
-static double r_f64(struct reader *r)
-{
-	const uint8_t *p = r_take(r, 8);
-
-	return p ? recfile_getf64(p) : 0;
-}
+/* r_u16, r_u32, r_u64, r_f64: a little-endian value, 0 past the end (and the reader marked bad) */
+#define R_FIXED(name, type, size, get)                                                                                 \
+	static type r_##name(struct reader *r)                                                                         \
+	{                                                                                                              \
+		const uint8_t *p = r_take(r, size);                                                                    \
+                                                                                                                       \
+		return p ? get(p) : 0;                                                                                 \
+	}
+R_FIXED(u16, uint16_t, 2, recfile_get16)
+R_FIXED(u32, uint32_t, 4, recfile_get32)
+R_FIXED(u64, uint64_t, 8, recfile_get64)
+R_FIXED(f64, double, 8, recfile_getf64)
 
 static char *r_str(struct reader *r)
 {

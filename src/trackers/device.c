@@ -144,11 +144,26 @@ int device_init(struct device *d, struct tracker *t, const struct device_codec *
 	return 0;
 }
 
+/*
+ * Plays a capture through the codec at its recorded pace (or the codec's
+ * period), speed times faster, from the top again at its end when loop;
+ * the link is UP while it plays and ENDED after. Returns when done or
+ * stopping.
+ */
+static void device_play(struct device *d, const struct capture *cap, double speed, bool loop);
+
+/* the thread: the driver's run, or the capture that stands in for its device */
 static void *device_main(void *arg)
 {
 	struct device *d = arg;
+	const struct device_opts *o = d->t->cfg->opt;
 
-	d->run(d);
+	if (d->use_capture) {
+		device_set_status(d, "playing capture %s", o->capture);
+		device_play(d, &d->cap, o->speed, o->loop);
+	} else {
+		d->run(d);
+	}
 	return NULL;
 }
 
@@ -168,18 +183,17 @@ int device_start(struct device *d, device_run_fn *run, void *drv, const char *na
 	return 0;
 }
 
-int device_begin(struct device *d, struct capture *cap, bool *use_capture, device_run_fn *run, void *drv,
-		 const char *name, char *err, size_t errlen)
+int device_begin(struct device *d, device_run_fn *run, void *drv, const char *name, char *err, size_t errlen)
 {
 	const struct device_opts *cfg = d->t->cfg->opt; /* the first member of the driver's options */
 	int rc;
 
 	if (cfg->capture[0]) {
-		if (capture_load(cap, cfg->capture, err, errlen)) {
+		if (capture_load(&d->cap, cfg->capture, err, errlen)) {
 			device_close(d);
 			return -EINVAL;
 		}
-		*use_capture = true;
+		d->use_capture = true;
 	} else if (cfg->record[0] && (rc = device_record(d, cfg->record, err, errlen))) {
 		device_close(d);
 		return rc;
@@ -187,7 +201,7 @@ int device_begin(struct device *d, struct capture *cap, bool *use_capture, devic
 	rc = device_start(d, run, drv, name, err, errlen);
 	if (rc) {
 		device_close(d);
-		capture_free(cap);
+		capture_free(&d->cap);
 	}
 	return rc;
 }
@@ -427,7 +441,7 @@ void device_set_status(struct device *d, const char *fmt, ...)
 	pthread_mutex_unlock(&d->mu);
 }
 
-void device_play(struct device *d, const struct capture *cap, double speed, bool loop)
+static void device_play(struct device *d, const struct capture *cap, double speed, bool loop)
 {
 	device_set_link(d, DEVICE_UP);
 	do {
@@ -490,6 +504,48 @@ int device_take_note(struct device *d, int *level, char *buf, size_t len)
 }
 
 /* ---- the drivers' table entries ------------------------------------------------------ */
+
+int device_drv_open(struct tracker *t, size_t size, const struct device_codec *codec, int n_sensors, char *err,
+		    size_t errlen)
+{
+	struct device *d = calloc(1, size);
+	int rc;
+
+	if (!d) {
+		snprintf(err, errlen, "[source %s]: out of memory", t->cfg->name);
+		return -ENOMEM;
+	}
+	rc = device_init(d, t, codec, n_sensors, err, errlen);
+	if (rc) {
+		free(d);
+		return rc;
+	}
+	t->priv = d;
+	return 0;
+}
+
+int device_drv_start(struct tracker *t, device_run_fn *run, const char *name, char *err, size_t errlen)
+{
+	int rc = device_begin(t->priv, run, t->priv, name, err, errlen);
+
+	if (rc) {
+		free(t->priv);
+		t->priv = NULL;
+	}
+	return rc;
+}
+
+void device_drv_close(struct tracker *t)
+{
+	struct device *d = t->priv;
+
+	if (!d)
+		return;
+	device_close(d); /* joins the thread first: what it uses is freed after */
+	capture_free(&d->cap);
+	free(d);
+	t->priv = NULL;
+}
 
 int device_drv_poll(struct tracker *t, const struct tracker_clock *now)
 {

@@ -127,7 +127,9 @@ struct device {
 	void *drv;	    /* the driver's own state */
 	device_run_fn *run; /* the thread's body: returns when device_stopping() */
 	FILE *rec;	    /* record = FILE: every report fed, as a capture line */
-	uint64_t rec_t0;    /* CLOCK_MONOTONIC of the first recorded report */
+	struct capture cap; /* capture = FILE: played instead of the device */
+	bool use_capture;
+	uint64_t rec_t0; /* CLOCK_MONOTONIC of the first recorded report */
 
 	pthread_t thread;
 	bool started;
@@ -160,12 +162,11 @@ int device_record(struct device *d, const char *path, char *err, size_t errlen);
 int device_start(struct device *d, device_run_fn *run, void *drv, const char *name, char *err, size_t errlen);
 /*
  * The common rest of a hardware driver's open(), after device_init(): the
- * source's capture to play instead of the device (*use_capture set) or the
+ * source's capture to play instead of the device (d->use_capture set) or the
  * capture to record, then the device thread. On failure it undoes what
  * device_init() and it made (the driver frees its own state); 0 or -errno.
  */
-int device_begin(struct device *d, struct capture *cap, bool *use_capture, device_run_fn *run, void *drv,
-		 const char *name, char *err, size_t errlen);
+int device_begin(struct device *d, device_run_fn *run, void *drv, const char *name, char *err, size_t errlen);
 /* asks the thread to stop and joins it (its reads time out within 100 ms), then frees */
 void device_close(struct device *d);
 
@@ -194,13 +195,6 @@ bool device_sleep_ms(struct device *d, int ms);
 void device_note(struct device *d, int level, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 /* the one-line condition that status() shows */
 void device_set_status(struct device *d, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-/*
- * Plays a capture through the codec at its recorded pace (or the codec's
- * period), speed times faster, from the top again at its end when loop;
- * the link is UP while it plays and ENDED after. Returns when done or
- * stopping.
- */
-void device_play(struct device *d, const struct capture *cap, double speed, bool loop);
 
 /* ---- the control thread ---------------------------------------------------------- */
 
@@ -216,6 +210,18 @@ int device_drv_poll(struct tracker *t, const struct tracker_clock *now);
 int device_drv_fd(struct tracker *t);
 void device_drv_status(struct tracker *t, char *buf, size_t len);
 int device_drv_note(struct tracker *t, int *level, char *buf, size_t len);
+
+/*
+ * open() and close() of such a driver: device_drv_open allocates t->priv
+ * (size bytes, zeroed) and readies its struct device; the driver sets its
+ * own fields, then device_drv_start plays the capture or starts the device
+ * thread on run (named name). Each returns 0 or -errno with err, and on
+ * failure leaves t->priv NULL. device_drv_close joins the thread and frees.
+ */
+int device_drv_open(struct tracker *t, size_t size, const struct device_codec *codec, int n_sensors, char *err,
+		    size_t errlen);
+int device_drv_start(struct tracker *t, device_run_fn *run, const char *name, char *err, size_t errlen);
+void device_drv_close(struct tracker *t);
 
 /* ---- helpers of the drivers --------------------------------------------------------- */
 

@@ -405,8 +405,6 @@ const struct device_codec dtrack_codec = {
 
 struct dtrack {
 	struct device dev; /* first: the device_drv_* entries reach it through t->priv */
-	struct capture cap;
-	bool use_capture;
 	int fd;
 	uint8_t buf[DTRACK_MAX_DATAGRAM + 1];
 	_Atomic uint64_t datagrams, silences;
@@ -460,11 +458,6 @@ static void dt_run(struct device *dv)
 	uint64_t timeout = (uint64_t)(cfg->timeout_ms * 1e6), last = 0;
 	bool up = false, ever = false;
 
-	if (d->use_capture) {
-		device_set_status(dv, "playing capture %s", cfg->dev.capture);
-		device_play(dv, &d->cap, cfg->dev.speed, cfg->dev.loop);
-		return;
-	}
 	device_set_status(dv, "waiting for DTrack frames on UDP %s port %d", cfg->address, cfg->port);
 	while (!device_stopping(dv)) {
 		struct pollfd p = { d->fd, POLLIN, 0 };
@@ -571,51 +564,34 @@ static int dt_check(const struct config *c, const void *section, const char **ke
 
 static int dt_open(struct tracker *t, char *err, size_t errlen)
 {
-	struct dtrack *d = calloc(1, sizeof(*d));
-	int rc;
+	int rc = device_drv_open(t, sizeof(struct dtrack), &dtrack_codec, t->n_sensors, err, errlen);
+	struct dtrack *d = t->priv;
+	int fd = -1;
 
-	if (!d) {
-		snprintf(err, errlen, "[source %s]: out of memory", t->cfg->name);
-		return -ENOMEM;
-	}
-	d->fd = -1;
-	rc = device_init(&d->dev, t, &dtrack_codec, t->n_sensors, err, errlen);
-	if (rc) {
-		free(d);
+	if (rc)
 		return rc;
-	}
 	if (!opts_of(t->cfg)->dev.capture[0]) {
-		d->fd = dt_socket(t->cfg, err, errlen);
-		if (d->fd < 0) {
-			rc = d->fd;
-			device_close(&d->dev);
-			free(d);
-			return rc;
+		fd = dt_socket(t->cfg, err, errlen);
+		if (fd < 0) {
+			device_drv_close(t);
+			return fd;
 		}
 	}
-	t->priv = d;
-	rc = device_begin(&d->dev, &d->cap, &d->use_capture, dt_run, d, "agw-dtrack", err, errlen);
-	if (rc) {
-		if (d->fd >= 0)
-			close(d->fd);
-		free(d);
-		t->priv = NULL;
-	}
+	d->fd = fd;
+	rc = device_drv_start(t, dt_run, "agw-dtrack", err, errlen);
+	if (rc && fd >= 0)
+		close(fd);
 	return rc;
 }
 
 static void dt_close(struct tracker *t)
 {
 	struct dtrack *d = t->priv;
+	int fd = d ? d->fd : -1;
 
-	if (!d)
-		return;
-	device_close(&d->dev);
-	if (d->fd >= 0)
-		close(d->fd);
-	capture_free(&d->cap);
-	free(d);
-	t->priv = NULL;
+	device_drv_close(t); /* the thread joined first: the socket is no longer read */
+	if (fd >= 0)
+		close(fd);
 }
 
 _Static_assert(offsetof(struct dtrack, dev) == 0, "struct dtrack begins with its struct device");

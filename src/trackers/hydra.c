@@ -429,8 +429,6 @@ static int hydra_find(int iface, int ctrl_iface, struct hydra_node data[][2], in
 
 struct hydra {
 	struct device dev;
-	struct capture cap;
-	bool use_capture;
 	hid_device *data, *ctrl;
 	bool ctrl_is_data;
 	bool found_gamepad;	 /* this connection switched it from gamepad mode (or one before it did) */
@@ -673,11 +671,6 @@ static void hydra_run(struct device *d)
 	struct hydra *h = d->drv;
 	bool told_missing = false;
 
-	if (h->use_capture) {
-		device_set_status(d, "playing capture %s", opts_of(d->t->cfg)->dev.capture);
-		device_play(d, &h->cap, opts_of(d->t->cfg)->dev.speed, opts_of(d->t->cfg)->dev.loop);
-		return;
-	}
 	while (!device_stopping(d)) {
 		bool first = true;
 		int rc = hydra_open_dev(h);
@@ -759,37 +752,10 @@ static void hydra_sensor_name(const struct cfg_source *cfg, int i, char *buf, si
 
 static int hydra_open(struct tracker *t, char *err, size_t errlen)
 {
-	struct hydra *h = calloc(1, sizeof(*h));
-	int rc;
+	int rc = device_drv_open(t, sizeof(struct hydra), &hydra_codec, 2, err, errlen);
 
-	if (!h) {
-		snprintf(err, errlen, "[source %s]: out of memory", t->cfg->name);
-		return -ENOMEM;
-	}
-	rc = device_init(&h->dev, t, &hydra_codec, 2, err, errlen);
-	if (rc) {
-		free(h);
-		return rc;
-	}
-	t->priv = h;
-	rc = device_begin(&h->dev, &h->cap, &h->use_capture, hydra_run, h, "agw-hydra", err, errlen);
-	if (rc) {
-		free(h);
-		t->priv = NULL;
-	}
-	return rc;
-}
-
-static void hydra_close(struct tracker *t)
-{
-	struct hydra *h = t->priv;
-
-	if (!h)
-		return;
-	device_close(&h->dev); /* joins the thread, which restores gamepad mode on its way out */
-	capture_free(&h->cap);
-	free(h);
-	t->priv = NULL;
+	/* its close is device_drv_close: joining the thread restores gamepad mode on its way out */
+	return rc ? rc : device_drv_start(t, hydra_run, "agw-hydra", err, errlen);
 }
 
 /* the device comes first: the device_drv_* entries reach it through t->priv */
@@ -838,7 +804,7 @@ const struct tracker_driver hydra_driver = {
 		  CFG_SHARED(device_keys), .check = device_check, .sensor_count = hydra_sensor_count,
 		  .sensor_name = hydra_sensor_name },
 	.open = hydra_open,
-	.close = hydra_close,
+	.close = device_drv_close,
 	.poll = device_drv_poll,
 	.fd = device_drv_fd,
 	.status = device_drv_status,

@@ -379,8 +379,6 @@ const struct device_codec polhemus_codec = {
 
 struct polhemus {
 	struct device dev;
-	struct capture cap;
-	bool use_capture;
 	libusb_context *ctx;
 	libusb_hotplug_callback_handle hp;
 	bool hotplug;
@@ -773,11 +771,6 @@ static void polhemus_run(struct device *d)
 	bool told_missing = false;
 	int rc;
 
-	if (p->use_capture) {
-		device_set_status(d, "playing capture %s", opts_of(d->t->cfg)->dev.capture);
-		device_play(d, &p->cap, opts_of(d->t->cfg)->dev.speed, opts_of(d->t->cfg)->dev.loop);
-		return;
-	}
 	while (!device_stopping(d) && (rc = libusb_init(&p->ctx))) {
 		device_set_status(d, "libusb: %s", libusb_error_name(rc));
 		device_note(d, LOG_ERR, "[source %s] libusb: %s; trying again", d->t->name, libusb_strerror(rc));
@@ -859,37 +852,9 @@ static void polhemus_run(struct device *d)
 
 static int polhemus_open(struct tracker *t, char *err, size_t errlen)
 {
-	struct polhemus *p = calloc(1, sizeof(*p));
-	int rc;
+	int rc = device_drv_open(t, sizeof(struct polhemus), &polhemus_codec, t->n_sensors, err, errlen);
 
-	if (!p) {
-		snprintf(err, errlen, "[source %s]: out of memory", t->cfg->name);
-		return -ENOMEM;
-	}
-	rc = device_init(&p->dev, t, &polhemus_codec, t->n_sensors, err, errlen);
-	if (rc) {
-		free(p);
-		return rc;
-	}
-	t->priv = p;
-	rc = device_begin(&p->dev, &p->cap, &p->use_capture, polhemus_run, p, "agw-polhemus", err, errlen);
-	if (rc) {
-		free(p);
-		t->priv = NULL;
-	}
-	return rc;
-}
-
-static void polhemus_close(struct tracker *t)
-{
-	struct polhemus *p = t->priv;
-
-	if (!p)
-		return;
-	device_close(&p->dev);
-	capture_free(&p->cap);
-	free(p);
-	t->priv = NULL;
+	return rc ? rc : device_drv_start(t, polhemus_run, "agw-polhemus", err, errlen);
 }
 
 /* the device comes first: the device_drv_* entries reach it through t->priv */
@@ -960,7 +925,7 @@ const struct tracker_driver polhemus_driver = {
 		  CFG_SHARED(device_keys), .check = device_check, .sensor_count = polhemus_sensor_count,
 		  .sensor_name = polhemus_sensor_name },
 	.open = polhemus_open,
-	.close = polhemus_close,
+	.close = device_drv_close,
 	.poll = device_drv_poll,
 	.fd = device_drv_fd,
 	.status = device_drv_status,

@@ -355,8 +355,6 @@ const struct device_codec vrpn_in_codec = {
 
 struct vrpn_in {
 	struct device dev; /* first: the device_drv_* entries reach it through t->priv */
-	struct capture cap;
-	bool use_capture;
 	char name[VRPN_NAME_MAX], host[128];
 	int port;
 	bool tcp;
@@ -748,11 +746,6 @@ static void vin_run(struct device *d)
 	bool quiet = false; /* the last connection brought no report: its "connected" was said */
 	char why[512], last_why[512] = "";
 
-	if (v->use_capture) {
-		device_set_status(d, "playing capture %s", cfg->dev.capture);
-		device_play(d, &v->cap, cfg->dev.speed, cfg->dev.loop);
-		return;
-	}
 	while (!device_stopping(d)) {
 		int rc;
 
@@ -863,45 +856,20 @@ static int vin_check(const struct config *c, const void *section, const char **k
 
 static int vin_open(struct tracker *t, char *err, size_t errlen)
 {
-	struct vrpn_in *v = calloc(1, sizeof(*v));
-	int rc;
+	int rc = device_drv_open(t, sizeof(struct vrpn_in), &vrpn_in_codec, t->n_sensors, err, errlen);
+	struct vrpn_in *v = t->priv;
 
-	if (!v) {
-		snprintf(err, errlen, "[source %s]: out of memory", t->cfg->name);
-		return -ENOMEM;
-	}
+	if (rc)
+		return rc;
 	v->fd = v->ufd = -1;
 	if (vrpn_in_parse_device(opts_of(t->cfg)->dev.device, v->name, sizeof(v->name), v->host, sizeof(v->host),
 				 &v->port, &v->tcp)) {
 		snprintf(err, errlen, "[source %s] device: '%s' is not NAME@host[:port]", t->cfg->name,
 			 opts_of(t->cfg)->dev.device);
-		free(v);
+		device_drv_close(t);
 		return -EINVAL;
 	}
-	rc = device_init(&v->dev, t, &vrpn_in_codec, t->n_sensors, err, errlen);
-	if (rc) {
-		free(v);
-		return rc;
-	}
-	t->priv = v;
-	rc = device_begin(&v->dev, &v->cap, &v->use_capture, vin_run, v, "agw-vrpn", err, errlen);
-	if (rc) {
-		free(v);
-		t->priv = NULL;
-	}
-	return rc;
-}
-
-static void vin_close(struct tracker *t)
-{
-	struct vrpn_in *v = t->priv;
-
-	if (!v)
-		return;
-	device_close(&v->dev);
-	capture_free(&v->cap);
-	free(v);
-	t->priv = NULL;
+	return device_drv_start(t, vin_run, "agw-vrpn", err, errlen);
 }
 
 _Static_assert(offsetof(struct vrpn_in, dev) == 0, "struct vrpn_in begins with its struct device");
@@ -988,7 +956,7 @@ const struct tracker_driver vrpn_in_driver = {
 		  DEVICE_CAPTURE_KEYS, .check = vin_check, .sensor_count = vin_sensor_count,
 		  .sensor_name = vin_sensor_name, .sensor_alias = vin_sensor_alias },
 	.open = vin_open,
-	.close = vin_close,
+	.close = device_drv_close,
 	.poll = device_drv_poll,
 	.fd = device_drv_fd,
 	.report = vin_report,
