@@ -546,6 +546,7 @@ class BusyWaitTest(unittest.TestCase):
         with tempfile.TemporaryDirectory() as tmp:
             d = Daemon(tmp, conf)
             try:
+                d.status()  # answered once the loop thread runs (the control socket exists before it)
                 loop = [t for t in os.listdir("/proc/%d/task" % d.proc.pid)
                         if read_text("/proc/%d/task/%s/comm" % (d.proc.pid, t)).strip() == "avatargw-loop"]
                 self.assertEqual(len(loop), 1)
