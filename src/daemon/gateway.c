@@ -142,8 +142,12 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 		rc = site_open(&g->site, &g->cfg, source_id, err, errlen);
 		if (rc)
 			goto fail;
-		g->n_remote = site_n_remote(g->site);
+		g->n_site = site_n_remote(g->site);
 	}
+	g->n_remote = g->n_site;
+	for (int i = 0; i < g->n_trackers; i++)
+		if (g->trk[i].drv->solved_count)
+			g->n_remote += g->trk[i].drv->solved_count(&g->trk[i]);
 	n_all = (size_t)g->cfg.n_avatars + (size_t)g->n_remote;
 	g->av = calloc(n_all + 1, sizeof(*g->av));
 	g->arena = malloc((n_all + 1) * g->frame_slot);
@@ -186,10 +190,36 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 			site_describe_local(g->site, i, a->describe);
 		g->n_avatars++;
 	}
-	for (int k = 0; k < g->n_remote; k++) {
+	for (int k = 0, t = 0, j = 0; k < g->n_remote; k++) {
 		struct gw_avatar *a = &g->av[g->n_avatars + k];
 
-		a->id = site_remote_id(g->site, k);
+		if (k < g->n_site) {
+			a->id = site_remote_id(g->site, k);
+		} else {
+			/* a recording's remote avatar: the id it had at the recording site */
+			while (!g->trk[t].drv->solved_count || j >= g->trk[t].drv->solved_count(&g->trk[t])) {
+				t++;
+				j = 0;
+			}
+			a->solved_trk = &g->trk[t];
+			a->solved_k = j++;
+			g->trk[t].drv->solved_name(&g->trk[t], a->solved_k, &a->id);
+			for (int i = 0; i < g->n_avatars + k; i++)
+				if (ids[i] == a->id) {
+					uint16_t id;
+					const char *name = g->trk[t].drv->solved_name(&g->trk[t], a->solved_k, &id);
+
+					snprintf(err, errlen,
+						 "[source %s]: the recording's remote avatar %s has id %u, %s",
+						 g->trk[t].name, name, id,
+						 i < g->n_avatars		? "as an avatar of this configuration"
+						 : i < g->n_avatars + g->n_site ? "among the [site] remote ids"
+										: "as another replayed remote avatar");
+					free(ids);
+					rc = -EINVAL;
+					goto fail;
+				}
+		}
 		a->describe_msg = g->describe + (size_t)(g->n_avatars + k) * WIRE_MAX_MSG;
 		a->describe = &g->describes[g->n_avatars + k];
 		ids[g->n_avatars + k] = a->id;
@@ -415,8 +445,11 @@ static int remote_frames(struct gateway *g, uint64_t now_ns, int n, int *frames)
 		struct gw_avatar *a = &g->av[i];
 		struct wire_frame *wf = &g->wframes[i];
 		bool described, fresh;
+		int m;
 
-		if (!site_remote(g->site, k, now_ns, wf, a->describe, &described, &fresh))
+		if (k < g->n_site ? !site_remote(g->site, k, now_ns, wf, a->describe, &described, &fresh)
+				  : !a->solved_trk->drv->solved(a->solved_trk, a->solved_k, now_ns, g->stale_ns, wf,
+								a->describe, &described, &fresh))
 			continue;
 		if (described) {
 			a->describe->h.source_id = g->source_id;
@@ -437,7 +470,13 @@ static int remote_frames(struct gateway *g, uint64_t now_ns, int n, int *frames)
 		if (wf->h.flags & WIRE_F_STALE)
 			ctr_add(&a->st.stale_frames, 1);
 		atomic_store_explicit(&a->st.state, wf->sensor[0].state, memory_order_relaxed);
+		/* recorded as what it is, a remote avatar: a replay publishes it again as it was */
+		if (g->rec && fresh)
+			recorder_remote(g->rec, now_ns, g->msgs[n - 1].data, g->msgs[n - 1].len);
+		m = n;
 		n = queue_describe(g, a, i, now_ns, n);
+		if (g->rec && n > m)
+			recorder_remote(g->rec, now_ns, g->msgs[m].data, g->msgs[m].len);
 	}
 	return n;
 }
@@ -529,10 +568,10 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 			site_put(g->site, i, g->msgs[n - 1].data, g->msgs[n - 1].len);
 		n = queue_describe(g, a, i, now->mono_ns, n);
 	}
-	if (g->site) {
+	if (g->site)
 		site_flush(g->site);
+	if (g->n_remote)
 		n = remote_frames(g, now->mono_ns, n, &frames);
-	}
 	for (int i = 0; g->rec && i < n; i++)
 		recorder_message(g->rec, now->mono_ns, g->msgs[i].data, g->msgs[i].len);
 	for (int o = 0; o < g->n_outputs; o++) {

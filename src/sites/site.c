@@ -29,14 +29,15 @@
 const bool site_built_in = true;
 
 #define FRAME_MAX (WIRE_FRAME_LEN + WIRE_INPUTS_LEN)
-#define OUT_WORDS (1 + FRAME_MAX / 4)	   /* length, then the FRAME's bytes */
-#define IN_HEAD 3			   /* length, arrival (CLOCK_MONOTONIC, 2 words) */
-#define IN_WORDS (IN_HEAD + FRAME_MAX / 4) /* then the FRAME's bytes */
-#define DESC_WORDS (1 + WIRE_MAX_MSG / 4)  /* length, then the DESCRIBE's bytes */
-#define SITE_MAX_PEERS 32		   /* remote sites followed at most */
-#define TAKE_MAX 32			   /* samples taken at once */
-#define PING_NS 1000000000ull		   /* clock pings: one a second */
-#define CLOCK_KEEP_NS 10000000000ull	   /* a clock estimate is replaced by a worse one after 10 s */
+#define OUT_WORDS (1 + FRAME_MAX / 4)				 /* length, then the FRAME's bytes */
+#define IN_HEAD 3						 /* length, arrival (CLOCK_MONOTONIC, 2 words) */
+#define IN_WORDS (IN_HEAD + FRAME_MAX / 4)			 /* then the FRAME's bytes */
+#define DESC_WORDS (1 + WIRE_MAX_MSG / 4)			 /* length, then the DESCRIBE's bytes */
+#define NAME_WORDS ((CFG_SITE_NAME_MAX + WIRE_NAME_MAX + 4) / 4) /* "SITE/AVATAR" and its NUL */
+#define SITE_MAX_PEERS 32					 /* remote sites followed at most */
+#define TAKE_MAX 32						 /* samples taken at once */
+#define PING_NS 1000000000ull					 /* clock pings: one a second */
+#define CLOCK_KEEP_NS 10000000000ull /* a clock estimate is replaced by a worse one after 10 s */
 #define MAX_AUTO_INDEX 9 /* participants per host with unicast discovery: each peer's ports 0-9 are probed */
 
 _Static_assert(FRAME_MAX % 4 == 0 && WIRE_MAX_MSG % 4 == 0, "whole words");
@@ -63,6 +64,9 @@ struct rslot {
 	_Atomic uint32_t fw[IN_WORDS];
 	_Atomic uint32_t dseq;
 	_Atomic uint32_t dw[DESC_WORDS];
+	/* shared with the control thread: "SITE/AVATAR", written when the slot is given to an avatar */
+	_Atomic uint32_t nseq;
+	_Atomic uint32_t nw[NAME_WORDS];
 	/* the receiving thread's */
 	char site[CFG_SITE_NAME_MAX];
 	char avatar[WIRE_NAME_MAX + 1];
@@ -675,6 +679,12 @@ static struct rslot *slot_of(struct site *s, const char *site, const char *avata
 	spare->peer = peer_of(s, site);
 	snprintf(spare->site, sizeof(spare->site), "%s", site);
 	snprintf(spare->avatar, sizeof(spare->avatar), "%s", avatar);
+	{
+		uint32_t w[NAME_WORDS] = { 0 };
+
+		snprintf((char *)w, sizeof(w), "%s/%s", site, avatar);
+		seqlock_write(&spare->nseq, spare->nw, w, NAME_WORDS);
+	}
 	return spare;
 }
 
@@ -1122,6 +1132,20 @@ int site_n_remote(const struct site *s)
 uint16_t site_remote_id(const struct site *s, int k)
 {
 	return (uint16_t)(s->cfg.remote_id + k);
+}
+
+bool site_remote_name(struct site *s, int k, char *buf, size_t len, bool *live)
+{
+	struct rslot *r = &s->rs[k];
+	uint32_t w[NAME_WORDS];
+
+	if (!seqlock_peek(&r->nseq))
+		return false;
+	seqlock_read(&r->nseq, r->nw, w, NAME_WORDS);
+	((char *)w)[sizeof(w) - 1] = '\0';
+	snprintf(buf, len, "%s", (const char *)w);
+	*live = atomic_load_explicit(&r->gen, memory_order_acquire) & 1;
+	return true;
 }
 
 /* ---- the loop ------------------------------------------------------------------------------------------- */

@@ -70,6 +70,13 @@ bool site_remote(struct site *s, int k, uint64_t now_mono, struct wire_frame *wf
 
 /* ---- the control thread ---- */
 
+/*
+ * Remote slot k's avatar: its full name "SITE/AVATAR" in buf and whether it
+ * is there now (*live; false: its site left or stopped sending). False when
+ * the slot has never had an avatar.
+ */
+bool site_remote_name(struct site *s, int k, char *buf, size_t len, bool *live);
+
 /* the site and every remote site: JSON members after a comma (",\"site\":{...}"), or text lines */
 void site_report(struct site *s, FILE *out, bool json);
 

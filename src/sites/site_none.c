@@ -83,3 +83,13 @@ void site_report(struct site *s, FILE *out, bool json)
 	(void)out;
 	(void)json;
 }
+
+bool site_remote_name(struct site *s, int k, char *buf, size_t len, bool *live)
+{
+	(void)s;
+	(void)k;
+	(void)buf;
+	(void)len;
+	*live = false;
+	return false;
+}

@@ -10,6 +10,7 @@ import random
 import signal
 import socket
 import struct
+import json
 import subprocess
 import sys
 import tempfile
@@ -21,6 +22,7 @@ from test_daemon import DAEMON, Daemon, free_port  # noqa: E402
 from wireframe import decode_frame  # noqa: E402
 
 PEER = os.path.join(os.path.dirname(DAEMON), "tests", "fastdds-peer")
+REC = os.path.join(os.path.dirname(DAEMON), "avatargw-rec")
 REMOTE_ID = 1000
 PEOPLE = 10  # avatars per site where several are needed
 LEASE = 1.0
@@ -309,6 +311,61 @@ class SitesTest(unittest.TestCase):
                 self.assertIn(pos, by_t[t], "JointState positions differ from the UDP stream's")
                 matched += 1
         self.assertGreaterEqual(matched, 20, "too few JointState samples matched the UDP stream by stamp")
+
+    def test_recorded_session_replays_the_remote_avatars(self):
+        """a recording at lab-b holds lab-a's avatar as solved there; its replay, with no [site] and no
+        DDS, publishes it again with its name, id and the joint angles lab-b published live"""
+        la, lb, lc = self.listener(), self.listener(), self.listener()
+        rec = os.path.join(self.tmp.name, "rec")
+        self.site("lab-a", la.port, people=1)
+        d = os.path.join(self.tmp.name, "lab-b-rec")
+        os.mkdir(d)
+        text = ("[daemon]\nrate = 240\nlock_memory = no\nrecord_dir = %s\nrecord_flush = 0.1\n"
+                "[source sim]\ntype = sim\npeople = 1\n[avatar person0]\nperson = sim/p0\n"
+                "[output local]\ntype = udp\naddress = 127.0.0.1\nport = %d\n"
+                "[site]\nname = lab-b\nsession = s-%s\ndomain = %d\ninterface = lo\npeers = 127.0.0.1\n"
+                "lease = %g\ndeadline_ms = %d\nremote_id = %d\n" %
+                (rec, lb.port, self.tag, self.domain, LEASE, DEADLINE_MS, REMOTE_ID))
+        b = Daemon(d, text)
+        self.daemons.append(b)
+        lb.wait(lambda: lb.names.get(REMOTE_ID) == "lab-a/person0" and
+                len([f for f in lb.of(REMOTE_ID) if f["flags"] & 8]) >= 300, 20,
+                "300 new frames of lab-a's avatar at lab-b while it records")
+        b.stop()
+        lb.drain()
+        live = {}
+        for f in lb.of(REMOTE_ID):
+            if f["flags"] & 8:
+                live.setdefault(f["t_ns"], set()).add(joints_bits(f))
+        files = sorted(os.listdir(rec))
+        self.assertEqual(len(files), 1, files)
+        path = os.path.join(rec, files[0])
+        info = json.loads(subprocess.run([REC, "info", "--json", path], capture_output=True, text=True).stdout)
+        self.assertEqual([(a["name"], a["id"]) for a in info["remote_avatars"]], [("lab-a/person0", REMOTE_ID)])
+        self.assertGreaterEqual(info["remote_avatars"][0]["frames"], 300)
+        # the replay: a daemon with no [site] (no DDS), lab-b's own person solved again from its samples
+        d = os.path.join(self.tmp.name, "replay")
+        os.mkdir(d)
+        r = Daemon(d, "[daemon]\nrate = 240\nlock_memory = no\n[source rec]\ntype = replay\nfile = %s\n"
+                   "loop = no\n[avatar local]\nperson = rec/sim.p0\nid = 7\n"
+                   "[output local]\ntype = udp\naddress = 127.0.0.1\nport = %d\n" % (path, lc.port))
+        self.daemons.append(r)
+        lc.wait(lambda: lc.names.get(REMOTE_ID) == "lab-a/person0" and lc.names.get(7) == "local" and
+                len([f for f in lc.of(REMOTE_ID) if f["flags"] & 8]) >= 200 and len(lc.of(7)) >= 100, 20,
+                "the replayed remote avatar (200 new frames) and the local one")
+        st = r.status()
+        self.assertNotIn("site", st)
+        matched = 0
+        for f in lc.of(REMOTE_ID):
+            if f["flags"] & 8:
+                self.assertIn(f["t_ns"], live, "a replayed sample time lab-b never published")
+                self.assertIn(joints_bits(f), live[f["t_ns"]], "replayed joint angles differ from lab-b's")
+                matched += 1
+        self.assertGreaterEqual(matched, 200)
+        # in the replaying daemon's status: the remote avatar as what it is
+        names = {a["name"]: a for a in st["avatars"]}
+        self.assertEqual(names["lab-a/person0"]["id"], REMOTE_ID)
+        self.assertTrue(names["lab-a/person0"]["remote"])
 
     def test_site_without_sources_and_no_site_section(self):
         # [site] and an output only: a valid configuration (a CAVE that shows the others)
