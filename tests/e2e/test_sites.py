@@ -18,7 +18,7 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from test_daemon import DAEMON, Daemon, free_port  # noqa: E402
+from test_daemon import CTL, DAEMON, Daemon, free_port  # noqa: E402
 from wireframe import decode_frame  # noqa: E402
 
 PEER = os.path.join(os.path.dirname(DAEMON), "tests", "fastdds-peer")
@@ -194,6 +194,18 @@ class SitesTest(unittest.TestCase):
         # one host, one clock: the estimate is off by at most half its round trip (the NTP bound)
         self.assertLessEqual(abs(p["clock_offset_ms"]), p["rtt_ms"] / 2 + 0.01, "offset beyond its bound")
         self.assertGreater(a.status()["site"]["written"], 0)
+        # the remote avatars in lab-b's avatar table, as what they are
+        av = {x["name"]: x for x in b.status()["avatars"]}
+        for i in range(PEOPLE):
+            r = av["lab-a/person%d" % i]
+            self.assertEqual((r["id"], r["state"], r["remote"], r["via"]), (ids_b["lab-a/person%d" % i], "OK",
+                                                                          True, "site"))
+            self.assertGreater(r["frames"], 0)
+            self.assertFalse(av["person%d" % i]["remote"])
+        text = subprocess.run([CTL, "-s", b.ctl, "status"], capture_output=True, text=True, timeout=5).stdout
+        row = [ln.split() for ln in text.split("\n") if ln.startswith("lab-a/person0 ")]
+        self.assertEqual(len(row), 1, text)
+        self.assertEqual(row[0][1:3], [str(ids_b["lab-a/person0"]), "OK"])
 
     def test_killed_site_goes_stale_then_away_then_comes_back(self):
         la, lb = self.listener(), self.listener()
@@ -220,6 +232,7 @@ class SitesTest(unittest.TestCase):
         seen_gone = time.monotonic()
         # the lease (1 s) plus the scheduling of a loaded host
         self.assertLess(seen_gone - killed, LEASE + 1.5, "departure seen late")
+        self.assertEqual([(x["name"], x["state"]) for x in b.status()["avatars"]], [("lab-a/person0", "GONE")])
         lb.drain()
         time.sleep(0.3)  # frames already in the socket before the departure
         lb.drain()
