@@ -5,6 +5,7 @@
 #include "daemon/gateway.h"
 #include "base/clock.h"
 
+#include "base/log.h"
 #include "base/seqlock.h"
 #include "publish/encode.h"
 #include "record/recfile.h"
@@ -123,6 +124,7 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 	uint16_t *ids;
 	size_t n_all;
 	int rc = 0;
+	bool kept = false; /* g->site is old's, taken over */
 
 	memset(g, 0, sizeof(*g));
 	g->cfg = *cfg;
@@ -139,9 +141,15 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 	g->frame_slot = frame_slot();
 	if (g->cfg.site.present) {
 		/* the other sites' avatars: slots reserved now, after the configured ones */
-		rc = site_open(&g->site, &g->cfg, source_id, err, errlen);
-		if (rc)
-			goto fail;
+		if (old && old->site && site_keeps(old->site, &g->cfg)) {
+			/* a reload that leaves [site] as it was: the participant and the remote avatars stay */
+			g->site = old->site;
+			kept = true;
+		} else {
+			rc = site_open(&g->site, &g->cfg, source_id, err, errlen);
+			if (rc)
+				goto fail;
+		}
 		g->n_site = site_n_remote(g->site);
 	}
 	g->n_remote = g->n_site;
@@ -186,15 +194,34 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 			a->dseq = o->dseq;
 			a->describe_rev = o->describe_rev + (describe_changed(a, o) ? 1 : 0);
 		}
-		if (g->site)
-			site_describe_local(g->site, i, a->describe);
 		g->n_avatars++;
 	}
+	for (int i = 0; kept && i < g->n_avatars; i++)
+		kept = site_keeps_describe(g->site, i, g->av[i].describe);
+	if (g->site && !kept && old && g->site == old->site) {
+		/* a local avatar's description changed: published by a new participant */
+		g->site = NULL;
+		rc = site_open(&g->site, &g->cfg, source_id, err, errlen);
+		if (rc) {
+			free(ids);
+			goto fail;
+		}
+	}
+	for (int i = 0; g->site && !kept && i < g->n_avatars; i++)
+		site_describe_local(g->site, i, g->av[i].describe);
 	for (int k = 0, t = 0, j = 0; k < g->n_remote; k++) {
 		struct gw_avatar *a = &g->av[g->n_avatars + k];
 
 		if (k < g->n_site) {
 			a->id = site_remote_id(g->site, k);
+			if (kept) {
+				/* the same avatar in the same slot: its numbering goes on */
+				const struct gw_avatar *o = &old->av[old->n_avatars + k];
+
+				a->seq = o->seq;
+				a->dseq = o->dseq;
+				a->describe_rev = o->describe_rev;
+			}
 		} else {
 			/* a recording's remote avatar: the id it had at the recording site */
 			while (!g->trk[t].drv->solved_count || j >= g->trk[t].drv->solved_count(&g->trk[t])) {
@@ -245,10 +272,19 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 					output_unadopt(&g->out[i], &old->out[j]);
 		goto fail;
 	}
-	if (g->site && (rc = site_start(g->site, err, errlen)))
+	if (kept) {
+		old->site = NULL;
+		site_adopt(g->site, &g->cfg);
+		pr_info("[site] unchanged: the DDS participant and the remote avatars stay");
+	} else if (g->site && old && old->site) {
+		pr_info("[site] changed: a new DDS participant; the remote avatars come back as it discovers them");
+	}
+	if (g->site && !kept && (rc = site_start(g->site, err, errlen)))
 		goto fail;
 	return 0;
 fail:
+	if (kept)
+		g->site = NULL; /* still old's */
 	gw_close(g);
 	return rc;
 }

@@ -272,6 +272,7 @@ static struct {
 	dds_domainid_t id;
 	dds_entity_t dom;
 	int refs;
+	char xml[4096]; /* its configuration: a reload cannot change it while the domain runs */
 } domains[4];
 static pthread_mutex_t domains_mu = PTHREAD_MUTEX_INITIALIZER;
 
@@ -370,7 +371,15 @@ static int domain_get(const struct cfg_site *c, char *err, size_t errlen)
 	pthread_mutex_lock(&domains_mu);
 	for (int i = 0; i < (int)(sizeof(domains) / sizeof(domains[0])); i++) {
 		if (domains[i].refs && domains[i].id == (dds_domainid_t)c->domain) {
-			/* a reload: the domain of the running configuration (its network settings stay) */
+			/* a reload: the domain of the running configuration, whose network settings Cyclone fixed */
+			if (strcmp(domains[i].xml, xml)) {
+				pthread_mutex_unlock(&domains_mu);
+				snprintf(err, errlen,
+					 "[site]: interface, peers, security or lease changed: Cyclone DDS cannot "
+					 "change "
+					 "them in a running domain; restart the daemon to apply them");
+				return -EBUSY;
+			}
 			domains[i].refs++;
 			pthread_mutex_unlock(&domains_mu);
 			return i;
@@ -392,6 +401,7 @@ static int domain_get(const struct cfg_site *c, char *err, size_t errlen)
 	}
 	domains[slot].id = (dds_domainid_t)c->domain;
 	domains[slot].refs = 1;
+	snprintf(domains[slot].xml, sizeof(domains[slot].xml), "%s", xml);
 	pthread_mutex_unlock(&domains_mu);
 	return slot;
 }
@@ -1077,6 +1087,52 @@ void site_describe_local(struct site *s, int idx, const struct wire_describe *w)
 	snprintf(d->avatar, sizeof(d->avatar), "%s", s->local_name[idx]);
 	describe_to_dds(w, d);
 	s->local_described[idx] = true;
+}
+
+/* the [site] keys of a and b are the same (where they were written does not count) */
+static bool site_cfg_same(const struct cfg_site *a, const struct cfg_site *b)
+{
+	return a->present == b->present && !strcmp(a->name, b->name) && !strcmp(a->session, b->session) &&
+	       a->domain == b->domain && !strcmp(a->peers, b->peers) && !strcmp(a->interface, b->interface) &&
+	       a->publish == b->publish && a->subscribe == b->subscribe && !strcmp(a->security, b->security) &&
+	       a->ros2 == b->ros2 && a->max_remote == b->max_remote && a->remote_id == b->remote_id &&
+	       a->deadline_ms == b->deadline_ms && a->lease == b->lease;
+}
+
+bool site_keeps(const struct site *s, const struct config *cfg)
+{
+	if (!site_cfg_same(&s->cfg, &cfg->site) || s->rate != cfg->daemon.rate ||
+	    s->n_local != (cfg->site.publish ? cfg->n_avatars : 0))
+		return false;
+	for (int i = 0; i < s->n_local; i++) {
+		char name[WIRE_NAME_MAX + 1];
+
+		snprintf(name, sizeof(name), "%.*s", WIRE_NAME_MAX, cfg->avatar[i].name);
+		if (strcmp(s->local_name[i], name))
+			return false;
+	}
+	return true;
+}
+
+bool site_keeps_describe(const struct site *s, int idx, const struct wire_describe *w)
+{
+	avatargw_sites_Description d;
+
+	if (idx >= s->n_local)
+		return true;
+	memset(&d, 0, sizeof(d));
+	snprintf(d.site, sizeof(d.site), "%.31s", s->cfg.name);
+	snprintf(d.avatar, sizeof(d.avatar), "%s", s->local_name[idx]);
+	describe_to_dds(w, &d);
+	return s->local_described[idx] && !memcmp(&d, &s->local_desc[idx], sizeof(d));
+}
+
+void site_adopt(struct site *s, const struct config *cfg)
+{
+	s->stale_ns = (uint64_t)(cfg->daemon.stale_ms * 1e6);
+	/* the new gateway's remote avatars are described again from the slots, at its first cycle */
+	for (int k = 0; k < s->n_remote; k++)
+		s->rs[k].l_gen = 0;
 }
 
 int site_start(struct site *s, char *err, size_t errlen)

@@ -42,6 +42,18 @@ extern const bool site_built_in;
 int site_open(struct site **out, const struct config *cfg, uint32_t source_id, char *err, size_t errlen);
 /* a local avatar's DESCRIBE, published as its description; before site_start */
 void site_describe_local(struct site *s, int idx, const struct wire_describe *d);
+/*
+ * A reload: whether the running site s can serve configuration cfg as it is
+ * (the same [site] keys and loop rate, the same local avatars by name; the
+ * caller then checks each local avatar's DESCRIBE with site_keeps_describe).
+ * Kept, the participant, its threads and the remote avatars stay: the new
+ * gateway takes s over and calls site_adopt (loop paused) instead of
+ * site_start. Otherwise a new site is opened beside it, in the same DDS
+ * domain, whose network settings cannot change (site_open refuses).
+ */
+bool site_keeps(const struct site *s, const struct config *cfg);
+bool site_keeps_describe(const struct site *s, int idx, const struct wire_describe *d);
+void site_adopt(struct site *s, const struct config *cfg);
 /* starts the threads: 0 or a negative errno */
 int site_start(struct site *s, char *err, size_t errlen);
 void site_close(struct site *s);

@@ -93,3 +93,24 @@ bool site_remote_name(struct site *s, int k, char *buf, size_t len, bool *live)
 	*live = false;
 	return false;
 }
+
+bool site_keeps(const struct site *s, const struct config *cfg)
+{
+	(void)s;
+	(void)cfg;
+	return false;
+}
+
+bool site_keeps_describe(const struct site *s, int idx, const struct wire_describe *d)
+{
+	(void)s;
+	(void)idx;
+	(void)d;
+	return false;
+}
+
+void site_adopt(struct site *s, const struct config *cfg)
+{
+	(void)s;
+	(void)cfg;
+}

@@ -380,6 +380,63 @@ class SitesTest(unittest.TestCase):
         self.assertEqual(names["lab-a/person0"]["id"], REMOTE_ID)
         self.assertTrue(names["lab-a/person0"]["remote"])
 
+    def reload(self, daemon, text):
+        """rewrites the daemon's configuration, SIGHUP; the status once the reload is done (or refused)"""
+        st = daemon.status()
+        done = st["reloads"] + st["reload_failures"]
+        with open(daemon.conf, "w") as f:
+            f.write(text)
+        daemon.proc.send_signal(signal.SIGHUP)
+        t_end = time.monotonic() + 15
+        while time.monotonic() < t_end:
+            st = daemon.status()
+            if st["reloads"] + st["reload_failures"] > done:
+                return st
+            time.sleep(0.05)
+        raise AssertionError("no reload within 15 s: " + daemon.stderr())
+
+    def test_reload_keeps_an_unchanged_site_and_applies_a_changed_one(self):
+        la, lb = self.listener(), self.listener()
+        a = self.site("lab-a", la.port, people=1)
+        b = self.site("lab-b", lb.port, people=1)
+        lb.wait(lambda: lb.names.get(REMOTE_ID) == "lab-a/person0" and len(lb.of(REMOTE_ID)) >= 50, 15,
+                "lab-a's avatar at lab-b")
+        la.wait(lambda: "lab-b/person0" in la.names.values(), 15, "lab-b's avatar at lab-a")
+        with open(b.conf) as f:
+            text = f.read()
+        written = b.status()["site"]["written"]
+        # 1. [site] as it was (an output's key changed): the participant, its counters and the remote avatar stay
+        st = self.reload(b, text.replace("[output local]\n", "[output local]\ndecimate = 1\n"))
+        self.assertEqual((st["reloads"], st["reload_failures"]), (1, 0), b.stderr())
+        self.assertIn("[site] unchanged", b.stderr())
+        self.assertGreaterEqual(st["site"]["written"], written, "the site's counters started over")
+        self.assertEqual(st["site"]["peers"][0]["joins"], 1)
+        self.assertEqual([(x["name"], x["id"], x["state"]) for x in st["avatars"] if x["remote"]],
+                         [("lab-a/person0", REMOTE_ID, "OK")])
+        peer_b = [p for p in a.status()["site"]["peers"] if p["name"] == "lab-b"][0]
+        self.assertEqual((peer_b["joins"], peer_b["departures"]), (1, 0), "lab-a saw lab-b leave")
+        t = time.monotonic()
+        lb.wait(lambda: len([f for f in lb.of(REMOTE_ID, t) if f["flags"] & 8]) >= 50, 10,
+                "lab-a's frames at lab-b after the reload")
+        # the remote avatar's numbering goes on: no FRAME sequence started over
+        seqs = [f["seq"] for f in lb.of(REMOTE_ID)]
+        self.assertEqual(seqs, sorted(seqs), "the remote avatar's FRAME numbering started over")
+        # 2. a changed [site] key is applied: a new participant, the remote avatar under its new id
+        text2 = text.replace("remote_id = %d\n" % REMOTE_ID, "remote_id = %d\n" % (REMOTE_ID + 500))
+        st = self.reload(b, text2)
+        self.assertEqual((st["reloads"], st["reload_failures"]), (2, 0), b.stderr())
+        self.assertIn("[site] changed: a new DDS participant", b.stderr())
+        lb.wait(lambda: lb.names.get(REMOTE_ID + 500) == "lab-a/person0" and
+                len(lb.of(REMOTE_ID + 500)) >= 50, 15, "lab-a's avatar at lab-b under its new id")
+        # 3. a network setting of the running domain cannot change: refused, the running configuration stays
+        st = self.reload(b, text2.replace("lease = %g\n" % LEASE, "lease = %g\n" % (LEASE * 2)))
+        self.assertEqual((st["reloads"], st["reload_failures"]), (2, 1))
+        self.assertIn("reload failed, the running configuration stays: [site]: interface, peers, security or "
+                      "lease changed", b.stderr())
+        t = time.monotonic()
+        lb.wait(lambda: len([f for f in lb.of(REMOTE_ID + 500, t) if f["flags"] & 8]) >= 50, 10,
+                "lab-a's frames at lab-b after the refused reload")
+
     def test_site_without_sources_and_no_site_section(self):
         # [site] and an output only: a valid configuration (a CAVE that shows the others)
         lb = self.listener()
