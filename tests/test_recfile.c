@@ -267,6 +267,59 @@ static void test_index(void **state)
 	rec_index_free(&ix);
 }
 
+/* REMOTE records: a remote avatar's DESCRIBE and FRAMEs kept with its id and name; a bad one counted */
+static void put_remote(struct rec_buf *r, uint64_t mono, const uint8_t *msg, size_t n)
+{
+	uint8_t p[RECFILE_MESSAGE_HEAD + WIRE_MAX_MSG];
+
+	recfile_put64(p, mono);
+	memcpy(p + RECFILE_MESSAGE_HEAD, msg, n);
+	put_record(r, RECFILE_REMOTE, p, (uint32_t)(RECFILE_MESSAGE_HEAD + n));
+}
+
+static void test_index_remote(void **state)
+{
+	static struct rec_buf r;
+	struct rec_index ix;
+	struct wire_describe d;
+	struct wire_frame f;
+	uint8_t msg[WIRE_MAX_MSG];
+	char err[256];
+	size_t n;
+
+	(void)state;
+	put_header(&r);
+	put_session(&r, false);
+	memset(&d, 0, sizeof(d));
+	d.h.avatar_id = 1000;
+	strcpy(d.avatar_name, "lab-a/person0");
+	n = wire_encode_describe(&d, msg);
+	put_remote(&r, 500, msg, n);
+	for (int i = 0; i < 5; i++) {
+		memset(&f, 0, sizeof(f));
+		f.h.avatar_id = 1000;
+		f.joint[3] = 0.25f * (float)i;
+		put_sample(&r, 0, 0, 1000 + (uint64_t)i, false);
+		put_remote(&r, 1000 + (uint64_t)i, msg, wire_encode_frame(&f, msg));
+	}
+	put_remote(&r, 2000, (const uint8_t *)"not a message", 13);
+	assert_string_equal(recfile_type_name(RECFILE_REMOTE), "REMOTE");
+	assert_int_equal(rec_index_parse(r.b, r.len, &ix, err, sizeof(err)), 0);
+	assert_int_equal(ix.n_events, 5);
+	assert_int_equal(ix.n_remote, 6);
+	assert_int_equal(ix.n_bad, 1);
+	assert_int_equal(ix.n_other, 0);
+	assert_int_equal(ix.n_remote_avatars, 1);
+	assert_int_equal(ix.remote_avatars[0].id, 1000);
+	assert_string_equal(ix.remote_avatars[0].name, "lab-a/person0");
+	assert_int_equal(ix.remote_avatars[0].frames, 5);
+	assert_int_equal(ix.remote[0].type, WIRE_DESCRIBE);
+	assert_true(ix.remote[0].mono_ns == 500 && ix.remote[5].mono_ns == 1004);
+	assert_int_equal(wire_decode_frame(ix.remote_bytes + ix.remote[5].off, ix.remote[5].len, &f), 0);
+	assert_true(f.joint[3] == 1.0f);
+	rec_index_free(&ix);
+}
+
 /* damage in the middle: reported at its offset, the records after it kept */
 static void test_damage_resync(void **state)
 {
@@ -521,6 +574,7 @@ int main(void)
 		cmocka_unit_test(test_second_session),
 		cmocka_unit_test(test_gap_unknown_bad),
 		cmocka_unit_test(test_no_session),
+		cmocka_unit_test(test_index_remote),
 		cmocka_unit_test(test_replay_damaged_first_session),
 		cmocka_unit_test(test_replay_nonfinite_analog),
 	};

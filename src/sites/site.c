@@ -34,9 +34,10 @@ const bool site_built_in = true;
 #define IN_WORDS (IN_HEAD + FRAME_MAX / 4)			 /* then the FRAME's bytes */
 #define DESC_WORDS (1 + WIRE_MAX_MSG / 4)			 /* length, then the DESCRIBE's bytes */
 #define NAME_WORDS ((CFG_SITE_NAME_MAX + WIRE_NAME_MAX + 4) / 4) /* "SITE/AVATAR" and its NUL */
-#define SITE_MAX_PEERS 32					 /* remote sites followed at most */
-#define TAKE_MAX 32						 /* samples taken at once */
-#define PING_NS 1000000000ull					 /* clock pings: one a second */
+#define FIG_WORDS ((int)(sizeof(struct wire_site) + 3) / 4)
+#define SITE_MAX_PEERS 32	     /* remote sites followed at most */
+#define TAKE_MAX 32		     /* samples taken at once */
+#define PING_NS 1000000000ull	     /* clock pings: one a second */
 #define CLOCK_KEEP_NS 10000000000ull /* a clock estimate is replaced by a worse one after 10 s */
 #define MAX_AUTO_INDEX 9 /* participants per host with unicast discovery: each peer's ports 0-9 are probed */
 
@@ -79,6 +80,7 @@ struct rslot {
 	uint64_t last_use;	      /* for reuse of a gone slot: the oldest goes first */
 	/* the loop's */
 	uint32_t l_gen, l_fseq, l_dseq;
+	uint32_t l_figs; /* the peer's figures' sequence last read */
 	bool l_desc, l_have;
 	uint64_t l_arrival;
 	struct wire_frame l_wf;
@@ -95,9 +97,11 @@ struct peer {
 	_Atomic int64_t rtt_ns;	   /* of the estimate in use, -1: none yet */
 	struct hist delay;	   /* its sample time (on our clock) -> arrival here */
 	uint64_t best_at;	   /* receiving thread: when the estimate in use was made */
-	/* control thread: the rate */
+	/* receiving thread, once a second: the rate, and every figure for the loop's DESCRIBEs */
 	uint64_t r_frames, r_t;
-	double rate;
+	_Atomic uint32_t rate_bits; /* float, frames a second */
+	_Atomic uint32_t fseq;
+	_Atomic uint32_t fw[FIG_WORDS]; /* struct wire_site */
 };
 
 struct site {
@@ -920,6 +924,63 @@ static void ping(struct site *s)
 	dds_write(s->w_clock, &c);
 }
 
+static float peer_rate(struct peer *p)
+{
+	uint32_t b = atomic_load_explicit(&p->rate_bits, memory_order_relaxed);
+	float f;
+
+	memcpy(&f, &b, sizeof(f));
+	return f;
+}
+
+/* present: it has avatars here, or it was heard from within its lease */
+static bool peer_present(const struct site *s, struct peer *p, uint64_t now)
+{
+	uint64_t last = atomic_load_explicit(&p->last_mono, memory_order_relaxed);
+
+	return ctr_get(&p->avatars) || (last && now - last < s->lease_ns);
+}
+
+/* once a second: each remote site's rate, and its figures for the loop (remote avatars' DESCRIBEs) */
+static void figures_update(struct site *s, uint64_t now)
+{
+	for (int i = 0; i < SITE_MAX_PEERS; i++) {
+		struct peer *p = &s->peer[i];
+		uint64_t f = ctr_get(&p->frames);
+		int64_t rtt = atomic_load_explicit(&p->rtt_ns, memory_order_relaxed);
+		union {
+			struct wire_site ws;
+			uint32_t w[FIG_WORDS];
+		} u;
+		float rate;
+		uint32_t b;
+
+		if (!atomic_load_explicit(&p->used, memory_order_acquire))
+			continue;
+		if (p->r_t && now > p->r_t) {
+			rate = (float)((double)(f - p->r_frames) / ((double)(now - p->r_t) * 1e-9));
+			memcpy(&b, &rate, sizeof(b));
+			atomic_store_explicit(&p->rate_bits, b, memory_order_relaxed);
+		}
+		p->r_frames = f;
+		p->r_t = now;
+		memset(&u, 0, sizeof(u));
+		u.ws.present = true;
+		snprintf(u.ws.name, sizeof(u.ws.name), "%s", p->name);
+		u.ws.state = peer_present(s, p, now) ? 0 : 1;
+		u.ws.avatars = (uint16_t)ctr_get(&p->avatars);
+		u.ws.rate_hz = peer_rate(p);
+		u.ws.frames = (uint32_t)f;
+		u.ws.lost = (uint32_t)ctr_get(&p->lost);
+		u.ws.delay_p50_ms = ctr_get(&p->delay.n) ? (float)(hist_percentile(&p->delay, 0.5) * 1e-6) : -1.0f;
+		u.ws.delay_p99_ms = ctr_get(&p->delay.n) ? (float)(hist_percentile(&p->delay, 0.99) * 1e-6) : -1.0f;
+		u.ws.clock_offset_ms =
+			rtt >= 0 ? (float)(atomic_load_explicit(&p->offset_ns, memory_order_relaxed) * 1e-6) : 0.0f;
+		u.ws.rtt_ms = rtt >= 0 ? (float)(rtt * 1e-6) : -1.0f;
+		seqlock_write(&p->fseq, p->fw, u.w, FIG_WORDS);
+	}
+}
+
 static void *sub_main(void *arg)
 {
 	struct site *s = arg;
@@ -939,6 +1000,7 @@ static void *sub_main(void *arg)
 		if (now - s->last_ping >= PING_NS) {
 			s->last_ping = now;
 			ping(s);
+			figures_update(s, now);
 		}
 	}
 	return NULL;
@@ -1303,6 +1365,24 @@ bool site_remote(struct site *s, int k, uint64_t now_mono, struct wire_frame *wf
 	return true;
 }
 
+void site_remote_site(struct site *s, int k, struct wire_site *ws)
+{
+	struct rslot *r = &s->rs[k];
+	struct peer *p;
+	uint32_t w[FIG_WORDS], sq;
+
+	/* the slot's peer was set before the slot became live, which the caller's site_remote() saw */
+	if (r->peer < 0)
+		return;
+	p = &s->peer[r->peer];
+	if (ws->present && seqlock_peek(&p->fseq) == r->l_figs)
+		return; /* what ws holds (a DESCRIBE decoded anew holds none) */
+	if (seqlock_try_read(&p->fseq, p->fw, w, FIG_WORDS, &sq)) {
+		memcpy(ws, w, sizeof(*ws));
+		r->l_figs = sq;
+	}
+}
+
 /* ---- the control thread --------------------------------------------------------------------------------- */
 
 static double ms(int64_t ns)
@@ -1317,22 +1397,6 @@ void site_report(struct site *s, FILE *out, bool json)
 
 	if (!s)
 		return;
-	for (int i = 0; i < SITE_MAX_PEERS; i++) {
-		struct peer *p = &s->peer[i];
-		uint64_t f;
-
-		if (!atomic_load_explicit(&p->used, memory_order_acquire))
-			continue;
-		f = ctr_get(&p->frames);
-		if (p->r_t && now > p->r_t + 200000000ull) {
-			p->rate = (double)(f - p->r_frames) / ((double)(now - p->r_t) * 1e-9);
-			p->r_frames = f;
-			p->r_t = now;
-		} else if (!p->r_t) {
-			p->r_frames = f;
-			p->r_t = now;
-		}
-	}
 	if (json) {
 		fprintf(out,
 			",\"site\":{\"name\":\"%s\",\"session\":\"%s\",\"domain\":%d,\"publish\":%s,\"subscribe\":%s,"
@@ -1356,16 +1420,15 @@ void site_report(struct site *s, FILE *out, bool json)
 	}
 	for (int i = 0; i < SITE_MAX_PEERS; i++) {
 		struct peer *p = &s->peer[i];
-		uint64_t last, avatars;
+		uint64_t avatars;
 		int64_t rtt;
 		const char *state;
 
 		if (!atomic_load_explicit(&p->used, memory_order_acquire))
 			continue;
-		last = atomic_load_explicit(&p->last_mono, memory_order_relaxed);
 		avatars = ctr_get(&p->avatars);
 		rtt = atomic_load_explicit(&p->rtt_ns, memory_order_relaxed);
-		state = avatars ? "present" : last && now - last < s->lease_ns ? "present" : "gone";
+		state = peer_present(s, p, now) ? "present" : "gone";
 		if (json) {
 			/* a remote site's name is what the network said: escaped */
 			fprintf(out, "%s{\"name\":", np ? "," : "");
@@ -1375,9 +1438,9 @@ void site_report(struct site *s, FILE *out, bool json)
 				"\"lost\":%llu,\"joins\":%llu,\"departures\":%llu,\"descriptions\":%llu,"
 				"\"clock_offset_ms\":%.3f,\"rtt_ms\":%.3f,"
 				"\"delay_ms\":{\"n\":%llu,\"p50\":%.3f,\"p99\":%.3f,\"max\":%.3f}}",
-				state, (unsigned long long)avatars, p->rate, (unsigned long long)ctr_get(&p->frames),
-				(unsigned long long)ctr_get(&p->lost), (unsigned long long)ctr_get(&p->joins),
-				(unsigned long long)ctr_get(&p->departures),
+				state, (unsigned long long)avatars, (double)peer_rate(p),
+				(unsigned long long)ctr_get(&p->frames), (unsigned long long)ctr_get(&p->lost),
+				(unsigned long long)ctr_get(&p->joins), (unsigned long long)ctr_get(&p->departures),
 				(unsigned long long)ctr_get(&p->descriptions),
 				rtt >= 0 ? ms(atomic_load_explicit(&p->offset_ns, memory_order_relaxed)) : 0.0,
 				rtt >= 0 ? ms(rtt) : -1.0, (unsigned long long)ctr_get(&p->delay.n),
@@ -1385,8 +1448,8 @@ void site_report(struct site *s, FILE *out, bool json)
 				ms((int64_t)hist_percentile(&p->delay, 0.99)), ms((int64_t)ctr_get(&p->delay.max_ns)));
 		} else {
 			fprintf(out, "%-16s %-8s %7llu %8.1f %10llu %8llu %10.3f %10.3f %8.3f/%.3f\n", p->name, state,
-				(unsigned long long)avatars, p->rate, (unsigned long long)ctr_get(&p->frames),
-				(unsigned long long)ctr_get(&p->lost),
+				(unsigned long long)avatars, (double)peer_rate(p),
+				(unsigned long long)ctr_get(&p->frames), (unsigned long long)ctr_get(&p->lost),
 				rtt >= 0 ? ms(atomic_load_explicit(&p->offset_ns, memory_order_relaxed)) : 0.0,
 				rtt >= 0 ? ms(rtt) : -1.0, ms((int64_t)hist_percentile(&p->delay, 0.5)),
 				ms((int64_t)hist_percentile(&p->delay, 0.99)));

@@ -80,6 +80,14 @@ void site_flush(struct site *s);
 bool site_remote(struct site *s, int k, uint64_t now_mono, struct wire_frame *wf, struct wire_describe *d,
 		 bool *described, bool *fresh);
 
+/*
+ * Remote slot k's site figures (rate, loss, delay, clock offset, round
+ * trip: struct wire_site) into ws, for its DESCRIBE; after site_remote()
+ * returned true for k. ws is left as it was when nothing changed since the
+ * last call (they change once a second).
+ */
+void site_remote_site(struct site *s, int k, struct wire_site *ws);
+
 /* ---- the control thread ---- */
 
 /*

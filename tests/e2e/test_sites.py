@@ -18,7 +18,9 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from test_daemon import CTL, DAEMON, Daemon, free_port  # noqa: E402
+import test_viewer  # noqa: E402  (a module import: its tests are not collected here)
+from headless import Chromium, chromium_path  # noqa: E402
+from test_daemon import CTL, DAEMON, DUMP, Daemon, free_port  # noqa: E402
 from wireframe import decode_frame  # noqa: E402
 
 PEER = os.path.join(os.path.dirname(DAEMON), "tests", "fastdds-peer")
@@ -133,7 +135,7 @@ class SitesTest(unittest.TestCase):
         self.listeners.append(lst)
         return lst
 
-    def site(self, name, port, people=0, session="s", extra=""):
+    def site(self, name, port, people=0, session="s", extra="", outputs=""):
         """a daemon at site NAME sending to a UDP port; people simulated persons of its own"""
         d = os.path.join(self.tmp.name, "%s-%d" % (name, len(self.daemons)))
         os.mkdir(d)
@@ -143,6 +145,7 @@ class SitesTest(unittest.TestCase):
             for i in range(people):
                 text += "[avatar person%d]\nperson = sim/p%d\n" % (i, i)
         text += "[output local]\ntype = udp\naddress = 127.0.0.1\nport = %d\n" % port
+        text += outputs
         text += ("[site]\nname = %s\nsession = %s-%s\ndomain = %d\ninterface = lo\npeers = 127.0.0.1\n"
                  "lease = %g\ndeadline_ms = %d\nremote_id = %d\n%s" %
                  (name, session, self.tag, self.domain, LEASE, DEADLINE_MS, REMOTE_ID, extra))
@@ -379,6 +382,58 @@ class SitesTest(unittest.TestCase):
         names = {a["name"]: a for a in st["avatars"]}
         self.assertEqual(names["lab-a/person0"]["id"], REMOTE_ID)
         self.assertTrue(names["lab-a/person0"]["remote"])
+
+    def test_site_figures_in_dump_stats_and_the_viewer(self):
+        """per remote site: rate, loss, one-way delay, clock offset, round trip and presence travel in
+        the remote avatars' DESCRIBEs to avatargw-dump --stats and to the viewer"""
+        la, lb = self.listener(), self.listener()
+        self.site("lab-a", la.port, people=1)
+        dport, vport = free_port(), free_port(socket.SOCK_STREAM)
+        b = self.site("lab-b", lb.port, extra="", outputs=(
+            "[output dump]\ntype = udp\naddress = 127.0.0.1\nport = %d\n"
+            "[output viewer]\ntype = websocket\naddress = 127.0.0.1\nport = %d\n" % (dport, vport)))
+        p = subprocess.Popen([DUMP, "--udp", "127.0.0.1:%d" % dport, "--stats", "--timeout", "10"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        self.peers.append(p)
+        site = None
+        t_end = time.monotonic() + 20
+        for line in p.stdout:
+            m = json.loads(line)
+            # once the clock estimate (a ping a second) and delays are in
+            if m["type"] == "site" and m["rtt_ms"] is not None and m["delay_ms"] is not None and \
+                    m["rate_hz"] > 100:
+                site = m
+                break
+            if time.monotonic() > t_end:
+                break
+        p.kill()
+        self.assertIsNotNone(site, "no figures of lab-a from avatargw-dump --stats")
+        st = [x for x in b.status()["site"]["peers"] if x["name"] == "lab-a"][0]
+        self.assertEqual((site["name"], site["state"], site["avatars"]), ("lab-a", "present", 1))
+        self.assertLessEqual(site["frames"], st["frames"])
+        self.assertGreater(site["frames"], 0)
+        self.assertLessEqual(site["lost"], st["lost"])
+        self.assertLess(site["rate_hz"], 400)
+        self.assertLessEqual(abs(site["clock_offset_ms"]), site["rtt_ms"] / 2 + 0.01)
+        self.assertLessEqual(site["delay_ms"]["p50"], site["delay_ms"]["p99"])
+        # the viewer: the card of lab-a's avatar says which site, and its figures
+        if not chromium_path():
+            self.skipTest("no Chromium to load the viewer (apt-get install chromium)")
+        with tempfile.TemporaryDirectory() as profile:
+            br = Chromium(profile)
+            try:
+                br.call("Page.navigate", url="http://127.0.0.1:%d/" % vport)
+                st = test_viewer.wait_for(br, lambda s: any(a["site"] == "lab-a" and a["siteStats"] and
+                                                   a["siteStats"]["rtt_ms"] is not None and
+                                                   a["siteStats"]["rate_hz"] > 100 for a in s["list"]))
+                card = br.evaluate("document.getElementById('avatars').innerText")
+            finally:
+                br.close()
+        a = [x for x in st["list"] if x["site"] == "lab-a"][0]
+        self.assertEqual(a["name"], "lab-a/person0")
+        self.assertEqual((a["siteStats"]["state"], a["siteStats"]["avatars"]), ("present", 1))
+        self.assertIn("lab-a present", card)
+        self.assertIn("delay", card)
 
     def reload(self, daemon, text):
         """rewrites the daemon's configuration, SIGHUP; the status once the reload is done (or refused)"""
