@@ -509,9 +509,10 @@ static int remote_frames(struct gateway *g, uint64_t now_ns, int n, int *frames)
 		/* recorded as what it is, a remote avatar: a replay publishes it again as it was */
 		if (g->rec && fresh)
 			recorder_remote(g->rec, now_ns, g->msgs[n - 1].data, g->msgs[n - 1].len);
-		if (k < g->n_site && now_ns >= a->next_describe_ns) {
+		if (now_ns >= a->next_describe_ns) {
 			/* its site's figures of now in the DESCRIBE (no new revision: the skeleton is the same) */
-			site_remote_site(g->site, k, &a->describe->site);
+			if (k < g->n_site)
+				site_remote_site(g->site, k, &a->describe->site);
 			a->describe_len = (uint16_t)wire_encode_describe(a->describe, a->describe_msg);
 		}
 		m = n;

@@ -36,6 +36,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -169,8 +170,9 @@ struct replay {
 	uint8_t *rbytes;
 	struct replay_solved *solved;
 	int n_solved;
-	int64_t rlast;	   /* clocked: last message played, counting passes */
-	double remote_end; /* s: the last remote message plus a loop period */
+	int64_t rlast;		   /* clocked: last message played, counting passes */
+	struct wire_describe dtmp; /* the loop's: a DESCRIBE being decoded */
+	double remote_end;	   /* s: the last remote message plus a loop period */
 };
 
 static const char *const roles[CSV_ROLES] = { "head", "left_hand", "right_hand" };
@@ -857,8 +859,18 @@ static void play_rmsg(struct replay *rp, const struct replay_rmsg *m, uint64_t n
 			a->have_f = a->new_f = true;
 			a->arrival = now_mono;
 		}
-	} else if (wire_decode_describe(b, m->len, &a->d) == 0) {
-		a->have_d = a->new_d = true;
+	} else {
+		struct wire_describe *d = &rp->dtmp;
+		size_t from = offsetof(struct wire_describe, rate_hz), to = offsetof(struct wire_describe, site);
+
+		/* recorded once a second: a new one only when the skeleton changed (its site's figures always) */
+		memset(d, 0, sizeof(*d));
+		if (wire_decode_describe(b, m->len, d) == 0) {
+			if (!a->have_d || memcmp((const char *)d + from, (const char *)&a->d + from, to - from))
+				a->new_d = true;
+			a->d = *d;
+			a->have_d = true;
+		}
 	}
 }
 
@@ -1094,6 +1106,7 @@ static bool replay_solved(struct tracker *t, int k, uint64_t now_mono, uint64_t 
 		a->new_d = false;
 		*described = true;
 	}
+	d->site = a->d.site; /* its site's figures as recorded: they go out with its next DESCRIBE */
 	*fresh = a->new_f;
 	a->new_f = false;
 	*wf = a->wf;

@@ -62,6 +62,7 @@ class Listener:
         self.sock.setblocking(False)
         self.frames = []
         self.names = {}
+        self.revs = {}  # avatar -> the describe_rev of each DESCRIBE
 
     def drain(self):
         while True:
@@ -78,6 +79,7 @@ class Listener:
             d = describe_name(data)
             if d:
                 self.names[d[0]] = d[1]
+                self.revs.setdefault(d[0], []).append(struct.unpack_from("<I", data, 20)[0])
 
     def wait(self, cond, timeout, what):
         t_end = time.monotonic() + timeout
@@ -378,6 +380,9 @@ class SitesTest(unittest.TestCase):
                 self.assertIn(joints_bits(f), live[f["t_ns"]], "replayed joint angles differ from lab-b's")
                 matched += 1
         self.assertGreaterEqual(matched, 200)
+        # a DESCRIBE a second, recorded and replayed: the same skeleton, no new revision
+        lc.wait(lambda: len(lc.revs.get(REMOTE_ID, [])) >= 3, 10, "three DESCRIBEs of the replayed avatar")
+        self.assertEqual(len(set(lc.revs[REMOTE_ID])), 1, lc.revs[REMOTE_ID])
         # in the replaying daemon's status: the remote avatar as what it is
         names = {a["name"]: a for a in st["avatars"]}
         self.assertEqual(names["lab-a/person0"]["id"], REMOTE_ID)
