@@ -561,6 +561,71 @@ static void test_replay_nonfinite_analog(void **state)
 	unlink(path);
 }
 
+/* a recording of remote avatars only (a site without trackers): replayed as recorded, on its clock */
+static void test_replay_remote_only(void **state)
+{
+	static struct rec_buf r;
+	static struct config cfg;
+	static struct wire_describe d, dout;
+	char path[] = "/tmp/avatargw-test-recfile-XXXXXX", text[256], err[512];
+	struct tracker_clock now = { 1000000000000ull, 0 };
+	struct wire_frame f, out;
+	struct tracker t;
+	uint8_t msg[WIRE_MAX_MSG];
+	bool described, fresh;
+	uint16_t id;
+
+	(void)state;
+	put_header(&r);
+	put_session(&r, false);
+	memset(&d, 0, sizeof(d));
+	d.h.avatar_id = 1000;
+	strcpy(d.avatar_name, "lab-a/person0");
+	d.site = (struct wire_site){ true, "lab-a", 0, 1, 240, 10, 0, 0.5f, 1, 0, 0.25f };
+	put_remote(&r, 5000000, msg, wire_encode_describe(&d, msg));
+	for (int i = 0; i < 10; i++) {
+		memset(&f, 0, sizeof(f));
+		f.h.avatar_id = 1000;
+		f.h.sample_time_ns = 77 + (uint64_t)i;
+		f.joint[5] = 0.1f * (float)i;
+		put_remote(&r, 5000000 + 10000000 * (uint64_t)i, msg, wire_encode_frame(&f, msg));
+	}
+	write_temp(&r, path);
+	snprintf(text, sizeof(text), "[source r]\ntype = replay\nfile = %s\nloop = no\n", path);
+	assert_int_equal(config_load_text(&cfg, "t.conf", text, err, sizeof(err)), 0);
+	assert_int_equal(tracker_open(&t, &cfg.source[0], err, sizeof(err)), 0);
+	assert_int_equal(t.drv->solved_count(&t), 1);
+	assert_string_equal(t.drv->solved_name(&t, 0, &id), "lab-a/person0");
+	assert_int_equal(id, 1000);
+	/* the first poll starts the clip: the DESCRIBE and the first frame (both at clip time 0) */
+	assert_int_equal(t.drv->poll(&t, &now), 0);
+	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	assert_true(described && fresh);
+	assert_string_equal(dout.avatar_name, "lab-a/person0");
+	assert_true(dout.site.present && dout.site.rtt_ms == 0.25f);
+	assert_true(out.h.sample_time_ns == 77 && out.joint[5] == 0.0f && (out.h.flags & WIRE_F_NEW_SAMPLE));
+	/* 45 ms later: the frame recorded at 40 ms, joint angles as recorded */
+	now.mono_ns += 45000000;
+	t.drv->poll(&t, &now);
+	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	assert_true(!described && fresh);
+	assert_true(out.h.sample_time_ns == 81 && out.joint[5] == 0.4f);
+	assert_int_equal(out.sensor[0].state, WIRE_SENSOR_OK);
+	/* past the end: nothing new, STALE after the stale time */
+	now.mono_ns += 500000000;
+	t.drv->poll(&t, &now);
+	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	assert_int_equal(out.h.sample_time_ns, 86);
+	now.mono_ns += 60000000;
+	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	assert_false(fresh);
+	assert_true((out.h.flags & WIRE_F_STALE) && out.sensor[0].state == WIRE_SENSOR_STALE);
+	assert_int_equal(atomic_load(&t.st.state), TRACKER_ENDED);
+	tracker_close(&t);
+	config_free(&cfg);
+	unlink(path);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -575,6 +640,7 @@ int main(void)
 		cmocka_unit_test(test_gap_unknown_bad),
 		cmocka_unit_test(test_no_session),
 		cmocka_unit_test(test_index_remote),
+		cmocka_unit_test(test_replay_remote_only),
 		cmocka_unit_test(test_replay_damaged_first_session),
 		cmocka_unit_test(test_replay_nonfinite_analog),
 	};

@@ -924,8 +924,10 @@ static int poll_clocked(struct tracker *t, struct replay *rp, const struct track
 		ct = el;
 		if (ct > rp->duration) {
 			atomic_store_explicit(&t->st.state, TRACKER_ENDED, memory_order_relaxed);
-			if (rp->last >= (int64_t)rp->n_ev - 1)
+			if (rp->last >= (int64_t)rp->n_ev - 1) {
+				play_remote(rp, 0, ct, now->mono_ns); /* the remote avatars' last messages */
 				return 0;
+			}
 		}
 	}
 	if (ct < 0)
@@ -1038,11 +1040,13 @@ static int poll_interpolated(struct tracker *t, struct replay *rp, const struct 
 		ct = el;
 		if (ct > rp->duration) {
 			atomic_store_explicit(&t->st.state, TRACKER_ENDED, memory_order_relaxed);
+			if (!opts_of(cfg)->step)
+				play_remote(rp, 0, ct, now->mono_ns); /* the remote avatars' last messages */
 			return 0;
 		}
 	}
 	if (!opts_of(cfg)->step)
-		play_remote(rp, (int64_t)floor(el / rp->duration), ct, now->mono_ns);
+		play_remote(rp, opts_of(cfg)->loop ? (int64_t)floor(el / rp->duration) : 0, ct, now->mono_ns);
 	for (uint32_t s = 0; s < rp->n_sensors; s++) {
 		struct replay_track *tk = &rp->track[s];
 		struct kf_pose o;
