@@ -277,6 +277,20 @@ static void put_remote(struct rec_buf *r, uint64_t mono, const uint8_t *msg, siz
 	put_record(r, RECFILE_REMOTE, p, (uint32_t)(RECFILE_MESSAGE_HEAD + n));
 }
 
+/* a recording that starts with the DESCRIBE of remote avatar 1000, lab-a/person0, at mono */
+static void remote_start(struct rec_buf *r, struct wire_describe *d, uint64_t mono)
+{
+	uint8_t msg[WIRE_MAX_MSG];
+
+	put_header(r);
+	put_session(r, false);
+	memset(d, 0, sizeof(*d));
+	d->h.avatar_id = 1000;
+	strcpy(d->avatar_name, "lab-a/person0");
+	d->site = (struct wire_site){ true, "lab-a", 0, 1, 240, 10, 0, 0.5f, 1, 0, 0.25f };
+	put_remote(r, mono, msg, wire_encode_describe(d, msg));
+}
+
 static void test_index_remote(void **state)
 {
 	static struct rec_buf r;
@@ -285,16 +299,9 @@ static void test_index_remote(void **state)
 	struct wire_frame f;
 	uint8_t msg[WIRE_MAX_MSG];
 	char err[256];
-	size_t n;
 
 	(void)state;
-	put_header(&r);
-	put_session(&r, false);
-	memset(&d, 0, sizeof(d));
-	d.h.avatar_id = 1000;
-	strcpy(d.avatar_name, "lab-a/person0");
-	n = wire_encode_describe(&d, msg);
-	put_remote(&r, 500, msg, n);
+	remote_start(&r, &d, 500);
 	for (int i = 0; i < 5; i++) {
 		memset(&f, 0, sizeof(f));
 		f.h.avatar_id = 1000;
@@ -576,13 +583,7 @@ static void test_replay_remote_only(void **state)
 	uint16_t id;
 
 	(void)state;
-	put_header(&r);
-	put_session(&r, false);
-	memset(&d, 0, sizeof(d));
-	d.h.avatar_id = 1000;
-	strcpy(d.avatar_name, "lab-a/person0");
-	d.site = (struct wire_site){ true, "lab-a", 0, 1, 240, 10, 0, 0.5f, 1, 0, 0.25f };
-	put_remote(&r, 5000000, msg, wire_encode_describe(&d, msg));
+	remote_start(&r, &d, 5000000);
 	for (int i = 0; i < 10; i++) {
 		memset(&f, 0, sizeof(f));
 		f.h.avatar_id = 1000;

@@ -105,7 +105,7 @@ static const struct replay_opts *opts_of(const struct cfg_source *c)
 #define CSV_ROLES 3
 
 struct replay_ev {
-	double t; /* s from the first event */
+	double t; /* s from the first event (first: last_due reads it) */
 	uint32_t sensor;
 	uint32_t buttons;
 	struct dq pose;
@@ -124,7 +124,7 @@ struct replay_track {
 
 /* a remote avatar's recorded FRAME or DESCRIBE ([site]), its bytes in replay.rbytes */
 struct replay_rmsg {
-	double t; /* s from the first event, as the samples */
+	double t; /* s from the first event, as the samples (first: last_due reads it) */
 	uint32_t avatar;
 	uint8_t type;
 	uint16_t len;
@@ -848,6 +848,27 @@ static uint64_t due_at(const struct replay *rp, const struct cfg_source *cfg, do
 	return due > now->mono_ns ? now->mono_ns : due;
 }
 
+/*
+ * The last of n time-ordered elements (replay_ev, replay_rmsg: a double t
+ * first) with t <= ct; 0 when none is (the caller checks element 0's t).
+ */
+static size_t last_due(const void *a, size_t n, size_t size, double ct)
+{
+	size_t lo = 0, hi = n - 1;
+
+	while (lo < hi) {
+		size_t mid = (lo + hi + 1) / 2;
+		double t;
+
+		memcpy(&t, (const char *)a + mid * size, sizeof(t));
+		if (t <= ct)
+			lo = mid;
+		else
+			hi = mid - 1;
+	}
+	return lo;
+}
+
 /* a recorded remote avatar's message played: its frame or description is the newest */
 static void play_rmsg(struct replay *rp, const struct replay_rmsg *m, uint64_t now_mono)
 {
@@ -878,19 +899,11 @@ static void play_rmsg(struct replay *rp, const struct replay_rmsg *m, uint64_t n
 static void play_remote(struct replay *rp, int64_t pass, double ct, uint64_t now_mono)
 {
 	int64_t target, from;
-	size_t lo = 0, hi;
+	size_t lo;
 
 	if (!rp->n_rmsg)
 		return;
-	hi = rp->n_rmsg - 1;
-	while (lo < hi) {
-		size_t mid = (lo + hi + 1) / 2;
-
-		if (rp->rmsg[mid].t <= ct)
-			lo = mid;
-		else
-			hi = mid - 1;
-	}
+	lo = last_due(rp->rmsg, rp->n_rmsg, sizeof(*rp->rmsg), ct);
 	if (rp->rmsg[lo].t > ct) {
 		if (!pass)
 			return;
@@ -914,7 +927,7 @@ static int poll_clocked(struct tracker *t, struct replay *rp, const struct track
 	const struct cfg_source *cfg = t->cfg;
 	double el = clip_elapsed(rp, cfg, now), ct;
 	int64_t pass = 0, target, from, cap;
-	size_t lo, hi;
+	size_t lo;
 	int put = 0;
 
 	if (opts_of(cfg)->loop) {
@@ -935,17 +948,7 @@ static int poll_clocked(struct tracker *t, struct replay *rp, const struct track
 	play_remote(rp, pass, ct, now->mono_ns);
 	if (!rp->n_ev)
 		return 0;
-	/* the last event with t <= ct */
-	lo = 0;
-	hi = rp->n_ev - 1;
-	while (lo < hi) {
-		size_t mid = (lo + hi + 1) / 2;
-
-		if (rp->ev[mid].t <= ct)
-			lo = mid;
-		else
-			hi = mid - 1;
-	}
+	lo = last_due(rp->ev, rp->n_ev, sizeof(*rp->ev), ct);
 	if (rp->ev[lo].t > ct) {
 		if (!pass)
 			return 0;
