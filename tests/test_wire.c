@@ -1050,6 +1050,13 @@ static void test_describe_site_block(void **state)
 	buf[plain] = 0x7f;
 	assert_int_equal(wire_decode_describe(buf, len, &back), 0);
 	assert_false(back.site.present);
+	/* a figure that is not a number: not taken */
+	d.site.delay_p99_ms = NAN;
+	len = wire_encode_describe(&d, buf);
+	assert_int_equal(wire_decode_describe(buf, len, &back), 0);
+	assert_false(back.site.present);
+	d.site.delay_p99_ms = 4.75f;
+	len = wire_encode_describe(&d, buf);
 	/* a block cut short (its length past the payload): not taken */
 	buf[plain] = WIRE_SITE_BLOCK;
 	buf[plain + 1] = 200;

@@ -29,19 +29,21 @@
 const bool site_built_in = true;
 
 #define FRAME_MAX (WIRE_FRAME_LEN + WIRE_INPUTS_LEN)
-#define OUT_WORDS (1 + FRAME_MAX / 4)				 /* length, then the FRAME's bytes */
-#define IN_HEAD 3						 /* length, arrival (CLOCK_MONOTONIC, 2 words) */
-#define IN_WORDS (IN_HEAD + FRAME_MAX / 4)			 /* then the FRAME's bytes */
-#define DESC_WORDS (1 + WIRE_MAX_MSG / 4)			 /* length, then the DESCRIBE's bytes */
-#define NAME_WORDS ((CFG_SITE_NAME_MAX + WIRE_NAME_MAX + 4) / 4) /* "SITE/AVATAR" and its NUL */
-#define FIG_WORDS ((int)(sizeof(struct wire_site) + 3) / 4)
-#define SITE_MAX_PEERS 32	     /* remote sites followed at most */
-#define TAKE_MAX 32		     /* samples taken at once */
-#define PING_NS 1000000000ull	     /* clock pings: one a second */
-#define CLOCK_KEEP_NS 10000000000ull /* a clock estimate is replaced by a worse one after 10 s */
+#define OUT_WORDS (1 + FRAME_MAX / 4)	   /* length, then the FRAME's bytes */
+#define IN_HEAD 3			   /* length, arrival (CLOCK_MONOTONIC, 2 words) */
+#define IN_WORDS (IN_HEAD + FRAME_MAX / 4) /* then the FRAME's bytes */
+#define DESC_WORDS (1 + WIRE_MAX_MSG / 4)  /* length, then the DESCRIBE's bytes */
+#define SITE_MAX_PEERS 32		   /* remote sites followed at most */
+#define TAKE_MAX 32			   /* samples taken at once */
+#define PING_NS 1000000000ull		   /* clock pings: one a second */
+#define CLOCK_KEEP_NS 10000000000ull	   /* a clock estimate is replaced by a worse one after 10 s */
 #define MAX_AUTO_INDEX 9 /* participants per host with unicast discovery: each peer's ports 0-9 are probed */
 
 _Static_assert(FRAME_MAX % 4 == 0 && WIRE_MAX_MSG % 4 == 0, "whole words");
+
+/* "SITE/AVATAR" and its NUL; a remote site's figures (struct wire_site) */
+#define NAME_WORDS ((CFG_SITE_NAME_MAX + WIRE_NAME_MAX + 4) / 4)
+#define FIG_WORDS ((int)(sizeof(struct wire_site) + 3) / 4)
 
 static const char *const topic_frame = "avatargw_frame";
 static const char *const topic_desc = "avatargw_description";
@@ -73,7 +75,7 @@ struct rslot {
 	char avatar[WIRE_NAME_MAX + 1];
 	bool used;
 	bool live;
-	int peer;
+	_Atomic int peer; /* its site in peer[], -1: none; the loop reads it too (site_remote_site) */
 	uint32_t last_seq;
 	bool have_seq;
 	dds_instance_handle_t writer; /* the remote writer of its last frame */
@@ -379,9 +381,8 @@ static int domain_get(const struct cfg_site *c, char *err, size_t errlen)
 			if (strcmp(domains[i].xml, xml)) {
 				pthread_mutex_unlock(&domains_mu);
 				snprintf(err, errlen,
-					 "[site]: interface, peers, security or lease changed: Cyclone DDS cannot "
-					 "change "
-					 "them in a running domain; restart the daemon to apply them");
+					 "[site]: interface, peers, security or lease changed: Cyclone DDS "
+					 "cannot change them in a running domain; restart the daemon to apply them");
 				return -EBUSY;
 			}
 			domains[i].refs++;
@@ -1368,13 +1369,14 @@ bool site_remote(struct site *s, int k, uint64_t now_mono, struct wire_frame *wf
 void site_remote_site(struct site *s, int k, struct wire_site *ws)
 {
 	struct rslot *r = &s->rs[k];
+	int pi = atomic_load_explicit(&r->peer, memory_order_relaxed);
 	struct peer *p;
 	uint32_t w[FIG_WORDS], sq;
 
-	/* the slot's peer was set before the slot became live, which the caller's site_remote() saw */
-	if (r->peer < 0)
+	/* set before the slot became live, which the caller's site_remote() saw */
+	if (pi < 0)
 		return;
-	p = &s->peer[r->peer];
+	p = &s->peer[pi];
 	if (ws->present && seqlock_peek(&p->fseq) == r->l_figs)
 		return; /* what ws holds (a DESCRIBE decoded anew holds none) */
 	if (seqlock_try_read(&p->fseq, p->fw, w, FIG_WORDS, &sq)) {

@@ -495,7 +495,9 @@ int wire_decode_describe(const uint8_t *buf, size_t len, struct wire_describe *d
 		d->site.delay_p99_ms = get_f32(&b);
 		d->site.clock_offset_ms = get_f32(&b);
 		d->site.rtt_ms = get_f32(&b);
-		if (b.err)
+		/* a figure that is not a number: the block is not taken */
+		if (b.err || !isfinite(d->site.rate_hz) || !isfinite(d->site.delay_p50_ms) ||
+		    !isfinite(d->site.delay_p99_ms) || !isfinite(d->site.clock_offset_ms) || !isfinite(d->site.rtt_ms))
 			memset(&d->site, 0, sizeof(d->site));
 		else
 			d->site.present = true;
