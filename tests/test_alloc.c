@@ -124,6 +124,23 @@ static void sleep_ms(int ms)
 		;
 }
 
+/* a recording directory and its files */
+static void remove_dir(const char *dir)
+{
+	DIR *d = opendir(dir);
+	struct dirent *de;
+	char p[512];
+
+	while (d && (de = readdir(d)))
+		if (de->d_name[0] != '.') {
+			snprintf(p, sizeof(p), "%s/%s", dir, de->d_name);
+			unlink(p);
+		}
+	if (d)
+		closedir(d);
+	rmdir(dir);
+}
+
 static void test_loop_allocates_nothing(void **state)
 {
 	static struct gateway g;
@@ -175,20 +192,7 @@ static void test_loop_allocates_nothing(void **state)
 	assert_true(ctr_get(&recorder_stats(rec)->records) - rec_before > 1000);
 	assert_int_equal(ctr_get(&recorder_stats(rec)->dropped_records), 0);
 	recorder_close(rec);
-	{
-		DIR *d = opendir("/tmp/avatargw-test-alloc-rec");
-		struct dirent *de;
-		char p[512];
-
-		while (d && (de = readdir(d)))
-			if (de->d_name[0] != '.') {
-				snprintf(p, sizeof(p), "/tmp/avatargw-test-alloc-rec/%s", de->d_name);
-				unlink(p);
-			}
-		if (d)
-			closedir(d);
-		rmdir("/tmp/avatargw-test-alloc-rec");
-	}
+	remove_dir("/tmp/avatargw-test-alloc-rec");
 	for (int i = 0; i < g.n_avatars; i++)
 		frames += ctr_get(&g.av[i].st.frames);
 	print_message("cycles %llu, frames %llu, tcp dropped %llu, allocations while running: %ld\n",
@@ -304,20 +308,7 @@ static void test_remote_replay_allocates_nothing(void **state)
 	assert_true(ctr_get(&g.av[0].st.new_frames) - remote0 > 100); /* they did play (a new one in most cycles) */
 	assert_int_equal(ctr_get(&recorder_stats(rec)->dropped_records), 0);
 	recorder_close(rec);
-	{
-		DIR *d = opendir("/tmp/avatargw-test-alloc-rec2");
-		struct dirent *de;
-		char p[512];
-
-		while (d && (de = readdir(d)))
-			if (de->d_name[0] != '.') {
-				snprintf(p, sizeof(p), "/tmp/avatargw-test-alloc-rec2/%s", de->d_name);
-				unlink(p);
-			}
-		if (d)
-			closedir(d);
-		rmdir("/tmp/avatargw-test-alloc-rec2");
-	}
+	remove_dir("/tmp/avatargw-test-alloc-rec2");
 	unlink(file);
 	assert_int_equal(n, 0);
 	assert_int_equal(before.uordblks, after.uordblks);
