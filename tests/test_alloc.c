@@ -8,12 +8,14 @@
  * then the real loop thread runs for a while with a TCP and a Unix
  * subscriber connected, a slow subscriber that never reads, several
  * avatars, sim and replay sources, DESCRIBEs, the recorder (samples and
- * messages, its writer thread flushing), and the counters must not move. mallinfo2() must not move either, which also
- * catches allocations made inside libc on our behalf.
+ * messages, its writer thread flushing), a replay of another site's
+ * avatars, and the counters must not move. mallinfo2() must not move
+ * either, which also catches allocations made inside libc on our behalf.
  */
 #include "config/config.h"
 #include "daemon/gateway.h"
 #include "daemon/loop.h"
+#include "record/recfile.h"
 #include "record/recorder.h"
 
 #include <stdarg.h>
@@ -122,6 +124,23 @@ static void sleep_ms(int ms)
 		;
 }
 
+/* a recording directory and its files */
+static void remove_dir(const char *dir)
+{
+	DIR *d = opendir(dir);
+	struct dirent *de;
+	char p[512];
+
+	while (d && (de = readdir(d)))
+		if (de->d_name[0] != '.') {
+			snprintf(p, sizeof(p), "%s/%s", dir, de->d_name);
+			unlink(p);
+		}
+	if (d)
+		closedir(d);
+	rmdir(dir);
+}
+
 static void test_loop_allocates_nothing(void **state)
 {
 	static struct gateway g;
@@ -173,20 +192,7 @@ static void test_loop_allocates_nothing(void **state)
 	assert_true(ctr_get(&recorder_stats(rec)->records) - rec_before > 1000);
 	assert_int_equal(ctr_get(&recorder_stats(rec)->dropped_records), 0);
 	recorder_close(rec);
-	{
-		DIR *d = opendir("/tmp/avatargw-test-alloc-rec");
-		struct dirent *de;
-		char p[512];
-
-		while (d && (de = readdir(d)))
-			if (de->d_name[0] != '.') {
-				snprintf(p, sizeof(p), "/tmp/avatargw-test-alloc-rec/%s", de->d_name);
-				unlink(p);
-			}
-		if (d)
-			closedir(d);
-		rmdir("/tmp/avatargw-test-alloc-rec");
-	}
+	remove_dir("/tmp/avatargw-test-alloc-rec");
 	for (int i = 0; i < g.n_avatars; i++)
 		frames += ctr_get(&g.av[i].st.frames);
 	print_message("cycles %llu, frames %llu, tcp dropped %llu, allocations while running: %ld\n",
@@ -202,6 +208,111 @@ static void test_loop_allocates_nothing(void **state)
 	assert_int_equal(before.hblkhd, after.hblkhd);
 	close(tcp);
 	close(ux);
+	gw_close(&g);
+}
+
+/*
+ * A recording of another site's avatar (REMOTE records only: a site without
+ * trackers), written here, replayed in a loop while it is recorded again:
+ * the replay's remote avatars (decoded in the loop, their DESCRIBEs
+ * re-encoded with their site's figures) and the recorder's REMOTE records
+ * allocate nothing.
+ */
+static void write_remote_recording(const char *path)
+{
+	static uint8_t buf[1 << 20];
+	uint8_t msg[WIRE_MAX_MSG];
+	struct recfile_header h = { RECFILE_VERSION, 0, 1, 0 };
+	struct recfile_writer w;
+	struct wire_describe d;
+	struct wire_frame f;
+	size_t len = RECFILE_HEADER_LEN;
+	FILE *o;
+
+	recfile_header_encode(&h, buf);
+	/* SESSION: no sources, no avatars */
+	w = (struct recfile_writer){ buf + len + RECFILE_REC_HEAD, 256, 0, false };
+	recfile_w_u64(&w, 1);
+	recfile_w_u64(&w, 1);
+	recfile_w_f64(&w, 480);
+	recfile_w_u32(&w, 42);
+	recfile_w_u16(&w, 0);
+	recfile_w_u16(&w, 0);
+	recfile_frame(buf + len, RECFILE_SESSION, (uint32_t)w.len);
+	recfile_seal(buf + len);
+	len += RECFILE_REC_OVERHEAD + w.len;
+	memset(&d, 0, sizeof(d));
+	d.h.avatar_id = 1000;
+	strcpy(d.avatar_name, "lab-a/person0");
+	d.site = (struct wire_site){ true, "lab-a", 0, 1, 240, 10, 0, 0.5f, 1, 0, 0.25f };
+	for (int i = 0; i < 400; i++) {
+		size_t n;
+
+		memset(&f, 0, sizeof(f));
+		f.h.avatar_id = 1000;
+		f.h.sample_time_ns = 1000 + (uint64_t)i;
+		f.joint[1] = 0.001f * (float)i;
+		/* a DESCRIBE every 100 frames, as a daemon records them once a second */
+		n = i % 100 ? wire_encode_frame(&f, msg) : wire_encode_describe(&d, msg);
+		recfile_put64(buf + len + RECFILE_REC_HEAD, 1000000 + 4166666 * (uint64_t)i);
+		memcpy(buf + len + RECFILE_REC_HEAD + RECFILE_MESSAGE_HEAD, msg, n);
+		recfile_frame(buf + len, RECFILE_REMOTE, (uint32_t)(RECFILE_MESSAGE_HEAD + n));
+		recfile_seal(buf + len);
+		len += RECFILE_REC_OVERHEAD + RECFILE_MESSAGE_HEAD + n;
+	}
+	o = fopen(path, "wb");
+	assert_non_null(o);
+	assert_int_equal(fwrite(buf, 1, len, o), len);
+	fclose(o);
+}
+
+static void test_remote_replay_allocates_nothing(void **state)
+{
+	static struct gateway g;
+	static const char file[] = "/tmp/avatargw-test-alloc-remote.agwrec";
+	struct config c;
+	char err[512], conf[1024];
+	struct loop *l = NULL;
+	struct recorder *rec = NULL;
+	struct mallinfo2 before, after;
+	uint64_t remote0;
+	long n;
+
+	(void)state;
+	write_remote_recording(file);
+	snprintf(conf, sizeof(conf),
+		 "[daemon]\nrate = 480\ncontrol_socket =\ndescribe_interval = 0.1\n"
+		 "record_dir = /tmp/avatargw-test-alloc-rec2\nrecord_flush = 0.02\n"
+		 "[source rec]\ntype = replay\nfile = %s\nspeed = 4\n"
+		 "[output udp]\ntype = udp\naddress = 127.0.0.1\nport = %d\n",
+		 file, free_tcp_port());
+	if (config_load_text(&c, "alloc.conf", conf, err, sizeof(err)))
+		fail_msg("%s", err);
+	assert_int_equal(gw_open(&g, &c, NULL, 42, err, sizeof(err)), 0);
+	assert_int_equal(g.n_remote, 1);
+	assert_int_equal(gw_record(&g, &rec, err, sizeof(err)), 0);
+	assert_int_equal(loop_start(&l, &g, err, sizeof(err)), 0);
+	sleep_ms(300);
+	before = mallinfo2();
+	remote0 = ctr_get(&g.av[0].st.new_frames);
+	atomic_store(&allocs, 0);
+	atomic_store(&counting, 1);
+	sleep_ms(1000); /* the clip (0.4 s at speed 4) loops: its DESCRIBEs and frames again and again */
+	atomic_store(&counting, 0);
+	after = mallinfo2();
+	n = atomic_load(&allocs);
+	loop_stop(l);
+	print_message("replayed remote frames %llu, records %llu, allocations while running: %ld\n",
+		      (unsigned long long)(ctr_get(&g.av[0].st.new_frames) - remote0),
+		      (unsigned long long)ctr_get(&recorder_stats(rec)->records), n);
+	assert_true(ctr_get(&g.av[0].st.new_frames) - remote0 > 100); /* they did play (a new one in most cycles) */
+	assert_int_equal(ctr_get(&recorder_stats(rec)->dropped_records), 0);
+	recorder_close(rec);
+	remove_dir("/tmp/avatargw-test-alloc-rec2");
+	unlink(file);
+	assert_int_equal(n, 0);
+	assert_int_equal(before.uordblks, after.uordblks);
+	assert_int_equal(before.hblkhd, after.hblkhd);
 	gw_close(&g);
 }
 
@@ -345,6 +456,7 @@ int main(void)
 		cmocka_unit_test(test_wrapper_counts),
 		cmocka_unit_test(test_loop_allocates_nothing),
 		cmocka_unit_test(test_bus_loop_allocates_nothing),
+		cmocka_unit_test(test_remote_replay_allocates_nothing),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

@@ -267,6 +267,66 @@ static void test_index(void **state)
 	rec_index_free(&ix);
 }
 
+/* REMOTE records: a remote avatar's DESCRIBE and FRAMEs kept with its id and name; a bad one counted */
+static void put_remote(struct rec_buf *r, uint64_t mono, const uint8_t *msg, size_t n)
+{
+	uint8_t p[RECFILE_MESSAGE_HEAD + WIRE_MAX_MSG];
+
+	recfile_put64(p, mono);
+	memcpy(p + RECFILE_MESSAGE_HEAD, msg, n);
+	put_record(r, RECFILE_REMOTE, p, (uint32_t)(RECFILE_MESSAGE_HEAD + n));
+}
+
+/* a recording that starts with the DESCRIBE of remote avatar 1000, lab-a/person0, at mono */
+static void remote_start(struct rec_buf *r, struct wire_describe *d, uint64_t mono)
+{
+	uint8_t msg[WIRE_MAX_MSG];
+
+	put_header(r);
+	put_session(r, false);
+	memset(d, 0, sizeof(*d));
+	d->h.avatar_id = 1000;
+	strcpy(d->avatar_name, "lab-a/person0");
+	d->site = (struct wire_site){ true, "lab-a", 0, 1, 240, 10, 0, 0.5f, 1, 0, 0.25f };
+	put_remote(r, mono, msg, wire_encode_describe(d, msg));
+}
+
+static void test_index_remote(void **state)
+{
+	static struct rec_buf r;
+	struct rec_index ix;
+	struct wire_describe d;
+	struct wire_frame f;
+	uint8_t msg[WIRE_MAX_MSG];
+	char err[256];
+
+	(void)state;
+	remote_start(&r, &d, 500);
+	for (int i = 0; i < 5; i++) {
+		memset(&f, 0, sizeof(f));
+		f.h.avatar_id = 1000;
+		f.joint[3] = 0.25f * (float)i;
+		put_sample(&r, 0, 0, 1000 + (uint64_t)i, false);
+		put_remote(&r, 1000 + (uint64_t)i, msg, wire_encode_frame(&f, msg));
+	}
+	put_remote(&r, 2000, (const uint8_t *)"not a message", 13);
+	assert_string_equal(recfile_type_name(RECFILE_REMOTE), "REMOTE");
+	assert_int_equal(rec_index_parse(r.b, r.len, &ix, err, sizeof(err)), 0);
+	assert_int_equal(ix.n_events, 5);
+	assert_int_equal(ix.n_remote, 6);
+	assert_int_equal(ix.n_bad, 1);
+	assert_int_equal(ix.n_other, 0);
+	assert_int_equal(ix.n_remote_avatars, 1);
+	assert_int_equal(ix.remote_avatars[0].id, 1000);
+	assert_string_equal(ix.remote_avatars[0].name, "lab-a/person0");
+	assert_int_equal(ix.remote_avatars[0].frames, 5);
+	assert_int_equal(ix.remote[0].type, WIRE_DESCRIBE);
+	assert_true(ix.remote[0].mono_ns == 500 && ix.remote[5].mono_ns == 1004);
+	assert_int_equal(wire_decode_frame(ix.remote_bytes + ix.remote[5].off, ix.remote[5].len, &f), 0);
+	assert_true(f.joint[3] == 1.0f);
+	rec_index_free(&ix);
+}
+
 /* damage in the middle: reported at its offset, the records after it kept */
 static void test_damage_resync(void **state)
 {
@@ -508,6 +568,65 @@ static void test_replay_nonfinite_analog(void **state)
 	unlink(path);
 }
 
+/* a recording of remote avatars only (a site without trackers): replayed as recorded, on its clock */
+static void test_replay_remote_only(void **state)
+{
+	static struct rec_buf r;
+	static struct config cfg;
+	static struct wire_describe d, dout;
+	char path[] = "/tmp/avatargw-test-recfile-XXXXXX", text[256], err[512];
+	struct tracker_clock now = { 1000000000000ull, 0 };
+	struct wire_frame f, out;
+	struct tracker t;
+	uint8_t msg[WIRE_MAX_MSG];
+	bool described, fresh;
+	uint16_t id;
+
+	(void)state;
+	remote_start(&r, &d, 5000000);
+	for (int i = 0; i < 10; i++) {
+		memset(&f, 0, sizeof(f));
+		f.h.avatar_id = 1000;
+		f.h.sample_time_ns = 77 + (uint64_t)i;
+		f.joint[5] = 0.1f * (float)i;
+		put_remote(&r, 5000000 + 10000000 * (uint64_t)i, msg, wire_encode_frame(&f, msg));
+	}
+	write_temp(&r, path);
+	snprintf(text, sizeof(text), "[source r]\ntype = replay\nfile = %s\nloop = no\n", path);
+	assert_int_equal(config_load_text(&cfg, "t.conf", text, err, sizeof(err)), 0);
+	assert_int_equal(tracker_open(&t, &cfg.source[0], err, sizeof(err)), 0);
+	assert_int_equal(t.drv->solved_count(&t), 1);
+	assert_string_equal(t.drv->solved_name(&t, 0, &id), "lab-a/person0");
+	assert_int_equal(id, 1000);
+	/* the first poll starts the clip: the DESCRIBE and the first frame (both at clip time 0) */
+	assert_int_equal(t.drv->poll(&t, &now), 0);
+	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	assert_true(described && fresh);
+	assert_string_equal(dout.avatar_name, "lab-a/person0");
+	assert_true(dout.site.present && dout.site.rtt_ms == 0.25f);
+	assert_true(out.h.sample_time_ns == 77 && out.joint[5] == 0.0f && (out.h.flags & WIRE_F_NEW_SAMPLE));
+	/* 45 ms later: the frame recorded at 40 ms, joint angles as recorded */
+	now.mono_ns += 45000000;
+	t.drv->poll(&t, &now);
+	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	assert_true(!described && fresh);
+	assert_true(out.h.sample_time_ns == 81 && out.joint[5] == 0.4f);
+	assert_int_equal(out.sensor[0].state, WIRE_SENSOR_OK);
+	/* past the end: nothing new, STALE after the stale time */
+	now.mono_ns += 500000000;
+	t.drv->poll(&t, &now);
+	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	assert_int_equal(out.h.sample_time_ns, 86);
+	now.mono_ns += 60000000;
+	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	assert_false(fresh);
+	assert_true((out.h.flags & WIRE_F_STALE) && out.sensor[0].state == WIRE_SENSOR_STALE);
+	assert_int_equal(atomic_load(&t.st.state), TRACKER_ENDED);
+	tracker_close(&t);
+	config_free(&cfg);
+	unlink(path);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -521,6 +640,8 @@ int main(void)
 		cmocka_unit_test(test_second_session),
 		cmocka_unit_test(test_gap_unknown_bad),
 		cmocka_unit_test(test_no_session),
+		cmocka_unit_test(test_index_remote),
+		cmocka_unit_test(test_replay_remote_only),
 		cmocka_unit_test(test_replay_damaged_first_session),
 		cmocka_unit_test(test_replay_nonfinite_analog),
 	};

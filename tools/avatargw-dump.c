@@ -42,6 +42,7 @@
 #include "avatargw/wire.h"
 
 #define DUMP_MAX_AVATARS 64
+#define DUMP_MAX_SITES 32     /* remote sites whose figures --stats prints */
 #define DUMP_LAT_SAMPLES 8192 /* per avatar and interval; a reservoir beyond */
 #define DUMP_SEQ_WINDOW 64    /* sequence numbers remembered behind the newest */
 #define DUMP_UDP_BATCH 64     /* datagrams read per wake-up before timers are checked */
@@ -107,7 +108,8 @@ struct dump {
 	int64_t iv_start_mono;
 	uint64_t rng;
 	struct dump_avatar av[DUMP_MAX_AVATARS];
-	uint64_t untracked; /* FRAMEs of avatars beyond DUMP_MAX_AVATARS */
+	struct wire_site site[DUMP_MAX_SITES]; /* the newest figures of each remote site, from DESCRIBEs */
+	uint64_t untracked;		       /* FRAMEs of avatars beyond DUMP_MAX_AVATARS */
 };
 
 /* ---- time ----------------------------------------------------------------------- */
@@ -302,6 +304,22 @@ static void dump_print_frame(const struct wire_frame *f, int64_t rx_ns)
 	fputs("}\n", stdout);
 }
 
+static void dump_json_site(const struct wire_site *ws)
+{
+	fputs("\"name\":", stdout);
+	dump_json_s(ws->name);
+	printf(",\"state\":\"%s\",\"avatars\":%u,\"rate_hz\":%.2f,\"frames\":%" PRIu32 ",\"lost\":%" PRIu32,
+	       ws->state ? "gone" : "present", ws->avatars, (double)ws->rate_hz, ws->frames, ws->lost);
+	if (ws->delay_p50_ms >= 0)
+		printf(",\"delay_ms\":{\"p50\":%.3f,\"p99\":%.3f}", (double)ws->delay_p50_ms, (double)ws->delay_p99_ms);
+	else
+		fputs(",\"delay_ms\":null", stdout);
+	if (ws->rtt_ms >= 0)
+		printf(",\"clock_offset_ms\":%.3f,\"rtt_ms\":%.3f", (double)ws->clock_offset_ms, (double)ws->rtt_ms);
+	else
+		fputs(",\"clock_offset_ms\":null,\"rtt_ms\":null", stdout);
+}
+
 static void dump_print_describe(const struct wire_describe *d)
 {
 	const struct wire_header *h = &d->h;
@@ -349,7 +367,13 @@ static void dump_print_describe(const struct wire_describe *d)
 			putchar(',');
 		dump_json_s(d->sensor[i]);
 	}
-	fputs("]}\n", stdout);
+	putchar(']');
+	if (d->site.present) {
+		fputs(",\"site\":{", stdout);
+		dump_json_site(&d->site);
+		putchar('}');
+	}
+	fputs("}\n", stdout);
 }
 
 /* ---- statistics ------------------------------------------------------------------ */
@@ -483,6 +507,17 @@ static void dump_json_count(const struct dump_count *c)
 	       c->frames, c->lost, c->reordered, c->duplicate, c->stale, c->held);
 }
 
+/* a remote avatar's DESCRIBE: its site's figures replace the ones held (--stats prints them) */
+static void dump_site_take(struct dump *d, const struct wire_site *ws)
+{
+	int i = 0;
+
+	while (i < DUMP_MAX_SITES && d->site[i].present && strcmp(d->site[i].name, ws->name))
+		i++;
+	if (i < DUMP_MAX_SITES)
+		d->site[i] = *ws;
+}
+
 /* one line per avatar for the interval that ends now, then a new interval */
 static void dump_stats_print(struct dump *d, bool final)
 {
@@ -517,6 +552,12 @@ static void dump_stats_print(struct dump *d, bool final)
 		memset(&a->iv, 0, sizeof(a->iv));
 		a->lat_n = 0;
 		a->lat_sum = a->lat_max = 0;
+	}
+	for (int i = 0; i < DUMP_MAX_SITES && d->site[i].present; i++) {
+		/* each remote site as the daemon measures its samples' arrival */
+		fputs("{\"type\":\"site\",", stdout);
+		dump_json_site(&d->site[i]);
+		fputs(final ? ",\"final\":true}\n" : "}\n", stdout);
 	}
 	if (!any)
 		printf("{\"type\":\"stats\",\"avatar\":null,\"interval_s\":%.3f,\"rate_hz\":0,\"malformed\":%" PRIu64
@@ -572,6 +613,8 @@ static void dump_message(struct dump *d, const uint8_t *buf, size_t len, int64_t
 			dump_malformed(d, ret);
 			return;
 		}
+		if (desc.site.present)
+			dump_site_take(d, &desc.site);
 		if (d->o.describe)
 			dump_print_describe(&desc);
 		break;
@@ -947,7 +990,8 @@ static void dump_usage(FILE *f)
 		"  --count N           exit 0 after N frames\n"
 		"  --timeout SECONDS   exit 1 if no message arrives for that long (0: wait forever)\n"
 		"  --stats             instead of frames, per avatar once a second and at exit: rate,\n"
-		"                      loss, reordering, latency (receive time - sample time)\n"
+		"                      loss, reordering, latency (receive time - sample time); and per\n"
+		"                      remote site ([site]) its figures as the daemon measures them\n"
 		"  --describe          also print DESCRIBE messages\n"
 		"  --avatar ID         only this avatar\n"
 		"  --help              this text\n",

@@ -105,6 +105,12 @@ static int cmd_info(const char *path, bool json)
 			       a->dims[0], a->dims[1], a->dims[2], a->dims[3], a->head_offset[0], a->head_offset[1],
 			       a->head_offset[2]);
 		}
+		printf("],\"remote_avatars\":[");
+		for (size_t i = 0; i < ix.n_remote_avatars; i++) {
+			printf("%s{\"name\":", i ? "," : "");
+			json_str(ix.remote_avatars[i].name);
+			printf(",\"id\":%u,\"frames\":%zu}", ix.remote_avatars[i].id, ix.remote_avatars[i].frames);
+		}
 		printf("]}\n");
 	} else {
 		printf("%s: avatargw recording v%u, %zu bytes, file %u of its run%s%s\n", path, ix.hdr.version,
@@ -117,6 +123,9 @@ static int cmd_info(const char *path, bool json)
 			       s->sources[i].n_sensors);
 		for (int i = 0; i < s->n_avatars; i++)
 			printf("  avatar %s (id %u)\n", s->avatars[i].name, s->avatars[i].id);
+		for (size_t i = 0; i < ix.n_remote_avatars; i++)
+			printf("  remote avatar %s (id %u): %zu frames, solved at its site\n",
+			       ix.remote_avatars[i].name, ix.remote_avatars[i].id, ix.remote_avatars[i].frames);
 		printf("%zu samples, %zu messages, %zu unmapped, %zu undecodable\n", ix.n_events, ix.n_messages,
 		       ix.n_unmapped, ix.n_bad);
 		if (ix.n_gaps)

@@ -243,7 +243,8 @@ function makeBody(av) {
 
 function makeAvatar(rec) {
 	const av = {
-		id: rec.id, name: rec.name || '', site: rec.site || '', // site: another site's people, later
+		id: rec.id, name: rec.name || '', site: rec.site || '', // site: another site's people ([site])
+		siteStats: null, // how that site's samples reach the daemon: rate, loss, delay, clock
 		color: new THREE.Color(PALETTE[avatars.size % PALETTE.length]),
 		group: new THREE.Group(), rec: null, rx: -1e9, hist: [], buckets: [], bucket: null,
 		drawnSeq: -1, drawn: [], since: performance.now(), latency: null, card: null, grey: null,
@@ -598,12 +599,12 @@ function makeCard(av) {
 	const el = document.createElement('div');
 	el.className = 'card';
 	el.innerHTML = '<div class="head"><span class="swatch"></span><span class="name"></span><span class="site"></span>' +
-		'<span class="id"></span><span class="state"></span></div><div class="nums"></div><canvas width="676" height="316"></canvas>';
+		'<span class="id"></span><span class="state"></span></div><div class="nums"></div><div class="nums sitenums"></div><canvas width="676" height="316"></canvas>';
 	el.addEventListener('click', () => setFollowing(following === av ? null : av));
 	$('avatars').appendChild(el);
 	av.card = { el, swatch: el.querySelector('.swatch'), name: el.querySelector('.name'), site: el.querySelector('.site'),
 		id: el.querySelector('.id'), state: el.querySelector('.state'), nums: el.querySelector('.nums'),
-		canvas: el.querySelector('canvas') };
+		siteNums: el.querySelector('.sitenums'), canvas: el.querySelector('canvas') };
 }
 
 function updateCard(av, now, st, grey) {
@@ -630,7 +631,27 @@ function updateCard(av, now, st, grey) {
 		fmt(latency, 1) + '</b> ms</span>' +
 		'<span title="from the tracker sample to the daemon sending it here">daemon <b>' + fmt(r.srv_ms, 1) + '</b> ms</span>' +
 		'<span title="distance from each hand sensor to the solved hand, right / left">IK <b>' + ik + '</b> mm</span>';
+	c.siteNums.innerHTML = siteLine(av.site, av.siteStats);
 	plot(av, now);
+}
+
+function escapeHtml(t) {
+	return String(t).replace(/[&<>"']/g, (c) => '&#' + c.charCodeAt(0) + ';');
+}
+
+// another site's avatar: how its site's samples reach the daemon (docs/SITES.md), or nothing
+function siteLine(site, f) {
+	if (!f)
+		return '';
+	const ms = (v) => (v === null || v < 0 ? '–' : fmt(v, 1));
+	return '<span title="the remote site, as the daemon sees it">' + escapeHtml(site) + ' <b>' + escapeHtml(f.state) + '</b></span>' +
+		'<span title="frames a second from that site, all its avatars">site rate <b>' + fmt(f.rate_hz, 0) + '</b> Hz</span>' +
+		'<span title="samples of that site lost on the network">lost <b>' + f.lost + '</b></span>' +
+		'<span title="one way, its sample time (on this daemon\'s clock) to the arrival here, p50 / p99">delay <b>' +
+		ms(f.delay_p50_ms) + ' / ' + ms(f.delay_p99_ms) + '</b> ms</span>' +
+		'<span title="its clock minus the daemon\'s, estimated from a round trip">clock <b>' +
+		(f.rtt_ms === null || f.rtt_ms < 0 ? '–' : fmt(f.clock_offset_ms, 2)) + '</b> ms</span>' +
+		'<span title="round trip to that site">rtt <b>' + ms(f.rtt_ms) + '</b> ms</span>';
 }
 
 // the last minute on the card's canvas: four line plots and the sensor strip
@@ -743,6 +764,7 @@ function onFrames(msg) {
 			av.tag = label(title(av));
 			av.group.add(av.tag);
 		}
+		av.siteStats = rec.site_stats || null;
 		if (restart || (av.rec && rec.k <= av.rec.k) || now - av.rx > WINDOW_MS) {
 			av.hist = [];
 			av.drawn = [];
@@ -871,7 +893,7 @@ function frame() {
 			const grey = noFrames || (av.rec.flags & F_STALE) !== 0;
 			updateCard(av, now, st, grey);
 			const seen = av.buckets.filter((b) => b.n);
-			stats.list.push({ id: av.id, name: av.name, site: av.site, grey, noFrames,
+			stats.list.push({ id: av.id, name: av.name, site: av.site, siteStats: av.siteStats, grey, noFrames,
 				sensors: av.rec.sensors.map((x) => STATE_NAMES[x.state]), rate: st.rate, outRate: st.outRate,
 				received: st.received, shown: st.shown, loss: st.loss, latency: av.latency, off: av.off || 0,
 				columns: av.buckets.length, strip: seen.length ? seen[seen.length - 1].states : null });

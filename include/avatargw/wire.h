@@ -154,6 +154,29 @@ struct wire_segment_desc {
 	uint8_t parent; /* index of the parent segment, 255 = world */
 };
 
+/*
+ * A remote avatar's site ([site], docs/SITES.md): how its site's samples
+ * reach this daemon, refreshed in each of its DESCRIBEs (an optional block
+ * after the sensor names, docs/PROTOCOL.md; a change of these figures is no
+ * new describe_rev). present: the DESCRIBE carries the block.
+ */
+#define WIRE_SITE_NAME_MAX 31
+#define WIRE_SITE_BLOCK 1 /* the block's tag */
+
+struct wire_site {
+	bool present;
+	char name[WIRE_SITE_NAME_MAX + 1];
+	uint8_t state;	       /* 0 present, 1 gone */
+	uint16_t avatars;      /* the site's avatars here now */
+	float rate_hz;	       /* its frames arriving per second, all its avatars */
+	uint32_t frames;       /* received from it */
+	uint32_t lost;	       /* lost on the way (gaps in its numbering) */
+	float delay_p50_ms;    /* one way: its sample time, on our clock, to the arrival here; -1: no estimate yet */
+	float delay_p99_ms;    /* -1: no estimate yet */
+	float clock_offset_ms; /* its clock minus ours (0 until rtt_ms >= 0) */
+	float rtt_ms;	       /* round trip of the clock estimate in use; -1: none yet */
+};
+
 struct wire_describe {
 	struct wire_header h;
 	float rate_hz;
@@ -164,6 +187,7 @@ struct wire_describe {
 	struct wire_joint_desc joint[WIRE_JOINTS];
 	struct wire_segment_desc segment[WIRE_SEGMENTS];
 	char sensor[WIRE_SENSORS][WIRE_NAME_MAX + 1];
+	struct wire_site site; /* a remote avatar's site, when present */
 };
 
 /* errors of the decoders (returned negated) */

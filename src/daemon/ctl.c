@@ -24,7 +24,7 @@
 #include <unistd.h>
 
 static const char *const tracker_states[] = { "OK", "STALE", "FAULTY", "ENDED" };
-static const char *const sensor_states[] = { "OK", "STALE", "FAULTY" };
+static const char *const sensor_states[] = { "OK", "STALE", "MISSING" };
 void ctl_resolve_path(const char *configured, char *out, size_t len)
 {
 	const char *d;
@@ -183,18 +183,19 @@ int ctl_rates_update(struct ctl_rates *r, struct gateway *g)
 {
 	struct timespec ts;
 	double t, dt;
+	int n_av = g->n_avatars + g->n_remote;
 
 	clock_gettime(CLOCK_MONOTONIC, &ts);
 	t = (double)ts.tv_sec + ts.tv_nsec * 1e-9;
-	if (r->n_trackers != g->n_trackers || r->n_avatars != g->n_avatars || !r->trk_samples) {
+	if (r->n_trackers != g->n_trackers || r->n_avatars != n_av || !r->trk_samples) {
 		/* a new configuration: start over */
 		ctl_rates_free(r);
 		r->n_trackers = g->n_trackers;
-		r->n_avatars = g->n_avatars;
+		r->n_avatars = n_av;
 		r->trk_samples = calloc((size_t)g->n_trackers + 1, sizeof(uint64_t));
 		r->trk_rate = calloc((size_t)g->n_trackers + 1, sizeof(double));
-		r->av_frames = calloc((size_t)g->n_avatars + 1, sizeof(uint64_t));
-		r->av_rate = calloc((size_t)g->n_avatars + 1, sizeof(double));
+		r->av_frames = calloc((size_t)n_av + 1, sizeof(uint64_t));
+		r->av_rate = calloc((size_t)n_av + 1, sizeof(double));
 		if (!r->trk_samples || !r->trk_rate || !r->av_frames || !r->av_rate)
 			return -ENOMEM;
 		r->t = 0;
@@ -208,7 +209,7 @@ int ctl_rates_update(struct ctl_rates *r, struct gateway *g)
 				(double)(s - r->trk_samples[i]) / dt / (g->trk[i].n_sensors ? g->trk[i].n_sensors : 1);
 		r->trk_samples[i] = s;
 	}
-	for (int i = 0; i < g->n_avatars; i++) {
+	for (int i = 0; i < n_av; i++) {
 		uint64_t f = ctr_get(&g->av[i].st.frames);
 
 		if (r->t > 0 && dt > 0)
@@ -231,6 +232,33 @@ void ctl_rates_free(struct ctl_rates *r)
 static double us(uint64_t ns)
 {
 	return (double)ns / 1000.0;
+}
+
+/*
+ * Remote avatar k (gateway av[n_avatars + k]): its name ("SITE/NAME") and
+ * state word; false for a slot that never had one. A [site] slot whose site
+ * left is GONE; a replayed one counts once it has published.
+ */
+static bool remote_row(struct gateway *g, int k, char *name, size_t len, const char **state, const char **via)
+{
+	const struct gw_avatar *a = &g->av[g->n_avatars + k];
+	uint32_t st = atomic_load_explicit(&a->st.state, memory_order_relaxed) % 3;
+	bool live = true;
+
+	if (k < g->n_site) {
+		if (!site_remote_name(g->site, k, name, len, &live))
+			return false;
+		*via = "site";
+	} else {
+		uint16_t id;
+
+		if (!ctr_get(&a->st.frames))
+			return false;
+		snprintf(name, len, "%s", a->solved_trk->drv->solved_name(a->solved_trk, a->solved_k, &id));
+		*via = a->solved_trk->name;
+	}
+	*state = live ? sensor_states[st] : "GONE";
+	return true;
 }
 
 void ctl_status(FILE *out, const struct ctl_info *info, bool json)
@@ -302,7 +330,7 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 			fprintf(out, "%s{\"name\":", i ? "," : "");
 			json_string(out, a->cfg->name);
 			fprintf(out,
-				",\"id\":%u,\"state\":\"%s\",\"frames\":%llu,\"rate_hz\":%.2f,"
+				",\"id\":%u,\"state\":\"%s\",\"remote\":false,\"frames\":%llu,\"rate_hz\":%.2f,"
 				"\"new_frames\":%llu,\"stale_frames\":%llu,\"held\":%llu,\"ik_iters_per_arm\":%.3f,"
 				"\"ik_unreached\":%llu,\"nan_blocked\":%llu,"
 				"\"latency_us\":{\"n\":%llu,\"p50\":%.1f,\"p99\":%.1f,\"p999\":%.1f,\"max\":%.1f}}",
@@ -317,6 +345,24 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 				(unsigned long long)ctr_get(&a->st.latency.n), us(hist_percentile(&a->st.latency, 0.5)),
 				us(hist_percentile(&a->st.latency, 0.99)), us(hist_percentile(&a->st.latency, 0.999)),
 				us(ctr_get(&a->st.latency.max_ns)));
+		}
+		for (int k = 0, n = g->n_avatars; k < g->n_remote; k++) {
+			const struct gw_avatar *a = &g->av[g->n_avatars + k];
+			const char *state, *via;
+			char name[64];
+
+			if (!remote_row(g, k, name, sizeof(name), &state, &via))
+				continue;
+			/* solved at its site: no IK figures of ours; its name is what the network said */
+			fprintf(out, "%s{\"name\":", n++ ? "," : "");
+			json_string(out, name);
+			fprintf(out, ",\"id\":%u,\"state\":\"%s\",\"remote\":true,\"via\":", a->id, state);
+			json_string(out, via);
+			fprintf(out, ",\"frames\":%llu,\"rate_hz\":%.2f,\"new_frames\":%llu,\"stale_frames\":%llu}",
+				(unsigned long long)ctr_get(&a->st.frames),
+				r && g->n_avatars + k < r->n_avatars ? r->av_rate[g->n_avatars + k] : 0.0,
+				(unsigned long long)ctr_get(&a->st.new_frames),
+				(unsigned long long)ctr_get(&a->st.stale_frames));
 		}
 		fputs("],\"outputs\":[", out);
 		for (int i = 0; i < g->n_outputs; i++) {
@@ -409,6 +455,18 @@ void ctl_status(FILE *out, const struct ctl_info *info, bool json)
 			(unsigned long long)ctr_get(&a->st.ik_unreached),
 			(unsigned long long)ctr_get(&a->st.nan_blocked), us(hist_percentile(&a->st.latency, 0.5)),
 			us(hist_percentile(&a->st.latency, 0.99)), us(ctr_get(&a->st.latency.max_ns)));
+	}
+	for (int k = 0; k < g->n_remote; k++) {
+		const struct gw_avatar *a = &g->av[g->n_avatars + k];
+		const char *state, *via;
+		char name[64];
+
+		if (!remote_row(g, k, name, sizeof(name), &state, &via))
+			continue;
+		fprintf(out, "%-16s %5u %-6s %8.1f %9llu %7llu %6s %8s %9s %5s %26s\n", name, a->id, state,
+			r && g->n_avatars + k < r->n_avatars ? r->av_rate[g->n_avatars + k] : 0.0,
+			(unsigned long long)ctr_get(&a->st.frames), (unsigned long long)ctr_get(&a->st.stale_frames),
+			"-", "-", "-", "-", strcmp(via, "site") ? "replayed" : "remote");
 	}
 	fprintf(out, "\n%-16s %-9s %10s %9s %7s %8s\n", "OUTPUT", "TYPE", "SENT", "DROPPED", "ERRORS", "CLIENTS");
 	for (int i = 0; i < g->n_outputs; i++) {

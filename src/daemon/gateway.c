@@ -5,6 +5,7 @@
 #include "daemon/gateway.h"
 #include "base/clock.h"
 
+#include "base/log.h"
 #include "base/seqlock.h"
 #include "publish/encode.h"
 #include "record/recfile.h"
@@ -123,6 +124,7 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 	uint16_t *ids;
 	size_t n_all;
 	int rc = 0;
+	bool kept = false; /* g->site is old's, taken over */
 
 	memset(g, 0, sizeof(*g));
 	g->cfg = *cfg;
@@ -139,11 +141,21 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 	g->frame_slot = frame_slot();
 	if (g->cfg.site.present) {
 		/* the other sites' avatars: slots reserved now, after the configured ones */
-		rc = site_open(&g->site, &g->cfg, source_id, err, errlen);
-		if (rc)
-			goto fail;
-		g->n_remote = site_n_remote(g->site);
+		if (old && old->site && site_keeps(old->site, &g->cfg)) {
+			/* a reload that leaves [site] as it was: the participant and the remote avatars stay */
+			g->site = old->site;
+			kept = true;
+		} else {
+			rc = site_open(&g->site, &g->cfg, source_id, err, errlen);
+			if (rc)
+				goto fail;
+		}
+		g->n_site = site_n_remote(g->site);
 	}
+	g->n_remote = g->n_site;
+	for (int i = 0; i < g->n_trackers; i++)
+		if (g->trk[i].drv->solved_count)
+			g->n_remote += g->trk[i].drv->solved_count(&g->trk[i]);
 	n_all = (size_t)g->cfg.n_avatars + (size_t)g->n_remote;
 	g->av = calloc(n_all + 1, sizeof(*g->av));
 	g->arena = malloc((n_all + 1) * g->frame_slot);
@@ -182,14 +194,59 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 			a->dseq = o->dseq;
 			a->describe_rev = o->describe_rev + (describe_changed(a, o) ? 1 : 0);
 		}
-		if (g->site)
-			site_describe_local(g->site, i, a->describe);
 		g->n_avatars++;
 	}
-	for (int k = 0; k < g->n_remote; k++) {
+	for (int i = 0; kept && i < g->n_avatars; i++)
+		kept = site_keeps_describe(g->site, i, g->av[i].describe);
+	if (g->site && !kept && old && g->site == old->site) {
+		/* a local avatar's description changed: published by a new participant */
+		g->site = NULL;
+		rc = site_open(&g->site, &g->cfg, source_id, err, errlen);
+		if (rc) {
+			free(ids);
+			goto fail;
+		}
+	}
+	for (int i = 0; g->site && !kept && i < g->n_avatars; i++)
+		site_describe_local(g->site, i, g->av[i].describe);
+	for (int k = 0, t = 0, j = 0; k < g->n_remote; k++) {
 		struct gw_avatar *a = &g->av[g->n_avatars + k];
 
-		a->id = site_remote_id(g->site, k);
+		if (k < g->n_site) {
+			a->id = site_remote_id(g->site, k);
+			if (kept) {
+				/* the same avatar in the same slot: its numbering goes on */
+				const struct gw_avatar *o = &old->av[old->n_avatars + k];
+
+				a->seq = o->seq;
+				a->dseq = o->dseq;
+				a->describe_rev = o->describe_rev;
+			}
+		} else {
+			/* a recording's remote avatar: the id it had at the recording site */
+			while (!g->trk[t].drv->solved_count || j >= g->trk[t].drv->solved_count(&g->trk[t])) {
+				t++;
+				j = 0;
+			}
+			a->solved_trk = &g->trk[t];
+			a->solved_k = j++;
+			g->trk[t].drv->solved_name(&g->trk[t], a->solved_k, &a->id);
+			for (int i = 0; i < g->n_avatars + k; i++)
+				if (ids[i] == a->id) {
+					uint16_t id;
+					const char *name = g->trk[t].drv->solved_name(&g->trk[t], a->solved_k, &id);
+
+					snprintf(err, errlen,
+						 "[source %s]: the recording's remote avatar %s has id %u, %s",
+						 g->trk[t].name, name, id,
+						 i < g->n_avatars		? "as an avatar of this configuration"
+						 : i < g->n_avatars + g->n_site ? "among the [site] remote ids"
+										: "as another replayed remote avatar");
+					free(ids);
+					rc = -EINVAL;
+					goto fail;
+				}
+		}
 		a->describe_msg = g->describe + (size_t)(g->n_avatars + k) * WIRE_MAX_MSG;
 		a->describe = &g->describes[g->n_avatars + k];
 		ids[g->n_avatars + k] = a->id;
@@ -215,10 +272,19 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 					output_unadopt(&g->out[i], &old->out[j]);
 		goto fail;
 	}
-	if (g->site && (rc = site_start(g->site, err, errlen)))
+	if (kept) {
+		old->site = NULL;
+		site_adopt(g->site, &g->cfg);
+		pr_info("[site] unchanged: the DDS participant and the remote avatars stay");
+	} else if (g->site && old && old->site) {
+		pr_info("[site] changed: a new DDS participant; the remote avatars come back as it discovers them");
+	}
+	if (g->site && !kept && (rc = site_start(g->site, err, errlen)))
 		goto fail;
 	return 0;
 fail:
+	if (kept)
+		g->site = NULL; /* still old's */
 	gw_close(g);
 	return rc;
 }
@@ -415,8 +481,11 @@ static int remote_frames(struct gateway *g, uint64_t now_ns, int n, int *frames)
 		struct gw_avatar *a = &g->av[i];
 		struct wire_frame *wf = &g->wframes[i];
 		bool described, fresh;
+		int m;
 
-		if (!site_remote(g->site, k, now_ns, wf, a->describe, &described, &fresh))
+		if (k < g->n_site ? !site_remote(g->site, k, now_ns, wf, a->describe, &described, &fresh)
+				  : !a->solved_trk->drv->solved(a->solved_trk, a->solved_k, now_ns, g->stale_ns, wf,
+								a->describe, &described, &fresh))
 			continue;
 		if (described) {
 			a->describe->h.source_id = g->source_id;
@@ -437,7 +506,19 @@ static int remote_frames(struct gateway *g, uint64_t now_ns, int n, int *frames)
 		if (wf->h.flags & WIRE_F_STALE)
 			ctr_add(&a->st.stale_frames, 1);
 		atomic_store_explicit(&a->st.state, wf->sensor[0].state, memory_order_relaxed);
+		/* recorded as what it is, a remote avatar: a replay publishes it again as it was */
+		if (g->rec && fresh)
+			recorder_remote(g->rec, now_ns, g->msgs[n - 1].data, g->msgs[n - 1].len);
+		if (now_ns >= a->next_describe_ns) {
+			/* its site's figures of now in the DESCRIBE (no new revision: the skeleton is the same) */
+			if (k < g->n_site)
+				site_remote_site(g->site, k, &a->describe->site);
+			a->describe_len = (uint16_t)wire_encode_describe(a->describe, a->describe_msg);
+		}
+		m = n;
 		n = queue_describe(g, a, i, now_ns, n);
+		if (g->rec && n > m)
+			recorder_remote(g->rec, now_ns, g->msgs[m].data, g->msgs[m].len);
 	}
 	return n;
 }
@@ -529,10 +610,10 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 			site_put(g->site, i, g->msgs[n - 1].data, g->msgs[n - 1].len);
 		n = queue_describe(g, a, i, now->mono_ns, n);
 	}
-	if (g->site) {
+	if (g->site)
 		site_flush(g->site);
+	if (g->n_remote)
 		n = remote_frames(g, now->mono_ns, n, &frames);
-	}
 	for (int i = 0; g->rec && i < n; i++)
 		recorder_message(g->rec, now->mono_ns, g->msgs[i].data, g->msgs[i].len);
 	for (int o = 0; o < g->n_outputs; o++) {

@@ -56,6 +56,9 @@ struct gw_avatar {
 	uint16_t describe_len;
 	struct wire_describe *describe; /* its values (made at start-up; seq and revision change) */
 	struct gw_avatar_stats st;
+	/* an avatar solved elsewhere that a source plays (a recording's remote avatar): its source and index */
+	struct tracker *solved_trk;
+	int solved_k;
 };
 
 struct gw_stats {
@@ -95,11 +98,14 @@ struct gateway {
 	int n_avatars;
 	/*
 	 * av[0, n_avatars): the configured avatars, solved here; then n_remote
-	 * slots for the other sites' avatars ([site], src/sites/site.h), whose
-	 * frames come solved from the site (cfg and av are NULL in them).
+	 * avatars solved elsewhere (cfg and av are NULL in them): first n_site
+	 * slots for the other sites' avatars ([site], src/sites/site.h), then
+	 * the remote avatars of recordings that replay sources play
+	 * (tracker_driver.solved).
 	 */
 	struct gw_avatar *av;
 	int n_remote;
+	int n_site;
 	struct site *site; /* [site]: this daemon in a telecollaboration, or NULL */
 	int n_outputs;
 	struct output out[CFG_MAX_OUTPUTS];

@@ -40,6 +40,7 @@ void snap_free(struct snap *s)
 static void describe(struct snap_slot *sl, const struct out_msg *m)
 {
 	memcpy(sl->name, m->describe->avatar_name, sizeof(sl->name));
+	sl->site = m->describe->site;
 }
 
 void snap_put_batch(struct snap *s, const bool *wants, const struct out_msg *m, int n, uint64_t now_mono)
@@ -64,6 +65,7 @@ void snap_put_batch(struct snap *s, const bool *wants, const struct out_msg *m, 
 		memcpy(e->analog, m[j].frame->in.analog, sizeof(e->analog));
 		e->put_mono_ns = now_mono;
 		memcpy(e->name, sl->name, sizeof(e->name));
+		e->site = sl->site;
 		sl->back = atomic_exchange_explicit(&sl->mid, sl->back | SNAP_NEW, memory_order_acq_rel) & 3u;
 	}
 }

@@ -27,6 +27,7 @@ struct snap_entry {
 	float analog[FRAME_SENSORS][SENSOR_ANALOG_MAX];
 	uint64_t put_mono_ns;	      /* when the loop handed it over */
 	char name[WIRE_NAME_MAX + 1]; /* from its DESCRIBE; "" until one came */
+	struct wire_site site;	      /* a remote avatar's site, from its DESCRIBE (site.present) */
 };
 
 struct snap_slot {
@@ -36,6 +37,7 @@ struct snap_slot {
 	unsigned front;		      /* the reader's */
 	bool seen;		      /* the reader has taken at least one */
 	char name[WIRE_NAME_MAX + 1]; /* writer: the avatar's name */
+	struct wire_site site;	      /* writer: its site's figures */
 };
 
 struct snap {
@@ -50,7 +52,7 @@ void snap_free(struct snap *s);
 /*
  * The loop: each FRAME of the batch for the avatars in wants goes in (its
  * buttons and analog values with it), each DESCRIBE gives the avatar's
- * name. No allocation, no waiting.
+ * name (and a remote avatar's site figures). No allocation, no waiting.
  */
 void snap_put_batch(struct snap *s, const bool *wants, const struct out_msg *m, int n, uint64_t now_mono);
 

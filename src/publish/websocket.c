@@ -266,7 +266,21 @@ static void json_avatar(struct jbuf *b, const struct snap_entry *e, _Atomic floa
 	jprintf(b, "],\"head_offset\":[");
 	for (int i = 4; i < WS_BODY; i++)
 		jnum(b, i > 4 ? "," : "", atomic_load_explicit(&body[i], memory_order_relaxed));
-	jprintf(b, "]}");
+	jprintf(b, "]");
+	if (e->site.present) {
+		/* another site's avatar: how that site's samples reach the daemon (docs/SITES.md) */
+		jprintf(b, ",\"site\":");
+		jname(b, e->site.name);
+		jprintf(b, ",\"site_stats\":{\"state\":\"%s\",\"avatars\":%u,\"frames\":%u,\"lost\":%u",
+			e->site.state ? "gone" : "present", e->site.avatars, e->site.frames, e->site.lost);
+		jnum(b, ",\"rate_hz\":", e->site.rate_hz);
+		jnum(b, ",\"delay_p50_ms\":", e->site.delay_p50_ms);
+		jnum(b, ",\"delay_p99_ms\":", e->site.delay_p99_ms);
+		jnum(b, ",\"clock_offset_ms\":", e->site.clock_offset_ms);
+		jnum(b, ",\"rtt_ms\":", e->site.rtt_ms);
+		jprintf(b, "}");
+	}
+	jprintf(b, "}");
 }
 
 /* the text of this tick: every avatar with a frame newer than the last tick's; false if none */

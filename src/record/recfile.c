@@ -480,6 +480,8 @@ const char *recfile_type_name(uint8_t type)
 		return "GAP";
 	case RECFILE_END:
 		return "END";
+	case RECFILE_REMOTE:
+		return "REMOTE";
 	default:
 		return "unknown";
 	}

@@ -42,13 +42,14 @@ enum recfile_type {
 	RECFILE_MESSAGE = 3, /* one published wire message (FRAME or DESCRIBE) */
 	RECFILE_GAP = 4,     /* records lost because the recorder's buffer was full */
 	RECFILE_END = 5,     /* the file was closed on purpose (stop or rotation) */
+	RECFILE_REMOTE = 6,  /* a remote avatar's FRAME or DESCRIBE ([site]): solved elsewhere, replayed as it was */
 };
 
 #define RECFILE_SAMPLE_LEN 52	     /* without analog values */
 #define RECFILE_SAMPLE_LEN_ANALOG 68 /* with the four analog values */
 #define RECFILE_GAP_LEN 24
 #define RECFILE_END_LEN 17
-#define RECFILE_MESSAGE_HEAD 8 /* mono time before the message bytes */
+#define RECFILE_MESSAGE_HEAD 8 /* mono time before the message bytes (MESSAGE and REMOTE) */
 
 struct recfile_header {
 	uint16_t version;

@@ -28,6 +28,63 @@ static int grow(void **p, size_t *cap, size_t n, size_t size)
 	return 0;
 }
 
+/* a REMOTE record: its message kept, its avatar found or added */
+static int add_remote(struct rec_index *ix, const struct recfile_record *rec, size_t *cap, size_t *cap_bytes,
+		      size_t *used_bytes)
+{
+	const uint8_t *msg = rec->payload + RECFILE_MESSAGE_HEAD;
+	size_t n = rec->len - RECFILE_MESSAGE_HEAD;
+	struct wire_describe d;
+	struct wire_frame f;
+	struct rec_remote *r;
+	uint32_t a;
+
+	if (rec->len < RECFILE_MESSAGE_HEAD || n > WIRE_MAX_MSG)
+		return 1;
+	if (wire_decode_frame(msg, n, &f) == 0) {
+		d.h = f.h;
+	} else if (wire_decode_describe(msg, n, &d) != 0) {
+		return 1;
+	}
+	for (a = 0; a < ix->n_remote_avatars && ix->remote_avatars[a].id != d.h.avatar_id; a++)
+		;
+	if (a == ix->n_remote_avatars) {
+		size_t acap = ix->n_remote_avatars;
+		void *np = realloc(ix->remote_avatars, (acap + 1) * sizeof(*ix->remote_avatars));
+
+		if (!np)
+			return -1;
+		ix->remote_avatars = np;
+		memset(&ix->remote_avatars[a], 0, sizeof(ix->remote_avatars[a]));
+		ix->remote_avatars[a].id = d.h.avatar_id;
+		ix->n_remote_avatars++;
+	}
+	if (d.h.type == WIRE_DESCRIBE && !ix->remote_avatars[a].name[0])
+		snprintf(ix->remote_avatars[a].name, sizeof(ix->remote_avatars[a].name), "%s", d.avatar_name);
+	if (d.h.type == WIRE_FRAME)
+		ix->remote_avatars[a].frames++;
+	if (grow((void **)&ix->remote, cap, ix->n_remote, sizeof(*ix->remote)))
+		return -1;
+	while (*used_bytes + n > *cap_bytes) {
+		size_t nc = *cap_bytes ? 2 * *cap_bytes : 65536;
+		void *np = realloc(ix->remote_bytes, nc);
+
+		if (!np)
+			return -1;
+		ix->remote_bytes = np;
+		*cap_bytes = nc;
+	}
+	memcpy(ix->remote_bytes + *used_bytes, msg, n);
+	r = &ix->remote[ix->n_remote++];
+	r->mono_ns = recfile_get64(rec->payload);
+	r->off = *used_bytes;
+	r->len = (uint16_t)n;
+	r->type = d.h.type;
+	r->avatar = a;
+	*used_bytes += n;
+	return 0;
+}
+
 /* the flat names of the first session */
 static int names_from_session(struct rec_index *ix)
 {
@@ -112,7 +169,7 @@ static int smap_build(const struct rec_index *ix, const struct recfile_session *
 
 int rec_index_parse(const uint8_t *buf, size_t len, struct rec_index *ix, char *err, size_t errlen)
 {
-	size_t off = RECFILE_HEADER_LEN, cap_ev = 0, cap_dmg = 0;
+	size_t off = RECFILE_HEADER_LEN, cap_ev = 0, cap_dmg = 0, cap_rem = 0, cap_bytes = 0, used_bytes = 0;
 	struct recfile_record rec;
 	struct recfile_damage dmg;
 	struct smap m = { 0 };
@@ -215,6 +272,12 @@ int rec_index_parse(const uint8_t *buf, size_t len, struct rec_index *ix, char *
 		}
 		case RECFILE_END:
 			break;
+		case RECFILE_REMOTE:
+			rc = add_remote(ix, &rec, &cap_rem, &cap_bytes, &used_bytes);
+			if (rc < 0)
+				goto nomem;
+			ix->n_bad += (size_t)rc;
+			break;
 		default:
 			/* a record type of a later minor version: skipped */
 			ix->n_other++;
@@ -284,6 +347,9 @@ void rec_index_free(struct rec_index *ix)
 	free(ix->names);
 	free(ix->events);
 	free(ix->damage);
+	free(ix->remote);
+	free(ix->remote_bytes);
+	free(ix->remote_avatars);
 	recfile_session_free(&ix->session);
 	memset(ix, 0, sizeof(*ix));
 }

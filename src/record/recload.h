@@ -3,7 +3,8 @@
  * recload.h - a whole recording read into memory and indexed: its header,
  * its first SESSION (the sensors' names), every sample in file order, and
  * what was wrong with the file (damaged regions, a cut-off end, records
- * lost to a full buffer while recording). Used at start-up by the replay
+ * lost to a full buffer while recording), and the remote avatars'
+ * messages ([site]). Used at start-up by the replay
  * source and by the tools; never by the loop.
  *
  * Sensors are named "SOURCE.SENSOR" after the first SESSION record
@@ -14,6 +15,7 @@
 #ifndef AGW_RECLOAD_H
 #define AGW_RECLOAD_H
 
+#include "avatargw/wire.h"
 #include "record/recfile.h"
 
 struct rec_event {
@@ -24,6 +26,22 @@ struct rec_event {
 	float p[3];
 	float q[4];
 	float analog[4];
+};
+
+/* a remote avatar's message ([site]: RECFILE_REMOTE), its bytes in rec_index.remote_bytes */
+struct rec_remote {
+	uint64_t mono_ns; /* the recording daemon's cycle, CLOCK_MONOTONIC */
+	size_t off;	  /* into remote_bytes */
+	uint16_t len;
+	uint8_t type;	 /* WIRE_FRAME or WIRE_DESCRIBE */
+	uint32_t avatar; /* index into rec_index.remote_avatars */
+};
+
+/* a remote avatar of the recording: its id and name as the recording daemon published them */
+struct rec_remote_avatar {
+	uint16_t id;
+	char name[WIRE_NAME_MAX + 1]; /* its first DESCRIBE's, "SITE/NAME" ("" before one) */
+	size_t frames;
 };
 
 struct rec_index {
@@ -43,6 +61,12 @@ struct rec_index {
 	bool truncated; /* the file ends inside a record */
 	bool clean_end; /* the last record is an END */
 	size_t file_size;
+	/* remote avatars ([site]): their FRAMEs and DESCRIBEs in file order, and who they are */
+	size_t n_remote;
+	struct rec_remote *remote;
+	uint8_t *remote_bytes;
+	size_t n_remote_avatars;
+	struct rec_remote_avatar *remote_avatars;
 };
 
 /*

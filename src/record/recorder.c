@@ -140,18 +140,29 @@ void recorder_sample(struct recorder *r, const struct recfile_sample *smp)
 		drop(r, RECFILE_REC_OVERHEAD + len);
 }
 
-void recorder_message(struct recorder *r, uint64_t mono, const uint8_t *data, size_t n)
+static void push_message(struct recorder *r, uint8_t type, uint64_t mono, const uint8_t *data, size_t n)
 {
 	uint8_t rec[RECFILE_REC_OVERHEAD + RECFILE_MESSAGE_HEAD + WIRE_MAX_MSG];
 	size_t len = RECFILE_MESSAGE_HEAD + n;
 
-	if (!r->messages || n > WIRE_MAX_MSG)
+	if (n > WIRE_MAX_MSG)
 		return;
-	recfile_frame(rec, RECFILE_MESSAGE, (uint32_t)len);
+	recfile_frame(rec, type, (uint32_t)len);
 	recfile_put64(rec + RECFILE_REC_HEAD, mono);
 	memcpy(rec + RECFILE_REC_HEAD + RECFILE_MESSAGE_HEAD, data, n);
 	if (!ring_push(&r->ring, rec, RECFILE_REC_OVERHEAD + len))
 		drop(r, RECFILE_REC_OVERHEAD + len);
+}
+
+void recorder_message(struct recorder *r, uint64_t mono, const uint8_t *data, size_t n)
+{
+	if (r->messages)
+		push_message(r, RECFILE_MESSAGE, mono, data, n);
+}
+
+void recorder_remote(struct recorder *r, uint64_t mono, const uint8_t *data, size_t n)
+{
+	push_message(r, RECFILE_REMOTE, mono, data, n);
 }
 
 /* ---- the writer thread -------------------------------------------------------------------------- */

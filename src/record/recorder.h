@@ -64,6 +64,12 @@ int recorder_attach(struct recorder *r, const struct config *c, uint32_t source_
 void recorder_sample(struct recorder *r, const struct recfile_sample *smp);
 /* loop: one published message, as the wire carries it (recorded only with record_messages) */
 void recorder_message(struct recorder *r, uint64_t mono_ns, const uint8_t *data, size_t len);
+/*
+ * loop: a remote avatar's FRAME (one with a new sample) or DESCRIBE as this
+ * daemon publishes it (its avatar id, names and joint angles), always
+ * recorded: a replay publishes it again as it was, not solved again
+ */
+void recorder_remote(struct recorder *r, uint64_t mono_ns, const uint8_t *data, size_t len);
 
 /* control thread */
 const struct recorder_stats *recorder_stats(const struct recorder *r);

@@ -41,6 +41,10 @@ const bool site_built_in = true;
 
 _Static_assert(FRAME_MAX % 4 == 0 && WIRE_MAX_MSG % 4 == 0, "whole words");
 
+/* "SITE/AVATAR" and its NUL; a remote site's figures (struct wire_site) */
+#define NAME_WORDS ((CFG_SITE_NAME_MAX + WIRE_NAME_MAX + 4) / 4)
+#define FIG_WORDS ((int)(sizeof(struct wire_site) + 3) / 4)
+
 static const char *const topic_frame = "avatargw_frame";
 static const char *const topic_desc = "avatargw_description";
 static const char *const topic_clock = "avatargw_clock";
@@ -63,18 +67,22 @@ struct rslot {
 	_Atomic uint32_t fw[IN_WORDS];
 	_Atomic uint32_t dseq;
 	_Atomic uint32_t dw[DESC_WORDS];
+	/* shared with the control thread: "SITE/AVATAR", written when the slot is given to an avatar */
+	_Atomic uint32_t nseq;
+	_Atomic uint32_t nw[NAME_WORDS];
 	/* the receiving thread's */
 	char site[CFG_SITE_NAME_MAX];
 	char avatar[WIRE_NAME_MAX + 1];
 	bool used;
 	bool live;
-	int peer;
+	_Atomic int peer; /* its site in peer[], -1: none; the loop reads it too (site_remote_site) */
 	uint32_t last_seq;
 	bool have_seq;
 	dds_instance_handle_t writer; /* the remote writer of its last frame */
 	uint64_t last_use;	      /* for reuse of a gone slot: the oldest goes first */
 	/* the loop's */
 	uint32_t l_gen, l_fseq, l_dseq;
+	uint32_t l_figs; /* the peer's figures' sequence last read */
 	bool l_desc, l_have;
 	uint64_t l_arrival;
 	struct wire_frame l_wf;
@@ -91,9 +99,11 @@ struct peer {
 	_Atomic int64_t rtt_ns;	   /* of the estimate in use, -1: none yet */
 	struct hist delay;	   /* its sample time (on our clock) -> arrival here */
 	uint64_t best_at;	   /* receiving thread: when the estimate in use was made */
-	/* control thread: the rate */
+	/* receiving thread, once a second: the rate, and every figure for the loop's DESCRIBEs */
 	uint64_t r_frames, r_t;
-	double rate;
+	_Atomic uint32_t rate_bits; /* float, frames a second */
+	_Atomic uint32_t fseq;
+	_Atomic uint32_t fw[FIG_WORDS]; /* struct wire_site */
 };
 
 struct site {
@@ -268,6 +278,7 @@ static struct {
 	dds_domainid_t id;
 	dds_entity_t dom;
 	int refs;
+	char xml[4096]; /* its configuration: a reload cannot change it while the domain runs */
 } domains[4];
 static pthread_mutex_t domains_mu = PTHREAD_MUTEX_INITIALIZER;
 
@@ -366,7 +377,14 @@ static int domain_get(const struct cfg_site *c, char *err, size_t errlen)
 	pthread_mutex_lock(&domains_mu);
 	for (int i = 0; i < (int)(sizeof(domains) / sizeof(domains[0])); i++) {
 		if (domains[i].refs && domains[i].id == (dds_domainid_t)c->domain) {
-			/* a reload: the domain of the running configuration (its network settings stay) */
+			/* a reload: the domain of the running configuration, whose network settings Cyclone fixed */
+			if (strcmp(domains[i].xml, xml)) {
+				pthread_mutex_unlock(&domains_mu);
+				snprintf(err, errlen,
+					 "[site]: interface, peers, security or lease changed: Cyclone DDS "
+					 "cannot change them in a running domain; restart the daemon to apply them");
+				return -EBUSY;
+			}
 			domains[i].refs++;
 			pthread_mutex_unlock(&domains_mu);
 			return i;
@@ -388,6 +406,7 @@ static int domain_get(const struct cfg_site *c, char *err, size_t errlen)
 	}
 	domains[slot].id = (dds_domainid_t)c->domain;
 	domains[slot].refs = 1;
+	snprintf(domains[slot].xml, sizeof(domains[slot].xml), "%s", xml);
 	pthread_mutex_unlock(&domains_mu);
 	return slot;
 }
@@ -675,6 +694,12 @@ static struct rslot *slot_of(struct site *s, const char *site, const char *avata
 	spare->peer = peer_of(s, site);
 	snprintf(spare->site, sizeof(spare->site), "%s", site);
 	snprintf(spare->avatar, sizeof(spare->avatar), "%s", avatar);
+	{
+		uint32_t w[NAME_WORDS] = { 0 };
+
+		snprintf((char *)w, sizeof(w), "%s/%s", site, avatar);
+		seqlock_write(&spare->nseq, spare->nw, w, NAME_WORDS);
+	}
 	return spare;
 }
 
@@ -900,6 +925,63 @@ static void ping(struct site *s)
 	dds_write(s->w_clock, &c);
 }
 
+static float peer_rate(struct peer *p)
+{
+	uint32_t b = atomic_load_explicit(&p->rate_bits, memory_order_relaxed);
+	float f;
+
+	memcpy(&f, &b, sizeof(f));
+	return f;
+}
+
+/* present: it has avatars here, or it was heard from within its lease */
+static bool peer_present(const struct site *s, struct peer *p, uint64_t now)
+{
+	uint64_t last = atomic_load_explicit(&p->last_mono, memory_order_relaxed);
+
+	return ctr_get(&p->avatars) || (last && now - last < s->lease_ns);
+}
+
+/* once a second: each remote site's rate, and its figures for the loop (remote avatars' DESCRIBEs) */
+static void figures_update(struct site *s, uint64_t now)
+{
+	for (int i = 0; i < SITE_MAX_PEERS; i++) {
+		struct peer *p = &s->peer[i];
+		uint64_t f = ctr_get(&p->frames);
+		int64_t rtt = atomic_load_explicit(&p->rtt_ns, memory_order_relaxed);
+		union {
+			struct wire_site ws;
+			uint32_t w[FIG_WORDS];
+		} u;
+		float rate;
+		uint32_t b;
+
+		if (!atomic_load_explicit(&p->used, memory_order_acquire))
+			continue;
+		if (p->r_t && now > p->r_t) {
+			rate = (float)((double)(f - p->r_frames) / ((double)(now - p->r_t) * 1e-9));
+			memcpy(&b, &rate, sizeof(b));
+			atomic_store_explicit(&p->rate_bits, b, memory_order_relaxed);
+		}
+		p->r_frames = f;
+		p->r_t = now;
+		memset(&u, 0, sizeof(u));
+		u.ws.present = true;
+		snprintf(u.ws.name, sizeof(u.ws.name), "%s", p->name);
+		u.ws.state = peer_present(s, p, now) ? 0 : 1;
+		u.ws.avatars = (uint16_t)ctr_get(&p->avatars);
+		u.ws.rate_hz = peer_rate(p);
+		u.ws.frames = (uint32_t)f;
+		u.ws.lost = (uint32_t)ctr_get(&p->lost);
+		u.ws.delay_p50_ms = ctr_get(&p->delay.n) ? (float)(hist_percentile(&p->delay, 0.5) * 1e-6) : -1.0f;
+		u.ws.delay_p99_ms = ctr_get(&p->delay.n) ? (float)(hist_percentile(&p->delay, 0.99) * 1e-6) : -1.0f;
+		u.ws.clock_offset_ms =
+			rtt >= 0 ? (float)(atomic_load_explicit(&p->offset_ns, memory_order_relaxed) * 1e-6) : 0.0f;
+		u.ws.rtt_ms = rtt >= 0 ? (float)(rtt * 1e-6) : -1.0f;
+		seqlock_write(&p->fseq, p->fw, u.w, FIG_WORDS);
+	}
+}
+
 static void *sub_main(void *arg)
 {
 	struct site *s = arg;
@@ -919,6 +1001,7 @@ static void *sub_main(void *arg)
 		if (now - s->last_ping >= PING_NS) {
 			s->last_ping = now;
 			ping(s);
+			figures_update(s, now);
 		}
 	}
 	return NULL;
@@ -1069,6 +1152,52 @@ void site_describe_local(struct site *s, int idx, const struct wire_describe *w)
 	s->local_described[idx] = true;
 }
 
+/* the [site] keys of a and b are the same (where they were written does not count) */
+static bool site_cfg_same(const struct cfg_site *a, const struct cfg_site *b)
+{
+	return a->present == b->present && !strcmp(a->name, b->name) && !strcmp(a->session, b->session) &&
+	       a->domain == b->domain && !strcmp(a->peers, b->peers) && !strcmp(a->interface, b->interface) &&
+	       a->publish == b->publish && a->subscribe == b->subscribe && !strcmp(a->security, b->security) &&
+	       a->ros2 == b->ros2 && a->max_remote == b->max_remote && a->remote_id == b->remote_id &&
+	       a->deadline_ms == b->deadline_ms && a->lease == b->lease;
+}
+
+bool site_keeps(const struct site *s, const struct config *cfg)
+{
+	if (!site_cfg_same(&s->cfg, &cfg->site) || s->rate != cfg->daemon.rate ||
+	    s->n_local != (cfg->site.publish ? cfg->n_avatars : 0))
+		return false;
+	for (int i = 0; i < s->n_local; i++) {
+		char name[WIRE_NAME_MAX + 1];
+
+		snprintf(name, sizeof(name), "%.*s", WIRE_NAME_MAX, cfg->avatar[i].name);
+		if (strcmp(s->local_name[i], name))
+			return false;
+	}
+	return true;
+}
+
+bool site_keeps_describe(const struct site *s, int idx, const struct wire_describe *w)
+{
+	avatargw_sites_Description d;
+
+	if (idx >= s->n_local)
+		return true;
+	memset(&d, 0, sizeof(d));
+	snprintf(d.site, sizeof(d.site), "%.31s", s->cfg.name);
+	snprintf(d.avatar, sizeof(d.avatar), "%s", s->local_name[idx]);
+	describe_to_dds(w, &d);
+	return s->local_described[idx] && !memcmp(&d, &s->local_desc[idx], sizeof(d));
+}
+
+void site_adopt(struct site *s, const struct config *cfg)
+{
+	s->stale_ns = (uint64_t)(cfg->daemon.stale_ms * 1e6);
+	/* the new gateway's remote avatars are described again from the slots, at its first cycle */
+	for (int k = 0; k < s->n_remote; k++)
+		s->rs[k].l_gen = 0;
+}
+
 int site_start(struct site *s, char *err, size_t errlen)
 {
 	int rc;
@@ -1122,6 +1251,20 @@ int site_n_remote(const struct site *s)
 uint16_t site_remote_id(const struct site *s, int k)
 {
 	return (uint16_t)(s->cfg.remote_id + k);
+}
+
+bool site_remote_name(struct site *s, int k, char *buf, size_t len, bool *live)
+{
+	struct rslot *r = &s->rs[k];
+	uint32_t w[NAME_WORDS];
+
+	if (!seqlock_peek(&r->nseq))
+		return false;
+	seqlock_read(&r->nseq, r->nw, w, NAME_WORDS);
+	((char *)w)[sizeof(w) - 1] = '\0';
+	snprintf(buf, len, "%s", (const char *)w);
+	*live = atomic_load_explicit(&r->gen, memory_order_acquire) & 1;
+	return true;
 }
 
 /* ---- the loop ------------------------------------------------------------------------------------------- */
@@ -1223,6 +1366,25 @@ bool site_remote(struct site *s, int k, uint64_t now_mono, struct wire_frame *wf
 	return true;
 }
 
+void site_remote_site(struct site *s, int k, struct wire_site *ws)
+{
+	struct rslot *r = &s->rs[k];
+	int pi = atomic_load_explicit(&r->peer, memory_order_relaxed);
+	struct peer *p;
+	uint32_t w[FIG_WORDS], sq;
+
+	/* set before the slot became live, which the caller's site_remote() saw */
+	if (pi < 0)
+		return;
+	p = &s->peer[pi];
+	if (ws->present && seqlock_peek(&p->fseq) == r->l_figs)
+		return; /* what ws holds (a DESCRIBE decoded anew holds none) */
+	if (seqlock_try_read(&p->fseq, p->fw, w, FIG_WORDS, &sq)) {
+		memcpy(ws, w, sizeof(*ws));
+		r->l_figs = sq;
+	}
+}
+
 /* ---- the control thread --------------------------------------------------------------------------------- */
 
 static double ms(int64_t ns)
@@ -1237,22 +1399,6 @@ void site_report(struct site *s, FILE *out, bool json)
 
 	if (!s)
 		return;
-	for (int i = 0; i < SITE_MAX_PEERS; i++) {
-		struct peer *p = &s->peer[i];
-		uint64_t f;
-
-		if (!atomic_load_explicit(&p->used, memory_order_acquire))
-			continue;
-		f = ctr_get(&p->frames);
-		if (p->r_t && now > p->r_t + 200000000ull) {
-			p->rate = (double)(f - p->r_frames) / ((double)(now - p->r_t) * 1e-9);
-			p->r_frames = f;
-			p->r_t = now;
-		} else if (!p->r_t) {
-			p->r_frames = f;
-			p->r_t = now;
-		}
-	}
 	if (json) {
 		fprintf(out,
 			",\"site\":{\"name\":\"%s\",\"session\":\"%s\",\"domain\":%d,\"publish\":%s,\"subscribe\":%s,"
@@ -1276,16 +1422,15 @@ void site_report(struct site *s, FILE *out, bool json)
 	}
 	for (int i = 0; i < SITE_MAX_PEERS; i++) {
 		struct peer *p = &s->peer[i];
-		uint64_t last, avatars;
+		uint64_t avatars;
 		int64_t rtt;
 		const char *state;
 
 		if (!atomic_load_explicit(&p->used, memory_order_acquire))
 			continue;
-		last = atomic_load_explicit(&p->last_mono, memory_order_relaxed);
 		avatars = ctr_get(&p->avatars);
 		rtt = atomic_load_explicit(&p->rtt_ns, memory_order_relaxed);
-		state = avatars ? "present" : last && now - last < s->lease_ns ? "present" : "gone";
+		state = peer_present(s, p, now) ? "present" : "gone";
 		if (json) {
 			/* a remote site's name is what the network said: escaped */
 			fprintf(out, "%s{\"name\":", np ? "," : "");
@@ -1295,9 +1440,9 @@ void site_report(struct site *s, FILE *out, bool json)
 				"\"lost\":%llu,\"joins\":%llu,\"departures\":%llu,\"descriptions\":%llu,"
 				"\"clock_offset_ms\":%.3f,\"rtt_ms\":%.3f,"
 				"\"delay_ms\":{\"n\":%llu,\"p50\":%.3f,\"p99\":%.3f,\"max\":%.3f}}",
-				state, (unsigned long long)avatars, p->rate, (unsigned long long)ctr_get(&p->frames),
-				(unsigned long long)ctr_get(&p->lost), (unsigned long long)ctr_get(&p->joins),
-				(unsigned long long)ctr_get(&p->departures),
+				state, (unsigned long long)avatars, (double)peer_rate(p),
+				(unsigned long long)ctr_get(&p->frames), (unsigned long long)ctr_get(&p->lost),
+				(unsigned long long)ctr_get(&p->joins), (unsigned long long)ctr_get(&p->departures),
 				(unsigned long long)ctr_get(&p->descriptions),
 				rtt >= 0 ? ms(atomic_load_explicit(&p->offset_ns, memory_order_relaxed)) : 0.0,
 				rtt >= 0 ? ms(rtt) : -1.0, (unsigned long long)ctr_get(&p->delay.n),
@@ -1305,8 +1450,8 @@ void site_report(struct site *s, FILE *out, bool json)
 				ms((int64_t)hist_percentile(&p->delay, 0.99)), ms((int64_t)ctr_get(&p->delay.max_ns)));
 		} else {
 			fprintf(out, "%-16s %-8s %7llu %8.1f %10llu %8llu %10.3f %10.3f %8.3f/%.3f\n", p->name, state,
-				(unsigned long long)avatars, p->rate, (unsigned long long)ctr_get(&p->frames),
-				(unsigned long long)ctr_get(&p->lost),
+				(unsigned long long)avatars, (double)peer_rate(p),
+				(unsigned long long)ctr_get(&p->frames), (unsigned long long)ctr_get(&p->lost),
 				rtt >= 0 ? ms(atomic_load_explicit(&p->offset_ns, memory_order_relaxed)) : 0.0,
 				rtt >= 0 ? ms(rtt) : -1.0, ms((int64_t)hist_percentile(&p->delay, 0.5)),
 				ms((int64_t)hist_percentile(&p->delay, 0.99)));

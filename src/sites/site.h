@@ -42,6 +42,18 @@ extern const bool site_built_in;
 int site_open(struct site **out, const struct config *cfg, uint32_t source_id, char *err, size_t errlen);
 /* a local avatar's DESCRIBE, published as its description; before site_start */
 void site_describe_local(struct site *s, int idx, const struct wire_describe *d);
+/*
+ * A reload: whether the running site s can serve configuration cfg as it is
+ * (the same [site] keys and loop rate, the same local avatars by name; the
+ * caller then checks each local avatar's DESCRIBE with site_keeps_describe).
+ * Kept, the participant, its threads and the remote avatars stay: the new
+ * gateway takes s over and calls site_adopt (loop paused) instead of
+ * site_start. Otherwise a new site is opened beside it, in the same DDS
+ * domain, whose network settings cannot change (site_open refuses).
+ */
+bool site_keeps(const struct site *s, const struct config *cfg);
+bool site_keeps_describe(const struct site *s, int idx, const struct wire_describe *d);
+void site_adopt(struct site *s, const struct config *cfg);
 /* starts the threads: 0 or a negative errno */
 int site_start(struct site *s, char *err, size_t errlen);
 void site_close(struct site *s);
@@ -68,7 +80,22 @@ void site_flush(struct site *s);
 bool site_remote(struct site *s, int k, uint64_t now_mono, struct wire_frame *wf, struct wire_describe *d,
 		 bool *described, bool *fresh);
 
+/*
+ * Remote slot k's site figures (rate, loss, delay, clock offset, round
+ * trip: struct wire_site) into ws, for its DESCRIBE; after site_remote()
+ * returned true for k. ws is left as it was when nothing changed since the
+ * last call (they change once a second).
+ */
+void site_remote_site(struct site *s, int k, struct wire_site *ws);
+
 /* ---- the control thread ---- */
+
+/*
+ * Remote slot k's avatar: its full name "SITE/AVATAR" in buf and whether it
+ * is there now (*live; false: its site left or stopped sending). False when
+ * the slot has never had an avatar.
+ */
+bool site_remote_name(struct site *s, int k, char *buf, size_t len, bool *live);
 
 /* the site and every remote site: JSON members after a comma (",\"site\":{...}"), or text lines */
 void site_report(struct site *s, FILE *out, bool json);

@@ -83,3 +83,41 @@ void site_report(struct site *s, FILE *out, bool json)
 	(void)out;
 	(void)json;
 }
+
+bool site_remote_name(struct site *s, int k, char *buf, size_t len, bool *live)
+{
+	(void)s;
+	(void)k;
+	(void)buf;
+	(void)len;
+	*live = false;
+	return false;
+}
+
+bool site_keeps(const struct site *s, const struct config *cfg)
+{
+	(void)s;
+	(void)cfg;
+	return false;
+}
+
+bool site_keeps_describe(const struct site *s, int idx, const struct wire_describe *d)
+{
+	(void)s;
+	(void)idx;
+	(void)d;
+	return false;
+}
+
+void site_adopt(struct site *s, const struct config *cfg)
+{
+	(void)s;
+	(void)cfg;
+}
+
+void site_remote_site(struct site *s, int k, struct wire_site *ws)
+{
+	(void)s;
+	(void)k;
+	(void)ws;
+}

@@ -36,6 +36,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -104,7 +105,7 @@ static const struct replay_opts *opts_of(const struct cfg_source *c)
 #define CSV_ROLES 3
 
 struct replay_ev {
-	double t; /* s from the first event */
+	double t; /* s from the first event (first: last_due reads it) */
 	uint32_t sensor;
 	uint32_t buttons;
 	struct dq pose;
@@ -119,6 +120,25 @@ struct replay_track {
 	double (*d2)[3];
 	double (*s)[4];
 	double *work;
+};
+
+/* a remote avatar's recorded FRAME or DESCRIBE ([site]), its bytes in replay.rbytes */
+struct replay_rmsg {
+	double t; /* s from the first event, as the samples (first: last_due reads it) */
+	uint32_t avatar;
+	uint8_t type;
+	uint16_t len;
+	size_t off;
+};
+
+/* a recorded remote avatar as it plays (the loop's) */
+struct replay_solved {
+	uint16_t id;
+	char name[WIRE_NAME_MAX + 1];
+	struct wire_frame wf;
+	struct wire_describe d;
+	uint64_t arrival; /* CLOCK_MONOTONIC when its newest frame was played */
+	bool have_f, have_d, new_f, new_d;
 };
 
 struct replay {
@@ -144,6 +164,15 @@ struct replay {
 	uint64_t steps_done;
 	int tfd;
 	bool tfd_used; /* an event-mode loop waits on tfd (replay_fd was asked) */
+	/* a recording's remote avatars, published again as they were (not solved again) */
+	struct replay_rmsg *rmsg;
+	size_t n_rmsg;
+	uint8_t *rbytes;
+	struct replay_solved *solved;
+	int n_solved;
+	int64_t rlast;		   /* clocked: last message played, counting passes */
+	struct wire_describe dtmp; /* the loop's: a DESCRIBE being decoded */
+	double remote_end;	   /* s: the last remote message plus a loop period */
 };
 
 static const char *const roles[CSV_ROLES] = { "head", "left_hand", "right_hand" };
@@ -481,23 +510,56 @@ static int cmp_ev(const void *a, const void *b)
 	return x->buttons < y->buttons ? -1 : x->buttons > y->buttons;
 }
 
+/* the recording's remote avatars and their messages, on the samples' time base */
+static int load_remote(struct replay *rp, struct rec_index *ix, uint64_t base)
+{
+	if (!ix->n_remote)
+		return 0;
+	rp->rmsg = calloc(ix->n_remote, sizeof(*rp->rmsg));
+	rp->solved = calloc(ix->n_remote_avatars, sizeof(*rp->solved));
+	if (!rp->rmsg || !rp->solved)
+		return -1;
+	rp->rbytes = ix->remote_bytes;
+	ix->remote_bytes = NULL;
+	for (size_t i = 0; i < ix->n_remote; i++) {
+		const struct rec_remote *r = &ix->remote[i];
+
+		rp->rmsg[i] = (struct replay_rmsg){ (double)(int64_t)(r->mono_ns - base) * 1e-9, r->avatar, r->type,
+						    r->len, r->off };
+		if (i && rp->rmsg[i].t < rp->rmsg[i - 1].t)
+			rp->rmsg[i].t = rp->rmsg[i - 1].t; /* one cycle after another: never backwards */
+	}
+	rp->n_rmsg = ix->n_remote;
+	for (size_t a = 0; a < ix->n_remote_avatars; a++) {
+		rp->solved[a].id = ix->remote_avatars[a].id;
+		memcpy(rp->solved[a].name, ix->remote_avatars[a].name, sizeof(rp->solved[a].name));
+	}
+	rp->n_solved = (int)ix->n_remote_avatars;
+	return 0;
+}
+
 static int load_recording(struct replay *rp, const char *path, char *err, size_t errlen)
 {
 	struct rec_index ix;
 	char why[512];
 	bool sorted = true;
+	uint64_t base;
 
 	if (rec_index_load(path, &ix, why, sizeof(why))) {
 		snprintf(err, errlen, "file: %s", why);
 		return -1;
 	}
-	if (ix.n_events < 1) {
+	if (ix.n_events < 1 && ix.n_remote < 1) {
 		snprintf(err, errlen, "file: %s: a recording without samples", path);
 		rec_index_free(&ix);
 		return -1;
 	}
-	rp->ev = calloc(ix.n_events, sizeof(*rp->ev));
-	if (!rp->ev) {
+	/* time 0: the first sample, or the first remote avatar's message if that came before */
+	base = ix.n_events ? ix.events[0].arrival_ns : ix.remote[0].mono_ns;
+	if (ix.n_remote && ix.remote[0].mono_ns < base)
+		base = ix.remote[0].mono_ns;
+	rp->ev = calloc(ix.n_events + 1, sizeof(*rp->ev));
+	if (!rp->ev || load_remote(rp, &ix, base)) {
 		snprintf(err, errlen, "file: %s: out of memory (%zu samples)", path, ix.n_events);
 		rec_index_free(&ix);
 		return -1;
@@ -518,7 +580,7 @@ static int load_recording(struct replay *rp, const char *path, char *err, size_t
 			continue;
 		}
 		e = &rp->ev[rp->n_ev++];
-		e->t = (double)(int64_t)(s->arrival_ns - ix.events[0].arrival_ns) * 1e-9;
+		e->t = (double)(int64_t)(s->arrival_ns - base) * 1e-9;
 		e->sensor = s->sensor;
 		e->buttons = (uint32_t)i;
 		dq_from_rt(&qn, &p, &e->pose);
@@ -542,8 +604,14 @@ static int load_recording(struct replay *rp, const char *path, char *err, size_t
 			rp->n_damage = ix.n_damage;
 		}
 	}
+	if (rp->n_rmsg) {
+		/* a pass lasts until the remote avatars' last message too, plus one loop period */
+		double end = rp->rmsg[rp->n_rmsg - 1].t + (ix.session.rate > 0 ? 1.0 / ix.session.rate : 0.0);
+
+		rp->remote_end = end;
+	}
 	rec_index_free(&ix);
-	if (rp->n_ev < 1) {
+	if (rp->n_ev < 1 && !rp->n_rmsg) {
 		snprintf(err, errlen, "file: %s: no readable samples", path);
 		return -1;
 	}
@@ -568,6 +636,8 @@ static int index_instants(struct replay *rp, const char *path, char *err, size_t
 	rp->n_inst = k;
 	/* one pass: the last instant plus the mean spacing, so a loop keeps the rhythm */
 	rp->duration = k > 1 ? rp->ev[rp->n_ev - 1].t * (double)k / (double)(k - 1) : 1.0;
+	if (rp->n_rmsg && (rp->remote_end > rp->duration || !k))
+		rp->duration = rp->remote_end > 1e-3 ? rp->remote_end : 1e-3;
 	return 0;
 }
 
@@ -644,6 +714,9 @@ static void replay_free(struct replay *rp)
 	free(rp->ev);
 	free(rp->inst);
 	free(rp->damage);
+	free(rp->rmsg);
+	free(rp->rbytes);
+	free(rp->solved);
 	free(rp);
 }
 
@@ -720,7 +793,10 @@ static int replay_open(struct tracker *t, char *err, size_t errlen)
 	rp->sample_period = 1.0 / opts_of(t->cfg)->sample_rate;
 	rp->tfd = timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
 	/* event mode: wake at the instants' mean rate, or the sample rate when interpolating */
-	dt = opts_of(t->cfg)->interpolate ? rp->sample_period : rp->duration / (double)rp->n_inst;
+	rp->rlast = -1;
+	dt = opts_of(t->cfg)->interpolate ? rp->sample_period
+	     : rp->n_inst		  ? rp->duration / (double)rp->n_inst
+					  : 1.0 / 240; /* only remote avatars: about a loop period */
 	dt /= opts_of(t->cfg)->step ? 1.0 : opts_of(t->cfg)->speed;
 	if (rp->tfd >= 0) {
 		long ns = (long)(dt * 1e9);
@@ -772,13 +848,86 @@ static uint64_t due_at(const struct replay *rp, const struct cfg_source *cfg, do
 	return due > now->mono_ns ? now->mono_ns : due;
 }
 
+/*
+ * The last of n time-ordered elements (replay_ev, replay_rmsg: a double t
+ * first) with t <= ct; 0 when none is (the caller checks element 0's t).
+ */
+static size_t last_due(const void *a, size_t n, size_t size, double ct)
+{
+	size_t lo = 0, hi = n - 1;
+
+	while (lo < hi) {
+		size_t mid = (lo + hi + 1) / 2;
+		double t;
+
+		memcpy(&t, (const char *)a + mid * size, sizeof(t));
+		if (t <= ct)
+			lo = mid;
+		else
+			hi = mid - 1;
+	}
+	return lo;
+}
+
+/* a recorded remote avatar's message played: its frame or description is the newest */
+static void play_rmsg(struct replay *rp, const struct replay_rmsg *m, uint64_t now_mono)
+{
+	struct replay_solved *a = &rp->solved[m->avatar];
+	const uint8_t *b = rp->rbytes + m->off;
+
+	if (m->type == WIRE_FRAME) {
+		if (wire_decode_frame(b, m->len, &a->wf) == 0) {
+			a->have_f = a->new_f = true;
+			a->arrival = now_mono;
+		}
+	} else {
+		struct wire_describe *d = &rp->dtmp;
+		size_t from = offsetof(struct wire_describe, rate_hz), to = offsetof(struct wire_describe, site);
+
+		/* recorded once a second: a new one only when the skeleton changed (its site's figures always) */
+		memset(d, 0, sizeof(*d));
+		if (wire_decode_describe(b, m->len, d) == 0) {
+			if (!a->have_d || memcmp((const char *)d + from, (const char *)&a->d + from, to - from))
+				a->new_d = true;
+			a->d = *d;
+			a->have_d = true;
+		}
+	}
+}
+
+/* clocked: the remote avatars' messages up to clip time ct of pass pass */
+static void play_remote(struct replay *rp, int64_t pass, double ct, uint64_t now_mono)
+{
+	int64_t target, from;
+	size_t lo;
+
+	if (!rp->n_rmsg)
+		return;
+	lo = last_due(rp->rmsg, rp->n_rmsg, sizeof(*rp->rmsg), ct);
+	if (rp->rmsg[lo].t > ct) {
+		if (!pass)
+			return;
+		pass--;
+		lo = rp->n_rmsg - 1;
+	}
+	target = pass * (int64_t)rp->n_rmsg + (int64_t)lo;
+	from = rp->rlast + 1;
+	/* a clock far ahead: the newest few messages (each avatar's DESCRIBE comes again within a second) */
+	if (target - from >= 4 * (int64_t)rp->n_solved + 64)
+		from = target - (4 * (int64_t)rp->n_solved + 64) + 1;
+	for (int64_t g = from; g <= target; g++)
+		play_rmsg(rp, &rp->rmsg[g % (int64_t)rp->n_rmsg], now_mono);
+	if (target > rp->rlast)
+		rp->rlast = target;
+}
+
 /* clocked, events as recorded */
 static int poll_clocked(struct tracker *t, struct replay *rp, const struct tracker_clock *now)
 {
 	const struct cfg_source *cfg = t->cfg;
 	double el = clip_elapsed(rp, cfg, now), ct;
 	int64_t pass = 0, target, from, cap;
-	size_t lo, hi;
+	size_t lo;
 	int put = 0;
 
 	if (opts_of(cfg)->loop) {
@@ -788,23 +937,18 @@ static int poll_clocked(struct tracker *t, struct replay *rp, const struct track
 		ct = el;
 		if (ct > rp->duration) {
 			atomic_store_explicit(&t->st.state, TRACKER_ENDED, memory_order_relaxed);
-			if (rp->last >= (int64_t)rp->n_ev - 1)
+			if (rp->last >= (int64_t)rp->n_ev - 1) {
+				play_remote(rp, 0, ct, now->mono_ns); /* the remote avatars' last messages */
 				return 0;
+			}
 		}
 	}
 	if (ct < 0)
 		return 0;
-	/* the last event with t <= ct */
-	lo = 0;
-	hi = rp->n_ev - 1;
-	while (lo < hi) {
-		size_t mid = (lo + hi + 1) / 2;
-
-		if (rp->ev[mid].t <= ct)
-			lo = mid;
-		else
-			hi = mid - 1;
-	}
+	play_remote(rp, pass, ct, now->mono_ns);
+	if (!rp->n_ev)
+		return 0;
+	lo = last_due(rp->ev, rp->n_ev, sizeof(*rp->ev), ct);
 	if (rp->ev[lo].t > ct) {
 		if (!pass)
 			return 0;
@@ -838,6 +982,8 @@ static int poll_stepped(struct tracker *t, struct replay *rp, const struct track
 	int put = 0;
 
 	rp->steps_done = req;
+	if (!rp->n_inst)
+		return 0; /* only remote avatars, which play by the clock only */
 	if (rp->cur_inst < 0) {
 		size_t k = 0;
 
@@ -897,9 +1043,13 @@ static int poll_interpolated(struct tracker *t, struct replay *rp, const struct 
 		ct = el;
 		if (ct > rp->duration) {
 			atomic_store_explicit(&t->st.state, TRACKER_ENDED, memory_order_relaxed);
+			if (!opts_of(cfg)->step)
+				play_remote(rp, 0, ct, now->mono_ns); /* the remote avatars' last messages */
 			return 0;
 		}
 	}
+	if (!opts_of(cfg)->step)
+		play_remote(rp, opts_of(cfg)->loop ? (int64_t)floor(el / rp->duration) : 0, ct, now->mono_ns);
 	for (uint32_t s = 0; s < rp->n_sensors; s++) {
 		struct replay_track *tk = &rp->track[s];
 		struct kf_pose o;
@@ -947,7 +1097,52 @@ static int replay_fd(struct tracker *t)
 	return rp->tfd;
 }
 
+/* the loop: a recorded remote avatar now (struct tracker_driver.solved) */
+static bool replay_solved(struct tracker *t, int k, uint64_t now_mono, uint64_t stale_ns, struct wire_frame *wf,
+			  struct wire_describe *d, bool *described, bool *fresh)
+{
+	struct replay *rp = t->priv;
+	struct replay_solved *a = &rp->solved[k];
+	uint64_t age;
+
+	*described = *fresh = false;
+	if (!a->have_f || !a->have_d)
+		return false;
+	if (a->new_d) {
+		*d = a->d;
+		a->new_d = false;
+		*described = true;
+	}
+	d->site = a->d.site; /* its site's figures as recorded: they go out with its next DESCRIBE */
+	*fresh = a->new_f;
+	a->new_f = false;
+	*wf = a->wf;
+	wf->h.flags = (uint16_t)(*fresh ? wf->h.flags | WIRE_F_NEW_SAMPLE : wf->h.flags & ~WIRE_F_NEW_SAMPLE);
+	age = now_mono > a->arrival ? now_mono - a->arrival : 0;
+	if (age > stale_ns) {
+		/* no recorded frame for a while (the site was gone, or the replay ended) */
+		for (int i = 0; i < WIRE_SENSORS; i++)
+			if (wf->sensor[i].state == WIRE_SENSOR_OK)
+				wf->sensor[i].state = WIRE_SENSOR_STALE;
+		wf->h.flags |= WIRE_F_STALE;
+	}
+	return true;
+}
+
 /* ---- the control thread's side ------------------------------------------------------------------------ */
+
+static int replay_solved_count(struct tracker *t)
+{
+	return ((struct replay *)t->priv)->n_solved;
+}
+
+static const char *replay_solved_name(struct tracker *t, int k, uint16_t *id)
+{
+	const struct replay_solved *a = &((struct replay *)t->priv)->solved[k];
+
+	*id = a->id;
+	return a->name;
+}
 
 bool replay_is_stepped(const struct tracker *t)
 {
@@ -990,6 +1185,9 @@ const struct tracker_driver replay_driver = {
 	.close = replay_close,
 	.poll = replay_poll,
 	.fd = replay_fd,
+	.solved_count = replay_solved_count,
+	.solved_name = replay_solved_name,
+	.solved = replay_solved,
 };
 
 void replay_log_damage(const struct tracker *t)

@@ -12,6 +12,7 @@
 #ifndef AGW_TRACKER_H
 #define AGW_TRACKER_H
 
+#include "avatargw/wire.h"
 #include "base/counter.h"
 #include "config/config.h"
 #include "ik/dq.h"
@@ -74,6 +75,20 @@ struct tracker_driver {
 	void (*status)(struct tracker *t, char *buf, size_t len);
 	int (*note)(struct tracker *t, int *level, char *buf, size_t len);
 	int (*list_devices)(FILE *out);
+	/*
+	 * Optional: avatars that come already solved (a recording's remote
+	 * avatars, replayed). solved_count() and solved_name() at start-up and
+	 * in the control thread (their names and ids are fixed at open());
+	 * solved() in the loop, as site_remote() (src/sites/site.h): false when
+	 * avatar k has nothing to publish yet; else its frame in wf (the
+	 * caller sets the header's source_id, seq and describe_rev), sensors
+	 * STALE after stale_ns without a new frame, *fresh when it carries a
+	 * new one, *described with its DESCRIBE in d when that changed.
+	 */
+	int (*solved_count)(struct tracker *t);
+	const char *(*solved_name)(struct tracker *t, int k, uint16_t *id);
+	bool (*solved)(struct tracker *t, int k, uint64_t now_mono, uint64_t stale_ns, struct wire_frame *wf,
+		       struct wire_describe *d, bool *described, bool *fresh);
 };
 
 struct tracker_stats {

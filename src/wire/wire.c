@@ -390,6 +390,8 @@ int wire_decode_frame(const uint8_t *buf, size_t len, struct wire_frame *f)
 	 WIRE_JOINTS * (1 + WIRE_NAME_MAX + 1 + 8 * 4) + WIRE_SEGMENTS * (1 + WIRE_NAME_MAX + 1) +                     \
 	 WIRE_SENSORS * (1 + WIRE_NAME_MAX))
 _Static_assert(WIRE_DESCRIBE_WORST <= WIRE_MAX_MSG, "a DESCRIBE can exceed WIRE_MAX_MSG");
+/* a remote avatar's site block: tag, length, then its fields; sent only when it fits */
+#define WIRE_SITE_WORST (2 + 1 + WIRE_SITE_NAME_MAX + 1 + 2 + 4 * 8)
 
 size_t wire_encode_describe(const struct wire_describe *d, uint8_t *buf)
 {
@@ -421,6 +423,25 @@ size_t wire_encode_describe(const struct wire_describe *d, uint8_t *buf)
 	}
 	for (int i = 0; i < WIRE_SENSORS; i++)
 		put_str(&w, d->sensor[i], WIRE_NAME_MAX);
+	if (d->site.present && w.n + WIRE_SITE_WORST <= WIRE_MAX_MSG) {
+		/* always with the protocol's names (987 bytes at most before it) */
+		size_t at;
+
+		put_u8(&w, WIRE_SITE_BLOCK);
+		at = w.n;
+		put_u8(&w, 0);
+		put_str(&w, d->site.name, WIRE_SITE_NAME_MAX);
+		put_u8(&w, d->site.state);
+		put_u16(&w, d->site.avatars);
+		put_f32(&w, d->site.rate_hz);
+		put_u32(&w, d->site.frames);
+		put_u32(&w, d->site.lost);
+		put_f32(&w, d->site.delay_p50_ms);
+		put_f32(&w, d->site.delay_p99_ms);
+		put_f32(&w, d->site.clock_offset_ms);
+		put_f32(&w, d->site.rtt_ms);
+		w.p[at] = (uint8_t)(w.n - at - 1);
+	}
 	return finish(&w);
 }
 
@@ -459,6 +480,28 @@ int wire_decode_describe(const uint8_t *buf, size_t len, struct wire_describe *d
 	}
 	for (int i = 0; i < WIRE_SENSORS; i++)
 		get_str(&r, d->sensor[i], sizeof(d->sensor[i]));
+	memset(&d->site, 0, sizeof(d->site));
+	if (!r.err && r.n + 2 <= r.len && r.p[r.n] == WIRE_SITE_BLOCK && r.n + 2 + r.p[r.n + 1] <= r.len) {
+		/* the site block; a block of another tag (a later revision) is skipped */
+		struct rbuf b = { r.p, r.n + 2, r.n + 2 + r.p[r.n + 1], 0 };
+
+		get_str(&b, d->site.name, sizeof(d->site.name));
+		d->site.state = get_u8(&b);
+		d->site.avatars = get_u16(&b);
+		d->site.rate_hz = get_f32(&b);
+		d->site.frames = get_u32(&b);
+		d->site.lost = get_u32(&b);
+		d->site.delay_p50_ms = get_f32(&b);
+		d->site.delay_p99_ms = get_f32(&b);
+		d->site.clock_offset_ms = get_f32(&b);
+		d->site.rtt_ms = get_f32(&b);
+		/* a figure that is not a number: the block is not taken */
+		if (b.err || !isfinite(d->site.rate_hz) || !isfinite(d->site.delay_p50_ms) ||
+		    !isfinite(d->site.delay_p99_ms) || !isfinite(d->site.clock_offset_ms) || !isfinite(d->site.rtt_ms))
+			memset(&d->site, 0, sizeof(d->site));
+		else
+			d->site.present = true;
+	}
 	return r.err ? -r.err : 0;
 }
 

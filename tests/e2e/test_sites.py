@@ -10,6 +10,7 @@ import random
 import signal
 import socket
 import struct
+import json
 import subprocess
 import sys
 import tempfile
@@ -17,10 +18,13 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from test_daemon import DAEMON, Daemon, free_port  # noqa: E402
+import test_viewer  # noqa: E402  (a module import: its tests are not collected here)
+from headless import Chromium, chromium_path  # noqa: E402
+from test_daemon import CTL, DAEMON, DUMP, Daemon, free_port  # noqa: E402
 from wireframe import decode_frame  # noqa: E402
 
 PEER = os.path.join(os.path.dirname(DAEMON), "tests", "fastdds-peer")
+REC = os.path.join(os.path.dirname(DAEMON), "avatargw-rec")
 REMOTE_ID = 1000
 PEOPLE = 10  # avatars per site where several are needed
 LEASE = 1.0
@@ -58,6 +62,7 @@ class Listener:
         self.sock.setblocking(False)
         self.frames = []
         self.names = {}
+        self.revs = {}  # avatar -> the describe_rev of each DESCRIBE
 
     def drain(self):
         while True:
@@ -74,6 +79,7 @@ class Listener:
             d = describe_name(data)
             if d:
                 self.names[d[0]] = d[1]
+                self.revs.setdefault(d[0], []).append(struct.unpack_from("<I", data, 20)[0])
 
     def wait(self, cond, timeout, what):
         t_end = time.monotonic() + timeout
@@ -131,7 +137,7 @@ class SitesTest(unittest.TestCase):
         self.listeners.append(lst)
         return lst
 
-    def site(self, name, port, people=0, session="s", extra=""):
+    def site(self, name, port, people=0, session="s", extra="", outputs=""):
         """a daemon at site NAME sending to a UDP port; people simulated persons of its own"""
         d = os.path.join(self.tmp.name, "%s-%d" % (name, len(self.daemons)))
         os.mkdir(d)
@@ -141,6 +147,7 @@ class SitesTest(unittest.TestCase):
             for i in range(people):
                 text += "[avatar person%d]\nperson = sim/p%d\n" % (i, i)
         text += "[output local]\ntype = udp\naddress = 127.0.0.1\nport = %d\n" % port
+        text += outputs
         text += ("[site]\nname = %s\nsession = %s-%s\ndomain = %d\ninterface = lo\npeers = 127.0.0.1\n"
                  "lease = %g\ndeadline_ms = %d\nremote_id = %d\n%s" %
                  (name, session, self.tag, self.domain, LEASE, DEADLINE_MS, REMOTE_ID, extra))
@@ -198,6 +205,18 @@ class SitesTest(unittest.TestCase):
         # one host, one clock: the estimate is off by at most half its round trip (the NTP bound)
         self.assertLessEqual(abs(p["clock_offset_ms"]), p["rtt_ms"] / 2 + 0.01, "offset beyond its bound")
         self.assertGreater(a.status()["site"]["written"], 0)
+        # the remote avatars in lab-b's avatar table, as what they are
+        av = {x["name"]: x for x in b.status()["avatars"]}
+        for i in range(PEOPLE):
+            r = av["lab-a/person%d" % i]
+            self.assertEqual((r["id"], r["state"], r["remote"], r["via"]), (ids_b["lab-a/person%d" % i], "OK",
+                                                                          True, "site"))
+            self.assertGreater(r["frames"], 0)
+            self.assertFalse(av["person%d" % i]["remote"])
+        text = subprocess.run([CTL, "-s", b.ctl, "status"], capture_output=True, text=True, timeout=5).stdout
+        row = [ln.split() for ln in text.split("\n") if ln.startswith("lab-a/person0 ")]
+        self.assertEqual(len(row), 1, text)
+        self.assertEqual(row[0][1:3], [str(ids_b["lab-a/person0"]), "OK"])
 
     def test_killed_site_goes_stale_then_away_then_comes_back(self):
         la, lb = self.listener(), self.listener()
@@ -224,6 +243,7 @@ class SitesTest(unittest.TestCase):
         seen_gone = time.monotonic()
         # the lease (1 s) plus the scheduling of a loaded host
         self.assertLess(seen_gone - killed, LEASE + 1.5, "departure seen late")
+        self.assertEqual([(x["name"], x["state"]) for x in b.status()["avatars"]], [("lab-a/person0", "GONE")])
         lb.drain()
         time.sleep(0.3)  # frames already in the socket before the departure
         lb.drain()
@@ -316,6 +336,173 @@ class SitesTest(unittest.TestCase):
                 matched += 1
         self.assertGreaterEqual(matched, 20, "too few JointState samples matched the UDP stream by stamp")
 
+    def test_recorded_session_replays_the_remote_avatars(self):
+        """a recording at lab-b holds lab-a's avatar as solved there; its replay, with no [site] and no
+        DDS, publishes it again with its name, id and the joint angles lab-b published live"""
+        la, lb, lc = self.listener(), self.listener(), self.listener()
+        rec = os.path.join(self.tmp.name, "rec")
+        self.site("lab-a", la.port, people=1)
+        d = os.path.join(self.tmp.name, "lab-b-rec")
+        os.mkdir(d)
+        text = ("[daemon]\nrate = 240\nlock_memory = no\nrecord_dir = %s\nrecord_flush = 0.1\n"
+                "[source sim]\ntype = sim\npeople = 1\n[avatar person0]\nperson = sim/p0\n"
+                "[output local]\ntype = udp\naddress = 127.0.0.1\nport = %d\n"
+                "[site]\nname = lab-b\nsession = s-%s\ndomain = %d\ninterface = lo\npeers = 127.0.0.1\n"
+                "lease = %g\ndeadline_ms = %d\nremote_id = %d\n" %
+                (rec, lb.port, self.tag, self.domain, LEASE, DEADLINE_MS, REMOTE_ID))
+        b = Daemon(d, text)
+        self.daemons.append(b)
+        lb.wait(lambda: lb.names.get(REMOTE_ID) == "lab-a/person0" and
+                len([f for f in lb.of(REMOTE_ID) if f["flags"] & 8]) >= 300, 20,
+                "300 new frames of lab-a's avatar at lab-b while it records")
+        b.stop()
+        lb.drain()
+        live = {}
+        for f in lb.of(REMOTE_ID):
+            if f["flags"] & 8:
+                live.setdefault(f["t_ns"], set()).add(joints_bits(f))
+        files = sorted(os.listdir(rec))
+        self.assertEqual(len(files), 1, files)
+        path = os.path.join(rec, files[0])
+        info = json.loads(subprocess.run([REC, "info", "--json", path], capture_output=True, text=True).stdout)
+        self.assertEqual([(a["name"], a["id"]) for a in info["remote_avatars"]], [("lab-a/person0", REMOTE_ID)])
+        self.assertGreaterEqual(info["remote_avatars"][0]["frames"], 300)
+        # the replay: a daemon with no [site] (no DDS), lab-b's own person solved again from its samples
+        d = os.path.join(self.tmp.name, "replay")
+        os.mkdir(d)
+        r = Daemon(d, "[daemon]\nrate = 240\nlock_memory = no\n[source rec]\ntype = replay\nfile = %s\n"
+                   "loop = no\n[avatar local]\nperson = rec/sim.p0\nid = 7\n"
+                   "[output local]\ntype = udp\naddress = 127.0.0.1\nport = %d\n" % (path, lc.port))
+        self.daemons.append(r)
+        lc.wait(lambda: lc.names.get(REMOTE_ID) == "lab-a/person0" and lc.names.get(7) == "local" and
+                len([f for f in lc.of(REMOTE_ID) if f["flags"] & 8]) >= 200 and len(lc.of(7)) >= 100, 20,
+                "the replayed remote avatar (200 new frames) and the local one")
+        st = r.status()
+        self.assertNotIn("site", st)
+        matched = 0
+        for f in lc.of(REMOTE_ID):
+            if f["flags"] & 8:
+                self.assertIn(f["t_ns"], live, "a replayed sample time lab-b never published")
+                self.assertIn(joints_bits(f), live[f["t_ns"]], "replayed joint angles differ from lab-b's")
+                matched += 1
+        self.assertGreaterEqual(matched, 200)
+        # a DESCRIBE a second, recorded and replayed: the same skeleton, no new revision
+        lc.wait(lambda: len(lc.revs.get(REMOTE_ID, [])) >= 3, 10, "three DESCRIBEs of the replayed avatar")
+        self.assertEqual(len(set(lc.revs[REMOTE_ID])), 1, lc.revs[REMOTE_ID])
+        # in the replaying daemon's status: the remote avatar as what it is
+        names = {a["name"]: a for a in st["avatars"]}
+        self.assertEqual(names["lab-a/person0"]["id"], REMOTE_ID)
+        self.assertTrue(names["lab-a/person0"]["remote"])
+
+    def test_site_figures_in_dump_stats_and_the_viewer(self):
+        """per remote site: rate, loss, one-way delay, clock offset, round trip and presence travel in
+        the remote avatars' DESCRIBEs to avatargw-dump --stats and to the viewer"""
+        la, lb = self.listener(), self.listener()
+        self.site("lab-a", la.port, people=1)
+        dport, vport = free_port(), free_port(socket.SOCK_STREAM)
+        b = self.site("lab-b", lb.port, extra="", outputs=(
+            "[output dump]\ntype = udp\naddress = 127.0.0.1\nport = %d\n"
+            "[output viewer]\ntype = websocket\naddress = 127.0.0.1\nport = %d\n" % (dport, vport)))
+        p = subprocess.Popen([DUMP, "--udp", "127.0.0.1:%d" % dport, "--stats", "--timeout", "10"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        self.peers.append(p)
+        site = None
+        t_end = time.monotonic() + 20
+        for line in p.stdout:
+            m = json.loads(line)
+            # once the clock estimate (a ping a second) and delays are in
+            if m["type"] == "site" and m["rtt_ms"] is not None and m["delay_ms"] is not None and \
+                    m["rate_hz"] > 100:
+                site = m
+                break
+            if time.monotonic() > t_end:
+                break
+        p.kill()
+        self.assertIsNotNone(site, "no figures of lab-a from avatargw-dump --stats")
+        st = [x for x in b.status()["site"]["peers"] if x["name"] == "lab-a"][0]
+        self.assertEqual((site["name"], site["state"], site["avatars"]), ("lab-a", "present", 1))
+        self.assertLessEqual(site["frames"], st["frames"])
+        self.assertGreater(site["frames"], 0)
+        self.assertLessEqual(site["lost"], st["lost"])
+        self.assertLess(site["rate_hz"], 400)
+        self.assertLessEqual(abs(site["clock_offset_ms"]), site["rtt_ms"] / 2 + 0.01)
+        self.assertLessEqual(site["delay_ms"]["p50"], site["delay_ms"]["p99"])
+        # the viewer: the card of lab-a's avatar says which site, and its figures
+        if not chromium_path():
+            self.skipTest("no Chromium to load the viewer (apt-get install chromium)")
+        with tempfile.TemporaryDirectory() as profile:
+            br = Chromium(profile)
+            try:
+                br.call("Page.navigate", url="http://127.0.0.1:%d/" % vport)
+                st = test_viewer.wait_for(br, lambda s: any(a["site"] == "lab-a" and a["siteStats"] and
+                                                   a["siteStats"]["rtt_ms"] is not None and
+                                                   a["siteStats"]["rate_hz"] > 100 for a in s["list"]))
+                card = br.evaluate("document.getElementById('avatars').innerText")
+            finally:
+                br.close()
+        a = [x for x in st["list"] if x["site"] == "lab-a"][0]
+        self.assertEqual(a["name"], "lab-a/person0")
+        self.assertEqual((a["siteStats"]["state"], a["siteStats"]["avatars"]), ("present", 1))
+        self.assertIn("lab-a present", card)
+        self.assertIn("delay", card)
+
+    def reload(self, daemon, text):
+        """rewrites the daemon's configuration, SIGHUP; the status once the reload is done (or refused)"""
+        st = daemon.status()
+        done = st["reloads"] + st["reload_failures"]
+        with open(daemon.conf, "w") as f:
+            f.write(text)
+        daemon.proc.send_signal(signal.SIGHUP)
+        t_end = time.monotonic() + 15
+        while time.monotonic() < t_end:
+            st = daemon.status()
+            if st["reloads"] + st["reload_failures"] > done:
+                return st
+            time.sleep(0.05)
+        raise AssertionError("no reload within 15 s: " + daemon.stderr())
+
+    def test_reload_keeps_an_unchanged_site_and_applies_a_changed_one(self):
+        la, lb = self.listener(), self.listener()
+        a = self.site("lab-a", la.port, people=1)
+        b = self.site("lab-b", lb.port, people=1)
+        lb.wait(lambda: lb.names.get(REMOTE_ID) == "lab-a/person0" and len(lb.of(REMOTE_ID)) >= 50, 15,
+                "lab-a's avatar at lab-b")
+        la.wait(lambda: "lab-b/person0" in la.names.values(), 15, "lab-b's avatar at lab-a")
+        with open(b.conf) as f:
+            text = f.read()
+        written = b.status()["site"]["written"]
+        # 1. [site] as it was (an output's key changed): the participant, its counters and the remote avatar stay
+        st = self.reload(b, text.replace("[output local]\n", "[output local]\ndecimate = 1\n"))
+        self.assertEqual((st["reloads"], st["reload_failures"]), (1, 0), b.stderr())
+        self.assertIn("[site] unchanged", b.stderr())
+        self.assertGreaterEqual(st["site"]["written"], written, "the site's counters started over")
+        self.assertEqual(st["site"]["peers"][0]["joins"], 1)
+        self.assertEqual([(x["name"], x["id"], x["state"]) for x in st["avatars"] if x["remote"]],
+                         [("lab-a/person0", REMOTE_ID, "OK")])
+        peer_b = [p for p in a.status()["site"]["peers"] if p["name"] == "lab-b"][0]
+        self.assertEqual((peer_b["joins"], peer_b["departures"]), (1, 0), "lab-a saw lab-b leave")
+        t = time.monotonic()
+        lb.wait(lambda: len([f for f in lb.of(REMOTE_ID, t) if f["flags"] & 8]) >= 50, 10,
+                "lab-a's frames at lab-b after the reload")
+        # the remote avatar's numbering goes on: no FRAME sequence started over
+        seqs = [f["seq"] for f in lb.of(REMOTE_ID)]
+        self.assertEqual(seqs, sorted(seqs), "the remote avatar's FRAME numbering started over")
+        # 2. a changed [site] key is applied: a new participant, the remote avatar under its new id
+        text2 = text.replace("remote_id = %d\n" % REMOTE_ID, "remote_id = %d\n" % (REMOTE_ID + 500))
+        st = self.reload(b, text2)
+        self.assertEqual((st["reloads"], st["reload_failures"]), (2, 0), b.stderr())
+        self.assertIn("[site] changed: a new DDS participant", b.stderr())
+        lb.wait(lambda: lb.names.get(REMOTE_ID + 500) == "lab-a/person0" and
+                len(lb.of(REMOTE_ID + 500)) >= 50, 15, "lab-a's avatar at lab-b under its new id")
+        # 3. a network setting of the running domain cannot change: refused, the running configuration stays
+        st = self.reload(b, text2.replace("lease = %g\n" % LEASE, "lease = %g\n" % (LEASE * 2)))
+        self.assertEqual((st["reloads"], st["reload_failures"]), (2, 1))
+        self.assertIn("reload failed, the running configuration stays: [site]: interface, peers, security or "
+                      "lease changed", b.stderr())
+        t = time.monotonic()
+        lb.wait(lambda: len([f for f in lb.of(REMOTE_ID + 500, t) if f["flags"] & 8]) >= 50, 10,
+                "lab-a's frames at lab-b after the refused reload")
+
     def test_site_without_sources_and_no_site_section(self):
         # [site] and an output only: a valid configuration (a CAVE that shows the others)
         lb = self.listener()
@@ -401,6 +588,9 @@ class SecurityTest(SitesTest):
     test_sessions_do_not_see_each_other = None
     test_fast_dds_reads_the_frame_topic_and_ros2 = None
     test_site_without_sources_and_no_site_section = None
+    test_recorded_session_replays_the_remote_avatars = None
+    test_site_figures_in_dump_stats_and_the_viewer = None
+    test_reload_keeps_an_unchanged_site_and_applies_a_changed_one = None
 
 
 RECV = """
