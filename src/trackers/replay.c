@@ -798,6 +798,8 @@ static int replay_open(struct tracker *t, char *err, size_t errlen)
 	     : rp->n_inst		  ? rp->duration / (double)rp->n_inst
 					  : 1.0 / 240; /* only remote avatars: about a loop period */
 	dt /= opts_of(t->cfg)->step ? 1.0 : opts_of(t->cfg)->speed;
+	if (!(dt <= 1.0))
+		dt = 1.0; /* instants far apart (or a clip whose times are absurd): a look a second is enough */
 	if (rp->tfd >= 0) {
 		long ns = (long)(dt * 1e9);
 		struct itimerspec its = { { ns / 1000000000, ns % 1000000000 }, { ns / 1000000000, ns % 1000000000 } };
