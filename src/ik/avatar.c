@@ -955,28 +955,19 @@ static bool wrist_in_reach(const struct arm *a, const struct ik_target *t)
 }
 
 /*
- * The chest moved by d (chest frame, capped at what is left of REACH_SHIFT,
- * *left, which the move uses up) and rolled about its forward axis by the
- * angle whose sine is sr (the right shoulder down for sr > 0), both arms'
- * targets rewritten.
+ * The chest c0 moved by d (c0's frame) and rolled about its forward axis by
+ * the angle whose sine is sr (the right shoulder down for sr > 0), both
+ * arms' targets rewritten.
  */
-static void chest_shift(struct vec3 d, sc_t sr, sc_t *left, const struct dq *const hand[2], struct dq *chest,
+static void chest_shift(const struct dq *c0, struct vec3 d, sc_t sr, const struct dq *const hand[2], struct dq *chest,
 			struct ik_target t[2])
 {
 	struct vec3 dw, c;
-	struct quat r = chest->r;
-	sc_t n = v3_norm(&d);
+	struct quat r = c0->r;
 	int side;
 
-	if (n > *left) {
-		sc_t k = sc_div(*left, n);
-
-		d = (struct vec3){ sc_mul(d.x, k), sc_mul(d.y, k), sc_mul(d.z, k) };
-		n = *left;
-	}
-	*left -= n;
 	quat_rotate(&r, &d, &dw);
-	dq_translation(chest, &c);
+	dq_translation(c0, &c);
 	c = (struct vec3){ c.x + dw.x, c.y + dw.y, c.z + dw.z };
 	if (sr != 0) {
 		/* the half angle: cos = sqrt((1 + cos) / 2), sin = sin / (2 cos(half)) */
@@ -992,68 +983,143 @@ static void chest_shift(struct vec3 d, sc_t sr, sc_t *left, const struct dq *con
 }
 
 /*
- * The shoulders' moves that give both arms what they miss, when both hands
- * are beyond reach: the least move (d, u) of the chest, d its shift and u
- * the rise of the right shoulder (and fall of the left) by a roll, such
- * that each shoulder moves toward its hand by that arm's excess:
- * (d + u ez) . ar = er, (d - u ez) . al = el. The least-norm solution of
- * these two equations in four unknowns. A lateral lean of the trunk (an arm
- * raised overhead, the other hanging: one shoulder up, one down), which no
- * shift of a rigid chest gives. false if the two are nearly one equation.
+ * The least move of the shoulders that brings every hand beyond reach
+ * within it: x = (d, u), d the chest's shift and u the rise of the right
+ * shoulder (the left falling as much) by a roll about the forward axis, the
+ * least |x| with g_i . x >= c_i for each arm i that needs it (g_i the arm's
+ * shoulder-wrist line as the shoulder moves with x: (a_i, +-a_i.z), or
+ * (a_i, 0) without the roll). A quadratic programme of at most two
+ * constraints in four unknowns, solved by its active sets: none, each one
+ * alone (if it leaves the other met), both. A lateral lean of the trunk (an
+ * arm raised overhead, the other hanging: one shoulder up, one down) is the
+ * last; no shift of a rigid chest gives it.
  */
 #define ROLL_MAX SC_C(0.3420201433256687) /* sine of 20 degrees */
 
-static bool reach_roll(const struct vec3 *ar, sc_t er, const struct vec3 *al, sc_t el, struct vec3 *d, sc_t *u)
-{
-	sc_t grr = SC_C(1) + sc_mul(ar->z, ar->z), gll = SC_C(1) + sc_mul(al->z, al->z);
-	sc_t grl = v3_dot(ar, al) - sc_mul(ar->z, al->z);
-	sc_t det = sc_mul(grr, gll) - sc_mul(grl, grl), lr, ll;
+struct reach_x {
+	sc_t v[4]; /* d.x, d.y, d.z, u */
+};
 
-	if (!(det > SC_C(0.05)))
-		return false;
-	lr = sc_div(sc_mul(gll, er) - sc_mul(grl, el), det);
-	ll = sc_div(sc_mul(grr, el) - sc_mul(grl, er), det);
-	*d = (struct vec3){ sc_mul(lr, ar->x) + sc_mul(ll, al->x), sc_mul(lr, ar->y) + sc_mul(ll, al->y),
-			    sc_mul(lr, ar->z) + sc_mul(ll, al->z) };
-	*u = sc_mul(lr, ar->z) - sc_mul(ll, al->z);
-	return true;
+static sc_t rx_dot(const struct reach_x *a, const struct reach_x *b)
+{
+	return sc_mul(a->v[0], b->v[0]) + sc_mul(a->v[1], b->v[1]) + sc_mul(a->v[2], b->v[2]) +
+	       sc_mul(a->v[3], b->v[3]);
 }
 
-/* shift_left, roll_left: what is left of REACH_SHIFT and ROLL_MAX (a second step takes no more than the first left) */
-static bool reach_chest(const struct avatar *av, const struct dq *const hand[2], struct dq *chest,
-			struct ik_target t[2], sc_t *shift_left, sc_t *roll_left)
+static void rx_scaled(const struct reach_x *g, sc_t k, struct reach_x *x)
 {
-	struct vec3 d = { 0, 0, 0 }, ax[2];
-	sc_t excess[2] = { 0, 0 }, u = 0, sr = 0;
-	int side, n = 0;
+	for (int i = 0; i < 4; i++)
+		x->v[i] = sc_mul(k, g->v[i]);
+}
 
-	for (side = 0; side < 2; side++) {
-		const struct arm *a = &av->arm[side];
-		struct arm_goal g;
+static void reach_qp(const struct reach_x g[2], const sc_t c[2], const bool act[2], struct reach_x *x)
+{
+	sc_t gg[2] = { rx_dot(&g[0], &g[0]), rx_dot(&g[1], &g[1]) }, g01, det, l0, l1;
+	int i;
 
-		if (!t[side].valid || wrist_in_reach(a, &t[side]) || !goal_init(a, &t[side], SC_C(0), &g) || g.in_reach)
-			continue;
-		excess[side] = v3_norm(&(struct vec3){ g.w.x - g.s.x, g.w.y - g.s.y, g.w.z - g.s.z }) -
-			       (a->dims.arm + a->dims.forearm) + SC_C(0.001);
-		/* the right arm's frame; the left arm's mirrored back */
-		ax[side] = (struct vec3){ side == ARM_LEFT ? -g.ax.x : g.ax.x, g.ax.y, g.ax.z };
-		d.x += sc_mul(excess[side], ax[side].x);
-		d.y += sc_mul(excess[side], ax[side].y);
-		d.z += sc_mul(excess[side], ax[side].z);
-		n++;
+	*x = (struct reach_x){ { 0, 0, 0, 0 } };
+	if (!act[0] || !act[1]) {
+		i = act[0] ? 0 : 1;
+		if (act[i] && c[i] > 0)
+			rx_scaled(&g[i], sc_div(c[i], gg[i]), x);
+		return;
 	}
-	if (!(v3_norm(&d) > 0) && n < 2)
-		return false;
-	if ((av->body.model & AVATAR_REACH_ROLL) && n == 2 &&
-	    reach_roll(&ax[ARM_RIGHT], excess[ARM_RIGHT], &ax[ARM_LEFT], excess[ARM_LEFT], &d, &u)) {
-		sc_t sh = av->arm[ARM_RIGHT].dims.shoulder;
-
-		/* the right shoulder at (S, 0, 0) rolled by a about y goes to (S cos a, 0, -S sin a): u = -S sin a */
-		sr = sc_clamp(-sc_div(u, sh), -*roll_left, *roll_left);
-		*roll_left -= sc_abs(sr);
+	if (!(c[0] > 0) && !(c[1] > 0))
+		return;
+	for (i = 0; i < 2; i++) {
+		/* the one alone, if it leaves the other's met */
+		if (c[i] > 0) {
+			rx_scaled(&g[i], sc_div(c[i], gg[i]), x);
+			if (rx_dot(&g[1 - i], x) >= c[1 - i])
+				return;
+		}
 	}
-	chest_shift(d, sr, shift_left, hand, chest, t);
-	return true;
+	g01 = rx_dot(&g[0], &g[1]);
+	det = sc_mul(gg[0], gg[1]) - sc_mul(g01, g01);
+	if (!(det > SC_C(0.01))) {
+		/* nearly one line: the arm that needs more */
+		i = c[0] > c[1] ? 0 : 1;
+		rx_scaled(&g[i], sc_div(c[i], gg[i]), x);
+		return;
+	}
+	l0 = sc_div(sc_mul(gg[1], c[0]) - sc_mul(g01, c[1]), det);
+	l1 = sc_div(sc_mul(gg[0], c[1]) - sc_mul(g01, c[0]), det);
+	for (i = 0; i < 4; i++)
+		x->v[i] = sc_mul(l0, g[0].v[i]) + sc_mul(l1, g[1].v[i]);
+}
+
+/*
+ * AVATAR_REACH_CHEST: the chest moved (and, with AVATAR_REACH_ROLL, rolled)
+ * by the least move that brings the hands beyond the straight arms' reach
+ * within it, at most REACH_SHIFT and 20 degrees. The arms' lines change
+ * with the move (and the roll is not linear): REACH_ITERS rounds, each the
+ * whole move again from the chest the head placed, with every arm that
+ * needed a move in an earlier round kept in it (a move for one hand must
+ * not take the other's shoulder out of its reach). Rewrites the targets;
+ * returns whether the chest moved.
+ */
+#define REACH_ITERS 3
+#define REACH_MARGIN SC_C(0.002) /* the hand brought a millimetre inside the straight arm's reach */
+
+static bool reach_chest(const struct avatar *av, const struct dq *const hand[2], struct dq *chest,
+			struct ik_target t[2])
+{
+	const struct dq c0 = *chest;
+	const bool roll = (av->body.model & AVATAR_REACH_ROLL) != 0;
+	const sc_t sh = av->arm[ARM_RIGHT].dims.shoulder;
+	struct reach_x x = { { 0, 0, 0, 0 } }, g[2];
+	sc_t c[2] = { 0, 0 }, sr = 0, cr = SC_C(1);
+	bool act[2] = { false, false }, moved = false;
+	int it, side;
+
+	for (it = 0; it < REACH_ITERS; it++) {
+		bool need = false;
+
+		for (side = 0; side < 2; side++) {
+			const struct arm *a = &av->arm[side];
+			struct arm_goal gl;
+			struct vec3 ax;
+			sc_t e;
+
+			if (!t[side].valid || (!act[side] && wrist_in_reach(a, &t[side])) ||
+			    !goal_init(a, &t[side], SC_C(0), &gl) || (!act[side] && gl.in_reach))
+				continue;
+			e = v3_norm(&(struct vec3){ gl.w.x - gl.s.x, gl.w.y - gl.s.y, gl.w.z - gl.s.z }) -
+			    (a->dims.arm + a->dims.forearm) + REACH_MARGIN;
+			/* the line in the chest's frame (the left arm's mirrored back), then in c0's */
+			ax = (struct vec3){ side == ARM_LEFT ? -gl.ax.x : gl.ax.x, gl.ax.y, gl.ax.z };
+			g[side] = (struct reach_x){ { sc_mul(cr, ax.x) + sc_mul(sr, ax.z), ax.y,
+						      sc_mul(cr, ax.z) - sc_mul(sr, ax.x), 0 } };
+			if (roll)
+				g[side].v[3] = side == ARM_LEFT ? -g[side].v[2] : g[side].v[2];
+			c[side] = e + rx_dot(&g[side], &x);
+			act[side] = true;
+			need |= e > 0;
+		}
+		if (!need)
+			break;
+		reach_qp(g, c, act, &x);
+		{
+			struct vec3 d = { x.v[0], x.v[1], x.v[2] };
+			sc_t n = v3_norm(&d);
+
+			if (n > REACH_SHIFT) {
+				sc_t k = sc_div(REACH_SHIFT, n);
+
+				d = (struct vec3){ sc_mul(d.x, k), sc_mul(d.y, k), sc_mul(d.z, k) };
+				x.v[0] = d.x;
+				x.v[1] = d.y;
+				x.v[2] = d.z;
+			}
+			/* the right shoulder (S, 0, 0) rolled by a about y: (S cos a, 0, -S sin a), u = -S sin a */
+			sr = sc_clamp(-sc_div(x.v[3], sh), -ROLL_MAX, ROLL_MAX);
+			x.v[3] = -sc_mul(sr, sh);
+			cr = sc_sqrt(SC_C(1) - sc_mul(sr, sr));
+			chest_shift(&c0, d, sr, hand, chest, t);
+			moved = true;
+		}
+	}
+	return moved;
 }
 
 /*
@@ -1266,11 +1332,7 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 	for (side = 0; side < 2; side++)
 		avatar_arm_target(&out->chest, hand[side], &t[side]);
 	if (av->body.model & AVATAR_REACH_CHEST) {
-		/* a second step where the first (linear in the roll) left a hand beyond reach, within the same caps */
-		sc_t shift_left = REACH_SHIFT, roll_left = ROLL_MAX;
-
-		if (reach_chest(av, hand, &out->chest, t, &shift_left, &roll_left))
-			reach_chest(av, hand, &out->chest, t, &shift_left, &roll_left);
+		reach_chest(av, hand, &out->chest, t);
 	}
 	if ((av->body.model & AVATAR_BOW) && prev && bowed(&prev->chest) && o->max_evals > TRACK_EVALS) {
 		/* out of a bow the upright chest is likely still short: its search as short as the bow's */
