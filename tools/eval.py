@@ -344,8 +344,9 @@ def plot_keyframes(kf, outdir):
 
 # model bits as avatargw-eval --model names them (include/ik/avatar.h); DEFAULT_BITS is AVATAR_MODEL_DEFAULT
 BITS = ["hand-elbow", "reach-first", "yaw-hands", "reach-chest", "neck", "bow", "keep-branch", "reach-roll",
-        "bow-head"]
-DEFAULT_BITS = ["hand-elbow", "reach-first", "yaw-hands", "reach-chest", "bow", "keep-branch", "reach-roll", "bow-head"]
+        "bow-head", "lean"]
+DEFAULT_BITS = ["hand-elbow", "reach-first", "yaw-hands", "reach-chest", "bow", "keep-branch", "reach-roll", "bow-head",
+                "lean"]
 # joint limits (degrees): the benchmark's (arm_default_limits), the rules that change them (joint, bound, value),
 # and the avatar's (avatar_default_limits)
 BENCH_LIMITS = [(-30, 30), (-90, 30), (-60, 120), (-90, 90), (-90, 60), (-90, 90), (-70, 70), (-30, 30)]
@@ -361,6 +362,7 @@ RULES = [("hand-elbow", "the elbow where the hand's orientation is plausible (ha
          ("keep-branch", "an arm kept on its branch (no elbow jump)"),
          ("reach-roll", "with reach-chest, the chest rolled when both hands are beyond reach"),
          ("bow-head", "a bow at the waist when the head pitches more than the neck's 30°"),
+         ("lean", "the trunk leaning sideways or back when raised hands are off their sensors"),
          ("j2-overhead", "J2 to -170° (arm raised sideways overhead; benchmark -90°)"),
          ("j2-adduction", "J2 adduction to 10° only (benchmark 30°)"),
          ("wrist-thumb", "J7 ±30°, J8 ±80° (deviation narrow, flexion wide; benchmark J7 ±70°, J8 ±30°)")]

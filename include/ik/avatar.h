@@ -53,8 +53,12 @@
  *    sensor.
  *  - AVATAR_KEEP_BRANCH: an elbow that moves 10 cm more than its hand in
  *    one frame (another branch of the arm) is held on the branch it was on
- *    if the hand stays within 1 mm of its sensor and 20 degrees of the
- *    jump's orientation.
+ *    if the hand stays within 1 mm of its sensor (or no farther than the
+ *    jump left it) and 20 degrees of the jump's orientation.
+ *  - AVATAR_LEAN: raised hands that the arms, against their limits, leave
+ *    off their sensors bend the trunk: sideways away from one raised arm
+ *    (5 to 20 degrees), or back (5 to 20 degrees about the head sensor),
+ *    the first bend that puts every hand on kept.
  */
 #ifndef IK_AVATAR_H
 #define IK_AVATAR_H
@@ -76,9 +80,10 @@ extern "C" {
 #define AVATAR_KEEP_BRANCH 0x40
 #define AVATAR_REACH_ROLL 0x80
 #define AVATAR_BOW_HEAD 0x100
+#define AVATAR_LEAN 0x200
 #define AVATAR_MODEL_DEFAULT                                                                                           \
 	(AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_BOW |                 \
-	 AVATAR_KEEP_BRANCH | AVATAR_REACH_ROLL | AVATAR_BOW_HEAD)
+	 AVATAR_KEEP_BRANCH | AVATAR_REACH_ROLL | AVATAR_BOW_HEAD | AVATAR_LEAN)
 
 struct avatar_body {
 	struct arm_dims dims;	 /* the right arm (and the left one unless avatar_set_left_arm() says otherwise) */

@@ -883,6 +883,28 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 			}
 		}
 	}
+	if ((av->body.model & AVATAR_REACH_FIRST) && prev && t->valid && (flags & IK_UNREACHABLE) &&
+	    res->err.pos > HOLD_POS) {
+		/*
+		 * Still off its sensor: the compromise Newton reaches from the
+		 * last frame's posture (no search) is often nearer than the one
+		 * from the seed (a raised arm against its limits, seeded outside
+		 * them, can end a hand's length away); the hand's place first.
+		 */
+		struct ik_opts no = *o;
+		struct ik_result r2;
+		struct arm_pose s2;
+		sc_t q2[ARM_DOF];
+
+		no.max_evals = 0;
+		ik_solve_pose(a, kin, t, prev->q[side], &no, q2, &r2, &s2);
+		if (r2.err.pos < res->err.pos) {
+			ik_q_copy(q, q2);
+			*res = r2;
+			out->seg[side] = s2;
+			flags = r2.flags;
+		}
+	}
 	if ((av->body.model & AVATAR_KEEP_BRANCH) && prev && t->valid &&
 	    arm_jumped(&prev->seg[side], &out->seg[side])) {
 		/*
@@ -911,7 +933,7 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 			arm_fk_pose(a, q2, &s2);
 			r2.flags = IK_UNREACHABLE | at_limits(a, q2);
 		}
-		if (r2.err.pos <= HOLD_POS && r2.err.rot <= res->err.rot + HOLD_ROT &&
+		if (r2.err.pos <= sc_max(HOLD_POS, res->err.pos) && r2.err.rot <= res->err.rot + HOLD_ROT &&
 		    !arm_jumped(&prev->seg[side], &s2)) {
 			ik_q_copy(q, q2);
 			*res = r2;
@@ -1298,6 +1320,87 @@ static unsigned bow(const struct avatar *av, const struct ik_kin *kin, const str
 	return flags;
 }
 
+/*
+ * AVATAR_LEAN: raised hands that their arms, against their limits, leave
+ * more than a millimetre off their sensors (J2 at -170 degrees: an arm over
+ * the head), every hand off raised: the trunk bends as a person reaching
+ * overhead does (the shoulder blade's turn, which the chain has no joint
+ * for). With one such hand it bends sideways away from it, lifting that
+ * shoulder and turning the arm's frame under the raised arm: the chest
+ * rolled about its forward axis through its origin by 5, 10, 15, 20
+ * degrees; then, and with both hands raised, it leans back: the chest
+ * pitched back about the head sensor by 5, 10, 15, 20 degrees. Both arms
+ * are solved at each with the short budget of a target out of reach; the
+ * first that puts every hand on is kept, else the chest stays.
+ */
+#define LEAN_TRIES 4
+/* the half angles of 5, 10, 15, 20 degrees */
+static const sc_t lean_c[LEAN_TRIES] = { SC_C(0.9990482215818578), SC_C(0.9961946980917455), SC_C(0.9914448613738104),
+					 SC_C(0.984807753012208) };
+static const sc_t lean_s[LEAN_TRIES] = { SC_C(0.043619387365336), SC_C(0.08715574274765817), SC_C(0.13052619222005157),
+					 SC_C(0.17364817766693033) };
+
+/* the side of the one raised hand off, 2 for both, -1 if none or a hand off is low */
+static int lean_wanted(const struct ik_target t[2], const struct avatar_pose *p)
+{
+	int side, raised = -1;
+
+	for (side = 0; side < 2; side++)
+		if (hand_off(t, p, side)) {
+			if (!(t[side].p.z > 0))
+				return -1;
+			raised = raised < 0 ? side : 2;
+		}
+	return raised;
+}
+
+static unsigned lean(const struct avatar *av, const struct ik_kin *kin, const struct ik_opts *o, const struct dq *head,
+		     const struct dq *const hand[2], const struct avatar_pose *prev, int raised,
+		     struct avatar_pose *out, unsigned flags)
+{
+	struct avatar_pose tmp;
+	struct ik_target t[2];
+	struct ik_opts short_o = *o;
+	struct vec3 hp, hc, c;
+	struct dq ci;
+	int k, side;
+
+	if (short_o.max_evals > TRACK_EVALS)
+		short_o.max_evals = TRACK_EVALS;
+	/* the head sensor in the chest's frame: where a pitch turns the chest about */
+	dq_translation(head, &hp);
+	dq_conj(&out->chest, &ci);
+	dq_transform_point(&ci, &hp, &hc);
+	for (k = raised == 2 ? LEAN_TRIES : 0; k < 2 * LEAN_TRIES; k++) {
+		const int j = k % LEAN_TRIES;
+		/* the raised arm's shoulder up: about +y for the left arm, -y for the right (x toward the right) */
+		const struct quat rq =
+			k < LEAN_TRIES ? (struct quat){ lean_c[j], 0, raised == ARM_LEFT ? lean_s[j] : -lean_s[j], 0 }
+				       : (struct quat){ lean_c[j], lean_s[j], 0, 0 };
+		struct quat r;
+		unsigned f = 0;
+
+		quat_mul(&out->chest.r, &rq, &r);
+		if (k < LEAN_TRIES) {
+			dq_translation(&out->chest, &c);
+		} else {
+			quat_rotate(&r, &hc, &c);
+			c = (struct vec3){ hp.x - c.x, hp.y - c.y, hp.z - c.z };
+		}
+		dq_from_rt(&r, &c, &tmp.chest);
+		tmp.head_yaw = out->head_yaw;
+		for (side = 0; side < 2; side++) {
+			avatar_arm_target(&tmp.chest, hand[side], &t[side]);
+			f |= avatar_arm_solve(av, side, kin, &short_o, &t[side], prev, &tmp);
+		}
+		if (!hand_off(t, &tmp, 0) && !hand_off(t, &tmp, 1)) {
+			*out = tmp;
+			return f;
+		}
+	}
+	return flags;
+}
+
 unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const struct ik_opts *o, const struct dq *head,
 		      const struct dq *lhand, const struct dq *rhand, const struct avatar_pose *prev,
 		      struct avatar_pose *out)
@@ -1342,6 +1445,12 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 	}
 	for (side = 0; side < 2; side++)
 		flags |= avatar_arm_solve(av, side, kin, o1, &t[side], prev, out);
+	if (av->body.model & AVATAR_LEAN) {
+		int raised = lean_wanted(t, out);
+
+		if (raised >= 0)
+			flags = lean(av, kin, o, head, hand, prev, raised, out, flags);
+	}
 	if ((av->body.model & AVATAR_BOW) && bow_wanted(t, out)) {
 		struct dq up;
 		sc_t y;
