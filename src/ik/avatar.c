@@ -1177,9 +1177,11 @@ static bool hand_off(const struct ik_target t[2], const struct avatar_pose *p, i
 }
 
 /*
- * A bow explains hands off their sensors only when they are low: below the
- * shoulders of the upright chest. A raised hand out of reach (a wave over
- * the head against a joint limit) is no bow.
+ * A bow explains hands off their sensors only when they are low or behind:
+ * below the shoulders of the upright chest, or behind its shoulder line
+ * (the arms swept back along a trunk bowed past the horizontal). A raised
+ * hand in front or overhead out of reach (a wave over the head against a
+ * joint limit) is no bow.
  */
 static bool bow_wanted(const struct ik_target t[2], const struct avatar_pose *p)
 {
@@ -1187,7 +1189,7 @@ static bool bow_wanted(const struct ik_target t[2], const struct avatar_pose *p)
 
 	for (side = 0; side < 2; side++)
 		if (hand_off(t, p, side)) {
-			if (!(t[side].p.z < 0))
+			if (!(t[side].p.z < 0) && !(t[side].p.y < 0))
 				return false;
 			off++;
 		}
@@ -1301,10 +1303,13 @@ static unsigned bow(const struct avatar *av, const struct ik_kin *kin, const str
 		tried[kb] = true;
 		tmp.chest = chest[kb];
 		tmp.head_yaw = out->head_yaw;
-		for (side = 0; side < 2; side++) {
+		for (side = 0; side < 2; side++)
 			avatar_arm_target(&tmp.chest, hand[side], &t[side]);
+		/* the bowed trunk's shoulders still move toward hands beyond reach */
+		if (av->body.model & AVATAR_REACH_CHEST)
+			reach_chest(av, hand, &tmp.chest, t);
+		for (side = 0; side < 2; side++)
 			f |= avatar_arm_solve(av, side, kin, &short_o, &t[side], prev, &tmp);
-		}
 		off = bow_eval(t, &tmp, &lie);
 		/* fewer hands off; among bows as many, the arms nearer along the trunk */
 		if (off < best_off || (kept && off == best_off && lie < best_lie)) {
