@@ -352,7 +352,7 @@ DEFAULT_BITS = ["hand-elbow", "reach-first", "yaw-hands", "reach-chest", "bow", 
 BENCH_LIMITS = [(-30, 30), (-90, 30), (-60, 120), (-90, 90), (-90, 60), (-90, 90), (-70, 70), (-30, 30)]
 LIMIT_RULES = {"j2-overhead": [(1, 0, -170)], "j2-adduction": [(1, 1, 10)],
                "wrist-thumb": [(6, 0, -30), (6, 1, 30), (7, 0, -80), (7, 1, 80)]}
-AVATAR_LIMITS = [(-30, 30), (-170, 10), (-60, 120), (-90, 90), (-90, 60), (-90, 90), (-30, 30), (-80, 80)]
+AVATAR_LIMITS = [(-30, 30), (-170, 30), (-60, 120), (-90, 90), (-90, 60), (-90, 90), (-30, 30), (-80, 80)]
 RULES = [("hand-elbow", "the elbow where the hand's orientation is plausible (hand-elbow cost, gravity pull)"),
          ("reach-first", "the hand on its sensor first when orientation and position conflict"),
          ("yaw-hands", "the chest's yaw pulled toward the hands' line"),
@@ -366,7 +366,7 @@ RULES = [("hand-elbow", "the elbow where the hand's orientation is plausible (ha
          ("j2-overhead", "J2 to -170° (arm raised sideways overhead; benchmark -90°)"),
          ("j2-adduction", "J2 adduction to 10° only (benchmark 30°)"),
          ("wrist-thumb", "J7 ±30°, J8 ±80° (deviation narrow, flexion wide; benchmark J7 ±70°, J8 ±30°)")]
-SHIPPED_LIMITS = ["j2-overhead", "j2-adduction", "wrist-thumb"]
+SHIPPED_LIMITS = ["j2-overhead", "wrist-thumb"]
 SHIPPED = frozenset(DEFAULT_BITS) | frozenset(SHIPPED_LIMITS)
 PAPER = frozenset(SHIPPED_LIMITS)  # the paper's avatar, with the avatar's limits
 # the clips the avatar was tuned on before the cross-validation (the seven of the first rounds)

@@ -127,9 +127,7 @@ struct avatar_pose {
  * but J2 from -170 degrees, so that an arm raised over the head (a wave
  * overhead, both hands up; the shoulder blade turns with the arm) stays
  * reachable: -90 and -120 cut the motion-capture clips' overhead frames
- * (docs/FIDELITY.md, each limit decided by folds of clips), to 10: more
- * adduction swings the hanging upper arm into the trunk (across the body
- * in front of it is J3's and J1's); and J7 -30..30,
+ * (docs/FIDELITY.md, each limit decided by folds of clips); and J7 -30..30,
  * J8 -80..80: with the hand's z toward the thumb, J7 (about x, across the
  * palm) is the wrist's deviation and J8 (about z) its flexion and extension
  * (the benchmark's -70..70 and -30..30 fit a hand frame whose z is the

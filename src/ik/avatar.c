@@ -12,8 +12,6 @@ void avatar_default_limits(struct arm_limits *out)
 {
 	arm_default_limits(out);
 	out->lo[1] = SC_C(-2.9670597283903604); /* -170 degrees: an arm over the head, the shoulder blade turned */
-	/* adduction to 10 degrees: the hanging upper arm meets the trunk (across the body is J3's and J1's) */
-	out->hi[1] = SC_C(0.17453292519943295);
 	/* J7 turns the hand about its x axis, across the palm: deviation, -30..30 degrees */
 	out->lo[6] = SC_C(-0.5235987755982988);
 	out->hi[6] = SC_C(0.5235987755982988);

@@ -25,7 +25,7 @@ CLIENT = os.path.join(BUILD, "examples", "glm_client")
 CLIP = os.path.join(ROOT, "config", "clips", "cmu_141_16.csv")
 DEG = math.pi / 180
 # the default limits (config/avatargw.conf), degrees
-LIMITS = [(-30, 30), (-170, 10), (-60, 120), (-90, 90), (-90, 60), (-90, 90), (-70, 70), (-30, 30)]
+LIMITS = [(-30, 30), (-170, 30), (-60, 120), (-90, 90), (-90, 60), (-90, 90), (-70, 70), (-30, 30)]
 IK_REACHED = 0x01
 
 
