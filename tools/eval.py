@@ -344,9 +344,9 @@ def plot_keyframes(kf, outdir):
 
 # model bits as avatargw-eval --model names them (include/ik/avatar.h); DEFAULT_BITS is AVATAR_MODEL_DEFAULT
 BITS = ["hand-elbow", "reach-first", "yaw-hands", "reach-chest", "neck", "bow", "keep-branch", "reach-roll",
-        "bow-head", "lean"]
+        "bow-head", "lean", "raise-roll"]
 DEFAULT_BITS = ["hand-elbow", "reach-first", "yaw-hands", "reach-chest", "bow", "keep-branch", "reach-roll", "bow-head",
-                "lean"]
+                "lean", "raise-roll"]
 # joint limits (degrees): the benchmark's (arm_default_limits), the rules that change them (joint, bound, value),
 # and the avatar's (avatar_default_limits)
 BENCH_LIMITS = [(-30, 30), (-90, 30), (-60, 120), (-90, 90), (-90, 60), (-90, 90), (-70, 70), (-30, 30)]
@@ -363,6 +363,7 @@ RULES = [("hand-elbow", "the elbow where the hand's orientation is plausible (ha
          ("reach-roll", "with reach-chest, the chest rolled when both hands are beyond reach"),
          ("bow-head", "a bow at the waist when the head pitches more than the neck's 30°"),
          ("lean", "the trunk leaning sideways or back when raised hands are off their sensors"),
+         ("raise-roll", "the chest rolled as a raised arm's shoulder rises (the trunk bent away from it)"),
          ("j2-overhead", "J2 to -170° (arm raised sideways overhead; benchmark -90°)"),
          ("j2-adduction", "J2 adduction to 10° only (benchmark 30°)"),
          ("wrist-thumb", "J7 ±30°, J8 ±80° (deviation narrow, flexion wide; benchmark J7 ±70°, J8 ±30°)")]
@@ -605,16 +606,22 @@ def rule_effect(results, names, base, rule):
     out = {}
     for n in names:
         a, b = results[n]["configs"][config_key(on)], results[n]["configs"][config_key(off)]
-        out[n] = (a["median"] - b["median"], a["off"] - b["off"], a["jumps"] - b["jumps"])
+        out[n] = (a["median"] - b["median"], a["off"] - b["off"], a["jumps"] - b["jumps"], 2 * results[n]["frames"])
     return out
 
 
 SAME_CM = 0.05  # a clip whose median moves less than this is unchanged (then its hands decide)
+# a clip whose reachable hands off their sensors change by this share of its arm-frames is judged by them first:
+# a hand the arm can reach belongs on its sensor (a goal of its own), before the elbow's centimetres
+HANDS_SHARE = 0.01
 
 
 def verdict(eff):
-    """+1 helped, -1 hurt, 0 unchanged: the elbow's median first, then the hands on their sensors, then the jumps"""
-    d, off, jumps = eff
+    """+1 helped, -1 hurt, 0 unchanged: the hands on their sensors if they change by HANDS_SHARE of the clip's
+    arm-frames, then the elbow's median, then the hands at all, then the jumps"""
+    d, off, jumps, arm_frames = eff
+    if abs(off) >= HANDS_SHARE * arm_frames:
+        return 1 if off < 0 else -1
     if abs(d) >= SAME_CM:
         return 1 if d < 0 else -1
     if off:
@@ -869,10 +876,11 @@ def write_report(args, results, kf, names, cv):
         w("")
         w("The clips are grouped into %d folds by what the person does (every style and take of one motion in one "
           "fold), so a rule is never judged on a variant of a motion it was chosen on. Each rule is toggled alone "
-          "on the shipped avatar; a clip is *helped* if its median elbow error falls by %g cm or more, *hurt* if it "
-          "rises as much, and when it moves less, by whether fewer or more of its arm-frames leave a reachable hand "
-          "off its sensor, then by its elbow jumps (an elbow that moves %g cm more than its hand in a frame)." % (
-              len(cv["folds"]), SAME_CM, JUMP_M * 100))
+          "on the shipped avatar; a clip is *helped* if fewer of its arm-frames leave a reachable hand off its "
+          "sensor, by %g %% of them or more (a hand the arm can reach belongs on its sensor), *hurt* if more; "
+          "otherwise if its median elbow error falls by %g cm or more, *hurt* if it rises as much, and when it moves "
+          "less, by the hands off at all, then by its elbow jumps (an elbow that moves %g cm more than its hand in a "
+          "frame)." % (len(cv["folds"]), 100 * HANDS_SHARE, SAME_CM, JUMP_M * 100))
         w("")
         w("A fold *chooses* a rule if, on the other folds, more clips are helped than hurt. A rule is on if most "
           "folds choose it and, over the clips, each held out when its fold was left out, more are helped than "

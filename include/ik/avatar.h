@@ -81,9 +81,10 @@ extern "C" {
 #define AVATAR_REACH_ROLL 0x80
 #define AVATAR_BOW_HEAD 0x100
 #define AVATAR_LEAN 0x200
+#define AVATAR_RAISE_ROLL 0x400
 #define AVATAR_MODEL_DEFAULT                                                                                           \
 	(AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_BOW |                 \
-	 AVATAR_KEEP_BRANCH | AVATAR_REACH_ROLL | AVATAR_BOW_HEAD | AVATAR_LEAN)
+	 AVATAR_KEEP_BRANCH | AVATAR_REACH_ROLL | AVATAR_BOW_HEAD | AVATAR_LEAN | AVATAR_RAISE_ROLL)
 
 struct avatar_body {
 	struct arm_dims dims;	 /* the right arm (and the left one unless avatar_set_left_arm() says otherwise) */
