@@ -31,15 +31,17 @@
  *  - AVATAR_YAW_HANDS: the chest's yaw is the head's, pulled toward the
  *    heading of the line from the left to the right hand when the two
  *    agree (the head turns more often than the chest).
- *  - AVATAR_REACH_CHEST: a hand sensor beyond the straight arm's reach
- *    moves the chest toward it, at most 8 cm (the trunk leans, the
- *    shoulder girdle protracts), before the arms are solved.
+ *  - AVATAR_REACH_CHEST: hand sensors beyond the straight arms' reach
+ *    move the chest toward them by the least move that brings them within
+ *    it, both at once, at most 8 cm (the trunk leans, the shoulder girdle
+ *    protracts), before the arms are solved.
  *  - AVATAR_NECK: the neck bends: head_offset turns about the chest origin
  *    by half of the head's tilt (its pitch and roll, the rest of a nod being
  *    the head's own joint), so a nod or a bow leaves the chest behind
  *    instead of carrying it forward and down with the head.
- *  - AVATAR_BOW: a hand the upright chest still leaves off its sensor (a
- *    joint limit in the way) tries the chest bowed forward at the waist, 15
+ *  - AVATAR_BOW: a hand below or behind the shoulders that the upright
+ *    chest still leaves off its sensor (a joint limit in the way) tries the
+ *    chest bowed forward at the waist, 15
  *    to 75 degrees about its x axis, turned with the neck and head about the
  *    head sensor; the bow that lays the arms nearest along the trunk and
  *    reaches both hands is kept. The chest is then no longer upright; its
@@ -59,6 +61,9 @@
  *    off their sensors bend the trunk: sideways away from one raised arm
  *    (5 to 20 degrees), or back (5 to 20 degrees about the head sensor),
  *    the first bend that puts every hand on kept.
+ *  - AVATAR_RAISE_ROLL: a raised arm's shoulder rises (4 cm times the sine
+ *    of the shoulder-wrist line's elevation); the chest rolls by half the
+ *    two shoulders' difference (one arm raised: the trunk bent away).
  */
 #ifndef IK_AVATAR_H
 #define IK_AVATAR_H
