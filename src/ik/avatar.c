@@ -1146,7 +1146,7 @@ static bool reach_chest(const struct avatar *av, const struct dq *const hand[2],
  * AVATAR_RAISE_ROLL: a shoulder rises with its arm raised above the
  * horizontal (the collar bone's elevation in the shoulder blade's upward
  * turn, about 15 degrees of a 15 cm clavicle at full elevation:
- * RAISE_RISE), by the sine of the shoulder-wrist line's elevation; the
+ * RAISE_RISE), by the sine of the shoulder-hand line's elevation; the
  * rigid chest carries the difference of the two rises as a roll about its
  * forward axis (one arm raised: that side up, the trunk bent away from it).
  * Their mean, a shift up, is left out: the folds of docs/FIDELITY.md chose
@@ -1155,26 +1155,41 @@ static bool reach_chest(const struct avatar *av, const struct dq *const hand[2],
  */
 #define RAISE_RISE SC_C(0.04)
 
-static void raise_roll(const struct avatar *av, const struct dq *const hand[2], struct dq *chest, struct ik_target t[2])
+/* before the targets: the hands' places in the chest's frame from their sensors, the chest's rotation rolled */
+static void raise_roll(const struct avatar *av, const struct dq *const hand[2], struct dq *chest)
 {
 	const sc_t sh = av->arm[ARM_RIGHT].dims.shoulder;
-	sc_t e[2] = { 0, 0 };
-	struct dq c0 = *chest;
+	sc_t e[2] = { 0, 0 }, sr, ch;
+	struct quat rc, r;
+	struct vec3 o;
 	int side;
 
+	quat_conj(&chest->r, &rc);
+	dq_translation(chest, &o);
 	for (side = 0; side < 2; side++) {
-		sc_t sx = side == ARM_LEFT ? -av->arm[side].dims.shoulder : av->arm[side].dims.shoulder;
-		struct vec3 v = { t[side].p.x - sx, t[side].p.y, t[side].p.z };
-		sc_t n = v3_norm(&v);
+		sc_t sx = side == ARM_LEFT ? -av->arm[side].dims.shoulder : av->arm[side].dims.shoulder, n;
+		struct vec3 hp, v;
 
-		if (t[side].valid && v.z > 0 && n > SC_C(0.05))
+		if (!hand[side] || !dq_is_finite(hand[side]))
+			continue;
+		dq_translation(hand[side], &hp);
+		hp = (struct vec3){ hp.x - o.x, hp.y - o.y, hp.z - o.z };
+		quat_rotate(&rc, &hp, &v);
+		v.x -= sx;
+		n = v3_norm(&v);
+		if (v.z > 0 && n > SC_C(0.05))
 			e[side] = sc_mul(RAISE_RISE, sc_div(v.z, n));
 	}
 	if (e[ARM_RIGHT] == e[ARM_LEFT])
 		return;
-	/* the right shoulder (S, 0, 0) rolled by a about y: (S cos a, 0, -S sin a), a rise u = -S sin a */
-	chest_shift(&c0, (struct vec3){ 0, 0, 0 }, -sc_div(sc_mul(SC_C(0.5), e[ARM_RIGHT] - e[ARM_LEFT]), sh), hand,
-		    chest, t);
+	/*
+	 * the right shoulder (S, 0, 0) rolled by a about y: (S cos a, 0, -S sin a), a rise u = -S sin a;
+	 * the half angle: cos = sqrt((1 + cos) / 2), sin = sin / (2 cos(half))
+	 */
+	sr = -sc_div(sc_mul(SC_C(0.5), e[ARM_RIGHT] - e[ARM_LEFT]), sh);
+	ch = sc_sqrt(sc_mul(SC_C(0.5), SC_C(1) + sc_sqrt(SC_C(1) - sc_mul(sr, sr))));
+	quat_mul(&chest->r, &(struct quat){ ch, 0, sc_div(sr, 2 * ch), 0 }, &r);
+	dq_from_rt(&r, &o, chest);
 }
 
 /*
@@ -1470,10 +1485,10 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 			out->chest = prev->chest;
 		return IK_BAD_TARGET;
 	}
+	if (av->body.model & AVATAR_RAISE_ROLL)
+		raise_roll(av, hand, &out->chest);
 	for (side = 0; side < 2; side++)
 		avatar_arm_target(&out->chest, hand[side], &t[side]);
-	if (av->body.model & AVATAR_RAISE_ROLL)
-		raise_roll(av, hand, &out->chest, t);
 	if (av->body.model & AVATAR_REACH_CHEST)
 		reach_chest(av, hand, &out->chest, t);
 	if ((av->body.model & AVATAR_BOW) && prev && bowed(&prev->chest) && o->max_evals > TRACK_EVALS) {
