@@ -933,6 +933,79 @@ static void test_avatar_roll(void **state)
 }
 
 /*
+ * AVATAR_LEAN in Q5.26: a trunk leaning sideways from -15 to 15 degrees and
+ * back under an arm raised over the head against its limits (J1 30
+ * degrees, J2 -169, J4 -86, the elbow bent; test_avatar's test_lean), the
+ * other hanging: from the upright chest the raised hand is off its sensor,
+ * and the chest rolls until it is on. No result may saturate; the hands are
+ * on their sensors in both builds and the Q5.26 avatar lies on the double
+ * one.
+ */
+static void test_avatar_lean(void **state)
+{
+	enum { N = 40 };
+	static const struct ikx_avatar_setup body = { .dims = { 0.18, 0.30, 0.26, 0.08 },
+						      .head_offset = { 0, 0, 0.25 } };
+	const double head[3] = { -0.2, 0.4, 1.55 };
+	const double raised[ARM_DOF] = { 0.5, -2.95, 0.1, -1.5, -0.8, 0, 0, 0 },
+		     hanging[ARM_DOF] = { 0, -0.1, 0.2, 0, -1.2, 0, 0, 0 };
+	static struct ikx_avatar_frame in[N];
+	static struct ikx_avatar_out od[N], oq[N];
+	double tol_d, tol_q, rot_d, rot_q, worst = 0, roll_max = 0;
+
+	(void)state;
+	for (int i = 0; i < N; i++) {
+		/* 15 degrees to one side and the other, never upright (a lean of 0 needs no bend) */
+		const double lean =
+			(i < N / 2 ? 8 + 7 * sin(M_PI * i / (N / 2)) : -8 - 7 * sin(M_PI * (i - N / 2) / (N / 2))) *
+			DEG;
+		const double chest[7] = { head[0], head[1], head[2] - 0.25, cos(lean / 2), 0, sin(lean / 2), 0 };
+
+		memcpy(in[i].head, head, sizeof(head));
+		in[i].head[3] = 1;
+		for (int side = ARM_RIGHT; side <= ARM_LEFT; side++) {
+			const struct ikx_setup arm = { .dims = { 0.18, 0.30, 0.26, 0.08 }, .left = side == ARM_LEFT };
+			double local[7];
+
+			ikx_fk_d(&arm, (side == ARM_RIGHT) == (lean < 0) ? raised : hanging, local);
+			pose_to_world(chest, local, side == ARM_RIGHT ? in[i].rhand : in[i].lhand);
+		}
+	}
+	ikx_tolerances_d(&tol_d, &rot_d);
+	ikx_tolerances_qs(&tol_q, &rot_q);
+	ikx_avatar_run_d(&body, in, N, od);
+	ikx_avatar_run_qs(&body, in, N, oq);
+	for (int i = 0; i < N; i++) {
+		set_ctx("bending, frame %d", i);
+		if (oq[i].saturations)
+			fail_msg("%s: %lu results saturated in Q5.26", ctx, oq[i].saturations);
+		assert_near(dist3(oq[i].chest, od[i].chest), 0, AV_POS);
+		assert_near(rot_between(oq[i].chest + 3, od[i].chest + 3), 0, AV_ROT);
+		roll_max =
+			fmax(roll_max, fabs(2 * (od[i].chest[4] * od[i].chest[6] - od[i].chest[3] * od[i].chest[5])));
+		for (int side = ARM_RIGHT; side <= ARM_LEFT; side++) {
+			const double *sensor = side == ARM_RIGHT ? in[i].rhand : in[i].lhand;
+			double hd[3], hq[3], ed[3], eq[3];
+
+			chest_to_world(od[i].chest, od[i].hand[side], hd);
+			chest_to_world(oq[i].chest, oq[i].hand[side], hq);
+			chest_to_world(od[i].chest, od[i].elbow[side], ed);
+			chest_to_world(oq[i].chest, oq[i].elbow[side], eq);
+			assert_near(dist3(hd, sensor), 0, tol_d + AV_HAND_SLACK);
+			assert_near(dist3(hq, sensor), 0, tol_q + AV_HAND_SLACK);
+			assert_near(dist3(hq, hd), 0, AV_POS);
+			assert_near(dist3(eq, ed), 0, AV_POS);
+			worst = fmax(worst, fmax(dist3(hq, hd), dist3(eq, ed)));
+		}
+	}
+	/* the bend did happen: sin 10 degrees at least */
+	assert_true(roll_max > 0.17);
+	print_message(
+		"bending: chest rolled up to %.1f degrees; hands and elbows Q5.26 against double %.3g um at most\n",
+		asin(roll_max) * RAD2DEG, worst * 1e6);
+}
+
+/*
  * AVATAR_BOW_HEAD in Q5.26: a head nodding forward from upright to 85
  * degrees and back, the trunk bowed by what passes 30 degrees, the arms
  * hanging from it: the Q5.26 avatar lies on the double one (chest, hands,
@@ -1018,7 +1091,7 @@ int main(void)
 		cmocka_unit_test(test_random_reset),	     cmocka_unit_test(test_trajectory_warm),
 		cmocka_unit_test(test_matrix_and_left),	     cmocka_unit_test(test_paper_newton),
 		cmocka_unit_test(test_hopeless_input),	     cmocka_unit_test(test_avatar_roll),
-		cmocka_unit_test(test_avatar_head_bow),
+		cmocka_unit_test(test_avatar_lean),	     cmocka_unit_test(test_avatar_head_bow),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

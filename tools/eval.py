@@ -1044,7 +1044,8 @@ def discussion(results, names, cv, sa, sn):
              "with the chest where it truly was, %s cm; with the elbow at the best swivel on the avatar's own chest, "
              "%s cm. Both the chest and the elbow's swivel matter, and neither alone reaches the goals on every "
              "clip." % (fmt(el["median"]), fmt(tc["median"]), fmt(bs["median"])))
-    d = sorted(((median(results[n]["elbow"]) - median(results[n]["paper_elbow"]), n) for n in names), reverse=True)
+    d = sorted(((median(results[n]["elbow"]) - median(results[n]["paper_elbow"]), n) for n in names if n not in TUNED),
+               reverse=True)
     worse = [(x, n) for x, n in d if x > GOAL_PAPER]
     off = sorted(((sum(results[n]["arms"][s]["resid_reachable"] for _, s in SIDES), n) for n in names),
                  reverse=True)
@@ -1053,12 +1054,12 @@ def discussion(results, names, cv, sa, sn):
              "%d clips have a median worse than the paper's avatar by more than %g cm, the worst %s; on the worst of them "
              "(the guiding gestures) a nearly straight arm held forward and out turns its hand palm up, and the swivel "
              "the wrist's cost picks for it is 50 to 80° off the true one, where the paper's, tracked from the "
-             "previous frame, stays near its rest. Reachable hands off their sensors: %d arm-frames of %d, in %d "
-             "clips%s." % (
+             "previous frame, stays near its rest. Reachable hands off their sensors: %d of %d arm-frames, in %d "
+             "%s%s." % (
                  fmt(sn["elbow"]["median"], 2), GOAL_MEDIAN, "met" if sn["elbow"]["median"] <= GOAL_MEDIAN else "not met",
                  fmt(sn["elbow"]["p95"]), GOAL_P95, "met" if sn["elbow"]["p95"] <= GOAL_P95 else "not met",
                  len(worse), GOAL_PAPER, ", ".join("`%s` %+.1f" % (short(n), x) for x, n in worse[:4]) or "none",
-                 sa["off_reachable"], sa["arm_frames"], len(offn),
+                 sa["off_reachable"], sa["arm_frames"], len(offn), "clip" if len(offn) == 1 else "clips",
                  (": " + ", ".join("`%s` (%d)" % (short(n), k) for k, n in offn[:3])) if offn else ""))
     P.append("**The hands.** A hand the arm can reach from the true chest is off its sensor when the avatar's "
              "chest puts the shoulder a few millimetres too far (an arm hanging or reaching at full stretch) or turns "
@@ -1101,7 +1102,7 @@ def discussion(results, names, cv, sa, sn):
              "(the walks better, 26 clips worse); a constant pull of the elbow toward its rest (as many clips worse "
              "as better); a chest shift of up to 15 cm instead of 8 (no clip changed); the raised arms' shoulders "
              "rising together as a shift of the chest up, besides the roll of `raise-roll` (25 clips helped, 19 "
-             "hurt, 6 by more than a centimetre, most with both hands raised). The Bandai actors also lean the "
+             "hurt, 6 by more than a centimetre; the fold raising both hands +0.6 cm). The Bandai actors also lean the "
              "trunk sideways by about 12° per metre of height between the hands; the CMU wave's subject does not "
              "(under 1° per metre), so no such fit ships.")
     return P

@@ -1034,16 +1034,18 @@ static void rx_scaled(const struct reach_x *g, sc_t k, struct reach_x *x)
 
 static void reach_qp(const struct reach_x g[2], const sc_t c[2], const bool act[2], struct reach_x *x)
 {
-	sc_t gg[2] = { rx_dot(&g[0], &g[0]), rx_dot(&g[1], &g[1]) }, g01, det, l0, l1;
+	sc_t gg[2], g01, det, l0, l1;
 	int i;
 
 	*x = (struct reach_x){ { 0, 0, 0, 0 } };
 	if (!act[0] || !act[1]) {
 		i = act[0] ? 0 : 1;
 		if (act[i] && c[i] > 0)
-			rx_scaled(&g[i], sc_div(c[i], gg[i]), x);
+			rx_scaled(&g[i], sc_div(c[i], rx_dot(&g[i], &g[i])), x);
 		return;
 	}
+	gg[0] = rx_dot(&g[0], &g[0]);
+	gg[1] = rx_dot(&g[1], &g[1]);
 	if (!(c[0] > 0) && !(c[1] > 0))
 		return;
 	for (i = 0; i < 2; i++) {
@@ -1087,7 +1089,7 @@ static bool reach_chest(const struct avatar *av, const struct dq *const hand[2],
 	const struct dq c0 = *chest;
 	const bool roll = (av->body.model & AVATAR_REACH_ROLL) != 0;
 	const sc_t sh = av->arm[ARM_RIGHT].dims.shoulder;
-	struct reach_x x = { { 0, 0, 0, 0 } }, g[2];
+	struct reach_x x = { { 0, 0, 0, 0 } }, g[2] = { { { 0, 0, 0, 0 } }, { { 0, 0, 0, 0 } } };
 	sc_t c[2] = { 0, 0 }, sr = 0, cr = SC_C(1);
 	bool act[2] = { false, false }, moved = false;
 	int it, side;
