@@ -757,6 +757,14 @@ static void posture_err(const struct arm *a, const struct ik_target *t, const sc
 	err->rot = quat_angle_between(&ee.r, &t->r);
 }
 
+/* chests within 5 degrees of each other: the cosine of the half angle, the quaternions' dot product */
+#define SAME_CHEST SC_C(0.9990482215818578)
+
+static bool same_chest(const struct quat *a, const struct quat *b)
+{
+	return sc_abs(sc_mul(a->w, b->w) + sc_mul(a->x, b->x) + sc_mul(a->y, b->y) + sc_mul(a->z, b->z)) > SAME_CHEST;
+}
+
 /* closed-form postures tried per frame while tracking a target out of the limits' reach */
 #define TRACK_EVALS 48
 
@@ -882,12 +890,14 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 		}
 	}
 	if ((av->body.model & AVATAR_REACH_FIRST) && prev && t->valid && (flags & IK_UNREACHABLE) &&
-	    res->err.pos > HOLD_POS) {
+	    res->err.pos > HOLD_POS && same_chest(&prev->chest.r, &out->chest.r)) {
 		/*
 		 * Still off its sensor: the compromise Newton reaches from the
 		 * last frame's posture (no search) is often nearer than the one
 		 * from the seed (a raised arm against its limits, seeded outside
 		 * them, can end a hand's length away); the hand's place first.
+		 * Not when the chest turned (a bow tried or left): the last
+		 * posture was another arm's then.
 		 */
 		struct ik_opts no = *o;
 		struct ik_result r2;
