@@ -953,13 +953,11 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 }
 
 /*
- * AVATAR_REACH_CHEST: a hand sensor beyond the straight arm's reach from
- * the chest the head places (for J1 at mid-range and at both limits) moves
- * the chest toward it by what is missing, both arms' summed, at most
- * REACH_SHIFT: the trunk leans and the shoulder girdle protracts that much
- * (the head sensor is then that far from its offset: the neck bends).
- * Before the solve, so a hand that becomes reachable costs one ordinary
- * solve. Rewrites the targets; returns whether the chest moved.
+ * AVATAR_REACH_CHEST (reach_chest below): the chest's move toward hands
+ * beyond reach, at most REACH_SHIFT: the trunk leans and the shoulder
+ * girdle protracts that much (the head sensor is then that far from its
+ * offset: the neck bends). Before the solve, so a hand that becomes
+ * reachable costs one ordinary solve.
  */
 #define REACH_SHIFT SC_C(0.08)
 
@@ -1091,7 +1089,8 @@ static void reach_qp(const struct reach_x g[2], const sc_t c[2], const bool act[
  * returns whether the chest moved.
  */
 #define REACH_ITERS 3
-#define REACH_MARGIN SC_C(0.002) /* the hand brought a millimetre inside the straight arm's reach */
+/* the hand brought 2 mm inside the straight arm's reach (1 mm: Q5.26's elbow of a straight arm 1 um off double) */
+#define REACH_MARGIN SC_C(0.002)
 
 static bool reach_chest(const struct avatar *av, const struct dq *const hand[2], struct dq *chest,
 			struct ik_target t[2])
