@@ -405,6 +405,47 @@ static void test_bow(void **state)
 }
 
 /*
+ * A person whose trunk leans sideways by lean degrees (rolled about its
+ * forward axis at the chest origin, head_offset below the head sensor hp,
+ * the head upright on its sensor), the arm on the side the trunk leans away
+ * from raised, the other hanging: the head and hand sensors.
+ */
+static void leaning_person(const struct avatar *av, const struct vec3 *hp, const struct vec3 *off, double lean,
+			   const sc_t raised[ARM_DOF], const sc_t hanging[ARM_DOF], struct dq *head, struct dq hand[2])
+{
+	struct quat roll;
+	struct dq chest;
+
+	quat_from_axis_angle(&(struct vec3){ 0, 1, 0 }, lean * M_PI / 180, &roll);
+	dq_from_rt(&(struct quat){ 1, 0, 0, 0 }, hp, head);
+	dq_from_rt(&roll, &(struct vec3){ hp->x - off->x, hp->y - off->y, hp->z - off->z }, &chest);
+	for (int side = 0; side < 2; side++) {
+		struct dq ee;
+
+		arm_fk(&av->arm[side], (side == ARM_RIGHT) == (lean < 0) ? raised : hanging, &ee);
+		dq_mul(&chest, &ee, &hand[side]);
+	}
+}
+
+/* the default avatar on a leaning person: both hands on their sensors, inside the limits, the chest rolled its way */
+static void assert_lean_followed(const struct avatar *av, const struct ik_opts *o, const struct dq *head,
+				 const struct dq hand[2], double lean)
+{
+	struct avatar_pose p;
+	struct vec3 x;
+
+	avatar_solve(av, &ik_kin_dq, o, head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
+	print_message("lean %+.0f degrees, default avatar: hands %.3g, %.3g mm off\n", lean,
+		      p.res[ARM_RIGHT].err.pos * 1e3, p.res[ARM_LEFT].err.pos * 1e3);
+	assert_true(p.res[ARM_RIGHT].err.pos < 1e-3 && p.res[ARM_LEFT].err.pos < 1e-3);
+	for (int side = 0; side < 2; side++)
+		assert_true(arm_in_limits(&av->arm[side], p.q[side]));
+	/* rolled the way the trunk leans (the right shoulder up for a lean to the left: x rises) */
+	quat_rotate(&p.chest.r, &(struct vec3){ 1, 0, 0 }, &x);
+	assert_true(x.z * -lean > 0);
+}
+
+/*
  * AVATAR_REACH_ROLL: a trunk leaning sideways, one arm raised over the head
  * and the other hanging, both nearly straight: from the upright chest the
  * head places, the raised hand is beyond reach upward and the hanging one
@@ -428,47 +469,27 @@ static void test_reach_roll(void **state)
 	ik_default_opts(&o);
 	for (size_t i = 0; i < sizeof(lean) / sizeof(lean[0]); i++) {
 		struct avatar_pose p;
-		struct quat roll;
-		struct dq head, chest, hand[2];
-		struct vec3 x;
+		struct dq head, hand[2];
 
-		/* the trunk rolled about its forward axis at the chest origin, the head upright on its sensor */
-		quat_from_axis_angle(&(struct vec3){ 0, 1, 0 }, lean[i] * M_PI / 180, &roll);
-		dq_from_rt(&(struct quat){ 1, 0, 0, 0 }, &hp, &head);
-		dq_from_rt(&roll, &(struct vec3){ hp.x - off.x, hp.y - off.y, hp.z - off.z }, &chest);
-		for (int side = 0; side < 2; side++) {
-			struct dq ee;
-
-			/* the arm on the side the trunk leans away from is raised */
-			arm_fk(&av.arm[side], (side == ARM_RIGHT) == (lean[i] < 0) ? raised : hanging, &ee);
-			dq_mul(&chest, &ee, &hand[side]);
-		}
+		leaning_person(&av, &hp, &off, lean[i], raised, hanging, &head, hand);
 		av.body.model = AVATAR_MODEL_DEFAULT & ~(unsigned)AVATAR_REACH_ROLL;
 		avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
 		print_message("lean %+.0f degrees, no roll: hands %.3g, %.3g mm off\n", lean[i],
 			      p.res[ARM_RIGHT].err.pos * 1e3, p.res[ARM_LEFT].err.pos * 1e3);
 		assert_true(p.res[ARM_RIGHT].err.pos > 5e-3 || p.res[ARM_LEFT].err.pos > 5e-3);
 		av.body.model = AVATAR_MODEL_DEFAULT;
-		avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
-		print_message("lean %+.0f degrees, rolled: hands %.3g, %.3g mm off\n", lean[i],
-			      p.res[ARM_RIGHT].err.pos * 1e3, p.res[ARM_LEFT].err.pos * 1e3);
-		assert_true(p.res[ARM_RIGHT].err.pos < 1e-3 && p.res[ARM_LEFT].err.pos < 1e-3);
-		for (int side = 0; side < 2; side++)
-			assert_true(arm_in_limits(&av.arm[side], p.q[side]));
-		/* rolled the way the trunk leans (the right shoulder up for a lean to the left: x rises) */
-		quat_rotate(&p.chest.r, &(struct vec3){ 1, 0, 0 }, &x);
-		assert_true(x.z * -lean[i] > 0);
+		assert_lean_followed(&av, &o, &head, hand, lean[i]);
 	}
 }
 
 /*
  * AVATAR_LEAN: a trunk leaning sideways under one arm raised over the head
  * (J2 at -169 degrees in the leaning chest, J1 and J4 near their limits,
- * the elbow bent: well within the arm's reach), the other hanging. From the upright chest the head
- * places the raised arm would need J2 past its -170 degrees: its hand stays
- * off its sensor without the lean (no reach move helps, no bow is wanted);
- * with it the chest rolls, the raised arm's shoulder up, and both hands are
- * on their sensors inside the limits.
+ * the elbow bent: well within the arm's reach), the other hanging. From the
+ * upright chest the head places the raised arm would need J2 past its -170
+ * degrees: its hand stays off its sensor without the lean (no reach move
+ * helps, no bow is wanted); with it the chest rolls, the raised arm's
+ * shoulder up, and both hands are on their sensors inside the limits.
  */
 static void test_lean(void **state)
 {
@@ -486,35 +507,17 @@ static void test_lean(void **state)
 	ik_default_opts(&o);
 	for (size_t i = 0; i < sizeof(lean) / sizeof(lean[0]); i++) {
 		struct avatar_pose p;
-		struct quat roll;
-		struct dq head, chest, hand[2];
-		struct vec3 x;
+		struct dq head, hand[2];
 		const int up = lean[i] < 0 ? ARM_RIGHT : ARM_LEFT;
 
-		quat_from_axis_angle(&(struct vec3){ 0, 1, 0 }, lean[i] * M_PI / 180, &roll);
-		dq_from_rt(&(struct quat){ 1, 0, 0, 0 }, &hp, &head);
-		dq_from_rt(&roll, &(struct vec3){ hp.x - off.x, hp.y - off.y, hp.z - off.z }, &chest);
-		for (int side = 0; side < 2; side++) {
-			struct dq ee;
-
-			arm_fk(&av.arm[side], side == up ? raised : hanging, &ee);
-			dq_mul(&chest, &ee, &hand[side]);
-		}
+		leaning_person(&av, &hp, &off, lean[i], raised, hanging, &head, hand);
 		av.body.model = AVATAR_MODEL_DEFAULT & ~(unsigned)AVATAR_LEAN;
 		avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
 		print_message("lean %+.0f degrees, upright: raised hand %.3g mm off\n", lean[i],
 			      p.res[up].err.pos * 1e3);
 		assert_true(p.res[up].err.pos > 5e-3);
 		av.body.model = AVATAR_MODEL_DEFAULT;
-		avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
-		print_message("lean %+.0f degrees, leaning: hands %.3g, %.3g mm off\n", lean[i],
-			      p.res[ARM_RIGHT].err.pos * 1e3, p.res[ARM_LEFT].err.pos * 1e3);
-		assert_true(p.res[ARM_RIGHT].err.pos < 1e-3 && p.res[ARM_LEFT].err.pos < 1e-3);
-		for (int side = 0; side < 2; side++)
-			assert_true(arm_in_limits(&av.arm[side], p.q[side]));
-		/* rolled the way the trunk leans (the right shoulder up for a lean to the left: x rises) */
-		quat_rotate(&p.chest.r, &(struct vec3){ 1, 0, 0 }, &x);
-		assert_true(x.z * -lean[i] > 0);
+		assert_lean_followed(&av, &o, &head, hand, lean[i]);
 	}
 }
 

@@ -829,6 +829,27 @@ static bool arm_jumped(const struct arm_pose *was, const struct arm_pose *now)
 	return v3_norm(&de) > v3_norm(&dh) + JUMP_MARGIN;
 }
 
+/* Newton from a posture with no closed-form search (ik_opts.max_evals = 0) */
+static void newton_from(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t,
+			const sc_t from[ARM_DOF], const struct ik_opts *o, sc_t q[ARM_DOF], struct ik_result *r,
+			struct arm_pose *s)
+{
+	struct ik_opts no = *o;
+
+	no.max_evals = 0;
+	ik_solve_pose(a, kin, t, from, &no, q, r, s);
+}
+
+/* another posture for the arm's result: its angles, result and segment poses; returns its flags */
+static unsigned take_posture(sc_t q[ARM_DOF], struct ik_result *res, struct arm_pose *seg, const sc_t q2[ARM_DOF],
+			     const struct ik_result *r2, const struct arm_pose *s2)
+{
+	ik_q_copy(q, q2);
+	*res = *r2;
+	*seg = *s2;
+	return r2->flags;
+}
+
 unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin *kin, const struct ik_opts *o,
 			  const struct ik_target *t, const struct avatar_pose *prev, struct avatar_pose *out)
 {
@@ -899,19 +920,13 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 		 * Not when the chest turned (a bow tried or left): the last
 		 * posture was another arm's then.
 		 */
-		struct ik_opts no = *o;
 		struct ik_result r2;
 		struct arm_pose s2;
 		sc_t q2[ARM_DOF];
 
-		no.max_evals = 0;
-		ik_solve_pose(a, kin, t, prev->q[side], &no, q2, &r2, &s2);
-		if (r2.err.pos < res->err.pos) {
-			ik_q_copy(q, q2);
-			*res = r2;
-			out->seg[side] = s2;
-			flags = r2.flags;
-		}
+		newton_from(a, kin, t, prev->q[side], o, q2, &r2, &s2);
+		if (r2.err.pos < res->err.pos)
+			flags = take_posture(q, res, &out->seg[side], q2, &r2, &s2);
 	}
 	if ((av->body.model & AVATAR_KEEP_BRANCH) && prev && t->valid &&
 	    arm_jumped(&prev->seg[side], &out->seg[side])) {
@@ -927,13 +942,11 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 		 * or where Newton gives up the hand's place for its orientation,
 		 * the hand on its place with the elbow at its last swivel.
 		 */
-		struct ik_opts no = *o;
 		struct ik_result r2;
 		struct arm_pose s2;
 		sc_t q2[ARM_DOF];
 
-		no.max_evals = 0;
-		ik_solve_pose(a, kin, t, prev->q[side], &no, q2, &r2, &s2);
+		newton_from(a, kin, t, prev->q[side], o, q2, &r2, &s2);
 		if (!(r2.err.pos <= HOLD_POS) && hold_swivel(a, t, prev->q[side], &prev->seg[side], q2)) {
 			/* Newton gave up the hand's place for its orientation: the hand on its place at the elbow's
 			 * swivel */
@@ -942,12 +955,8 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 			r2.flags = IK_UNREACHABLE | at_limits(a, q2);
 		}
 		if (r2.err.pos <= sc_max(HOLD_POS, res->err.pos) && r2.err.rot <= res->err.rot + HOLD_ROT &&
-		    !arm_jumped(&prev->seg[side], &s2)) {
-			ik_q_copy(q, q2);
-			*res = r2;
-			out->seg[side] = s2;
-			flags = r2.flags;
-		}
+		    !arm_jumped(&prev->seg[side], &s2))
+			flags = take_posture(q, res, &out->seg[side], q2, &r2, &s2);
 	}
 	return flags;
 }
