@@ -126,8 +126,17 @@ static void test_wave_clip(void **state)
 		struct dq hand[2];
 
 		solve_frame(&av, &o, i, prev, cur, hand);
-		/* the person stands and waves: never a bow, the chest upright */
-		assert_true(fabs(cur->chest.r.x) < 1e-12 && fabs(cur->chest.r.y) < 1e-12);
+		/*
+		 * the person stands and waves: never a bow, the chest's forward
+		 * axis level; rolled at most as far as AVATAR_RAISE_ROLL takes it
+		 * (the raised arm's shoulder up by 4 cm of the 17 cm half-width)
+		 */
+		{
+			const struct quat *r = &cur->chest.r;
+
+			assert_true(fabs(2 * (r->y * r->z + r->w * r->x)) < 1e-12);
+			assert_true(fabs(2 * (r->x * r->z - r->w * r->y)) < 0.5 * 0.04 / 0.1732 + 1e-9);
+		}
 		for (int side = 0; side < 2; side++) {
 			struct dq fk, world;
 			struct vec3 p, s;
@@ -396,6 +405,47 @@ static void test_bow(void **state)
 }
 
 /*
+ * A person whose trunk leans sideways by lean degrees (rolled about its
+ * forward axis at the chest origin, head_offset below the head sensor hp,
+ * the head upright on its sensor), the arm on the side the trunk leans away
+ * from raised, the other hanging: the head and hand sensors.
+ */
+static void leaning_person(const struct avatar *av, const struct vec3 *hp, const struct vec3 *off, double lean,
+			   const sc_t raised[ARM_DOF], const sc_t hanging[ARM_DOF], struct dq *head, struct dq hand[2])
+{
+	struct quat roll;
+	struct dq chest;
+
+	quat_from_axis_angle(&(struct vec3){ 0, 1, 0 }, lean * M_PI / 180, &roll);
+	dq_from_rt(&(struct quat){ 1, 0, 0, 0 }, hp, head);
+	dq_from_rt(&roll, &(struct vec3){ hp->x - off->x, hp->y - off->y, hp->z - off->z }, &chest);
+	for (int side = 0; side < 2; side++) {
+		struct dq ee;
+
+		arm_fk(&av->arm[side], (side == ARM_RIGHT) == (lean < 0) ? raised : hanging, &ee);
+		dq_mul(&chest, &ee, &hand[side]);
+	}
+}
+
+/* the default avatar on a leaning person: both hands on their sensors, inside the limits, the chest rolled its way */
+static void assert_lean_followed(const struct avatar *av, const struct ik_opts *o, const struct dq *head,
+				 const struct dq hand[2], double lean)
+{
+	struct avatar_pose p;
+	struct vec3 x;
+
+	avatar_solve(av, &ik_kin_dq, o, head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
+	print_message("lean %+.0f degrees, default avatar: hands %.3g, %.3g mm off\n", lean,
+		      p.res[ARM_RIGHT].err.pos * 1e3, p.res[ARM_LEFT].err.pos * 1e3);
+	assert_true(p.res[ARM_RIGHT].err.pos < 1e-3 && p.res[ARM_LEFT].err.pos < 1e-3);
+	for (int side = 0; side < 2; side++)
+		assert_true(arm_in_limits(&av->arm[side], p.q[side]));
+	/* rolled the way the trunk leans (the right shoulder up for a lean to the left: x rises) */
+	quat_rotate(&p.chest.r, &(struct vec3){ 1, 0, 0 }, &x);
+	assert_true(x.z * -lean > 0);
+}
+
+/*
  * AVATAR_REACH_ROLL: a trunk leaning sideways, one arm raised over the head
  * and the other hanging, both nearly straight: from the upright chest the
  * head places, the raised hand is beyond reach upward and the hanging one
@@ -419,36 +469,55 @@ static void test_reach_roll(void **state)
 	ik_default_opts(&o);
 	for (size_t i = 0; i < sizeof(lean) / sizeof(lean[0]); i++) {
 		struct avatar_pose p;
-		struct quat roll;
-		struct dq head, chest, hand[2];
-		struct vec3 x;
+		struct dq head, hand[2];
 
-		/* the trunk rolled about its forward axis at the chest origin, the head upright on its sensor */
-		quat_from_axis_angle(&(struct vec3){ 0, 1, 0 }, lean[i] * M_PI / 180, &roll);
-		dq_from_rt(&(struct quat){ 1, 0, 0, 0 }, &hp, &head);
-		dq_from_rt(&roll, &(struct vec3){ hp.x - off.x, hp.y - off.y, hp.z - off.z }, &chest);
-		for (int side = 0; side < 2; side++) {
-			struct dq ee;
-
-			/* the arm on the side the trunk leans away from is raised */
-			arm_fk(&av.arm[side], (side == ARM_RIGHT) == (lean[i] < 0) ? raised : hanging, &ee);
-			dq_mul(&chest, &ee, &hand[side]);
-		}
+		leaning_person(&av, &hp, &off, lean[i], raised, hanging, &head, hand);
 		av.body.model = AVATAR_MODEL_DEFAULT & ~(unsigned)AVATAR_REACH_ROLL;
 		avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
 		print_message("lean %+.0f degrees, no roll: hands %.3g, %.3g mm off\n", lean[i],
 			      p.res[ARM_RIGHT].err.pos * 1e3, p.res[ARM_LEFT].err.pos * 1e3);
 		assert_true(p.res[ARM_RIGHT].err.pos > 5e-3 || p.res[ARM_LEFT].err.pos > 5e-3);
 		av.body.model = AVATAR_MODEL_DEFAULT;
+		assert_lean_followed(&av, &o, &head, hand, lean[i]);
+	}
+}
+
+/*
+ * AVATAR_LEAN: a trunk leaning sideways under one arm raised over the head
+ * (J2 at -169 degrees in the leaning chest, J1 and J4 near their limits,
+ * the elbow bent: well within the arm's reach), the other hanging. From the
+ * upright chest the head places the raised arm would need J2 past its -170
+ * degrees: its hand stays off its sensor without the lean (no reach move
+ * helps, no bow is wanted); with it the chest rolls, the raised arm's
+ * shoulder up, and both hands are on their sensors inside the limits.
+ */
+static void test_lean(void **state)
+{
+	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.08 };
+	const struct vec3 off = { 0, 0, 0.25 }, hp = { -0.2, 0.4, 1.55 };
+	const sc_t raised[ARM_DOF] = { 0.5, -2.95, 0.1, -1.5, -0.8, 0, 0, 0 },
+		   hanging[ARM_DOF] = { 0, -0.1, 0.2, 0, -1.2, 0, 0, 0 };
+	const double lean[] = { -8, 12, -15 };
+	struct avatar av;
+	struct ik_opts o;
+
+	(void)state;
+	avatar_init(&av, &dims, &off, NULL);
+	assert_true(av.body.model & AVATAR_LEAN);
+	ik_default_opts(&o);
+	for (size_t i = 0; i < sizeof(lean) / sizeof(lean[0]); i++) {
+		struct avatar_pose p;
+		struct dq head, hand[2];
+		const int up = lean[i] < 0 ? ARM_RIGHT : ARM_LEFT;
+
+		leaning_person(&av, &hp, &off, lean[i], raised, hanging, &head, hand);
+		av.body.model = AVATAR_MODEL_DEFAULT & ~(unsigned)AVATAR_LEAN;
 		avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
-		print_message("lean %+.0f degrees, rolled: hands %.3g, %.3g mm off\n", lean[i],
-			      p.res[ARM_RIGHT].err.pos * 1e3, p.res[ARM_LEFT].err.pos * 1e3);
-		assert_true(p.res[ARM_RIGHT].err.pos < 1e-3 && p.res[ARM_LEFT].err.pos < 1e-3);
-		for (int side = 0; side < 2; side++)
-			assert_true(arm_in_limits(&av.arm[side], p.q[side]));
-		/* rolled the way the trunk leans (the right shoulder up for a lean to the left: x rises) */
-		quat_rotate(&p.chest.r, &(struct vec3){ 1, 0, 0 }, &x);
-		assert_true(x.z * -lean[i] > 0);
+		print_message("lean %+.0f degrees, upright: raised hand %.3g mm off\n", lean[i],
+			      p.res[up].err.pos * 1e3);
+		assert_true(p.res[up].err.pos > 5e-3);
+		av.body.model = AVATAR_MODEL_DEFAULT;
+		assert_lean_followed(&av, &o, &head, hand, lean[i]);
 	}
 }
 
@@ -871,6 +940,7 @@ int main(void)
 		cmocka_unit_test(test_neck_bends),
 		cmocka_unit_test(test_bow),
 		cmocka_unit_test(test_reach_roll),
+		cmocka_unit_test(test_lean),
 		cmocka_unit_test(test_bow_head),
 		cmocka_unit_test(test_lost_hand),
 		cmocka_unit_test(test_wave_clip),

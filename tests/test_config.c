@@ -776,7 +776,7 @@ static void test_defaults(void **state)
 						 "[output x]\ntype = unix\n");
 	const struct cfg_source *s = &c->source[0], *r = &c->source[1];
 	const struct cfg_avatar *a = &c->avatar[0];
-	static const double lim[8][2] = { { -30, 30 }, { -170, 10 }, { -60, 120 }, { -90, 90 },
+	static const double lim[8][2] = { { -30, 30 }, { -170, 30 }, { -60, 120 }, { -90, 90 },
 					  { -90, 60 }, { -90, 90 },  { -30, 30 },  { -80, 80 } };
 
 	assert_near(c->daemon.rate, 240, 0);

@@ -862,54 +862,54 @@ static void pose_to_world(const double c[7], const double p[7], double out[7])
 }
 
 /*
- * AVATAR_REACH_ROLL in Q5.26: a trunk leaning sideways from -15 to 15
- * degrees and back, one arm raised over the head, the other hanging, both
- * nearly straight (test_avatar's test_reach_roll): each frame needs the
- * chest rolled to reach both hands. No result may saturate; the hands are
- * on their sensors in both builds and the Q5.26 avatar lies on the double
- * one.
+ * LEAN_N frames of a trunk leaning sideways by lean[i] degrees (rolled about
+ * its forward axis at the chest origin, 0.25 m below the head sensor, the
+ * head upright), the arm on the side it leans away from raised, the other
+ * hanging, solved by the double and the Q5.26 avatar: no result may
+ * saturate, the hands are on their sensors in both builds and the Q5.26
+ * avatar lies on the double one (chest, hands, elbows). Returns the largest
+ * Q5.26-double distance; *roll_max: the sine of the double chest's largest
+ * roll.
  */
-static void test_avatar_roll(void **state)
+enum { LEAN_N = 40 };
+
+static double leaning_agree(const char *what, const double head[3], const double raised[ARM_DOF],
+			    const double hanging[ARM_DOF], const double lean[LEAN_N], double *roll_max)
 {
-	enum { N = 40 };
 	static const struct ikx_avatar_setup body = { .dims = { 0.18, 0.30, 0.26, 0.08 },
 						      .head_offset = { 0, 0, 0.25 } };
-	const double head[3] = { 0.1, 0.3, 1.6 };
-	const double raised[ARM_DOF] = { 0, -2.9, 0, 0, -1.45, 0, 0, 0 },
-		     hanging[ARM_DOF] = { 0, 0, 0, 0, -1.45, 0, 0, 0 };
-	static struct ikx_avatar_frame in[N];
-	static struct ikx_avatar_out od[N], oq[N];
-	double tol_d, tol_q, rot_d, rot_q, worst = 0, roll_max = 0;
+	static struct ikx_avatar_frame in[LEAN_N];
+	static struct ikx_avatar_out od[LEAN_N], oq[LEAN_N];
+	double tol_d, tol_q, rot_d, rot_q, worst = 0;
 
-	(void)state;
-	for (int i = 0; i < N; i++) {
-		/* 15 degrees to one side, through upright (no roll needed there), to the other and back */
-		const double lean = 15 * sin(2 * M_PI * i / N) * DEG;
-		const double chest[7] = { head[0], head[1], head[2] - 0.25, cos(lean / 2), 0, sin(lean / 2), 0 };
+	*roll_max = 0;
+	for (int i = 0; i < LEAN_N; i++) {
+		const double a = lean[i] * DEG;
+		const double chest[7] = { head[0], head[1], head[2] - 0.25, cos(a / 2), 0, sin(a / 2), 0 };
 
-		memcpy(in[i].head, head, sizeof(head));
-		in[i].head[3] = 1;
+		memcpy(in[i].head, head, 3 * sizeof(double));
+		memcpy(in[i].head + 3, (const double[]){ 1, 0, 0, 0 }, 4 * sizeof(double));
 		for (int side = ARM_RIGHT; side <= ARM_LEFT; side++) {
 			const struct ikx_setup arm = { .dims = { 0.18, 0.30, 0.26, 0.08 }, .left = side == ARM_LEFT };
 			double local[7];
 
-			ikx_fk_d(&arm, (side == ARM_RIGHT) == (lean < 0) ? raised : hanging, local);
+			ikx_fk_d(&arm, (side == ARM_RIGHT) == (a < 0) ? raised : hanging, local);
 			pose_to_world(chest, local, side == ARM_RIGHT ? in[i].rhand : in[i].lhand);
 		}
 	}
 	ikx_tolerances_d(&tol_d, &rot_d);
 	ikx_tolerances_qs(&tol_q, &rot_q);
-	ikx_avatar_run_d(&body, in, N, od);
-	ikx_avatar_run_qs(&body, in, N, oq);
-	for (int i = 0; i < N; i++) {
-		set_ctx("leaning, frame %d", i);
+	ikx_avatar_run_d(&body, in, LEAN_N, od);
+	ikx_avatar_run_qs(&body, in, LEAN_N, oq);
+	for (int i = 0; i < LEAN_N; i++) {
+		set_ctx("%s, frame %d", what, i);
 		if (oq[i].saturations)
 			fail_msg("%s: %lu results saturated in Q5.26", ctx, oq[i].saturations);
 		assert_near(dist3(oq[i].chest, od[i].chest), 0, AV_POS);
 		assert_near(rot_between(oq[i].chest + 3, od[i].chest + 3), 0, AV_ROT);
 		/* the chest's roll: its x axis's rise, 2 (x z - w y) */
-		roll_max =
-			fmax(roll_max, fabs(2 * (od[i].chest[4] * od[i].chest[6] - od[i].chest[3] * od[i].chest[5])));
+		*roll_max =
+			fmax(*roll_max, fabs(2 * (od[i].chest[4] * od[i].chest[6] - od[i].chest[3] * od[i].chest[5])));
 		for (int side = ARM_RIGHT; side <= ARM_LEFT; side++) {
 			const double *sensor = side == ARM_RIGHT ? in[i].rhand : in[i].lhand;
 			double hd[3], hq[3], ed[3], eq[3];
@@ -925,10 +925,57 @@ static void test_avatar_roll(void **state)
 			worst = fmax(worst, fmax(dist3(hq, hd), dist3(eq, ed)));
 		}
 	}
+	return worst;
+}
+
+/*
+ * AVATAR_REACH_ROLL in Q5.26: a trunk leaning sideways from -15 to 15
+ * degrees and back, one arm raised over the head, the other hanging, both
+ * nearly straight (test_avatar's test_reach_roll): each frame needs the
+ * chest rolled to reach both hands.
+ */
+static void test_avatar_roll(void **state)
+{
+	const double head[3] = { 0.1, 0.3, 1.6 };
+	const double raised[ARM_DOF] = { 0, -2.9, 0, 0, -1.45, 0, 0, 0 },
+		     hanging[ARM_DOF] = { 0, 0, 0, 0, -1.45, 0, 0, 0 };
+	double lean[LEAN_N], worst, roll_max;
+
+	(void)state;
+	/* 15 degrees to one side, through upright (no roll needed there), to the other and back */
+	for (int i = 0; i < LEAN_N; i++)
+		lean[i] = 15 * sin(2 * M_PI * i / LEAN_N);
+	worst = leaning_agree("leaning", head, raised, hanging, lean, &roll_max);
 	/* the roll did happen: sin 10 degrees at least */
 	assert_true(roll_max > 0.17);
 	print_message(
 		"leaning: chest rolled up to %.1f degrees; hands and elbows Q5.26 against double %.3g um at most\n",
+		asin(roll_max) * RAD2DEG, worst * 1e6);
+}
+
+/*
+ * AVATAR_LEAN in Q5.26: a trunk leaning sideways from 8 to 15 degrees to
+ * one side and the other under an arm raised over the head against its
+ * limits (J1 30 degrees, J2 -169, J4 -86, the elbow bent; test_avatar's
+ * test_lean), the other hanging: from the upright chest the raised hand is
+ * off its sensor, and the chest rolls until it is on.
+ */
+static void test_avatar_lean(void **state)
+{
+	const double head[3] = { -0.2, 0.4, 1.55 };
+	const double raised[ARM_DOF] = { 0.5, -2.95, 0.1, -1.5, -0.8, 0, 0, 0 },
+		     hanging[ARM_DOF] = { 0, -0.1, 0.2, 0, -1.2, 0, 0, 0 };
+	double lean[LEAN_N], worst, roll_max;
+
+	(void)state;
+	/* never upright (a lean of 0 needs no bend) */
+	for (int i = 0; i < LEAN_N; i++)
+		lean[i] = i < LEAN_N / 2 ? 8 + 7 * sin(M_PI * i / (LEAN_N / 2))
+					 : -8 - 7 * sin(M_PI * (i - LEAN_N / 2) / (LEAN_N / 2));
+	worst = leaning_agree("bending", head, raised, hanging, lean, &roll_max);
+	assert_true(roll_max > 0.17);
+	print_message(
+		"bending: chest rolled up to %.1f degrees; hands and elbows Q5.26 against double %.3g um at most\n",
 		asin(roll_max) * RAD2DEG, worst * 1e6);
 }
 
@@ -1018,7 +1065,7 @@ int main(void)
 		cmocka_unit_test(test_random_reset),	     cmocka_unit_test(test_trajectory_warm),
 		cmocka_unit_test(test_matrix_and_left),	     cmocka_unit_test(test_paper_newton),
 		cmocka_unit_test(test_hopeless_input),	     cmocka_unit_test(test_avatar_roll),
-		cmocka_unit_test(test_avatar_head_bow),
+		cmocka_unit_test(test_avatar_lean),	     cmocka_unit_test(test_avatar_head_bow),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

@@ -73,7 +73,7 @@ static void usage(FILE *f)
 		   "  --left-arm     the left arm's own lengths (the right's are --dims)\n"
 		   "  --model        paper, default, or names joined by '+' (or taken away by '-'): hand-elbow,\n"
 		   "                 reach-first, yaw-hands, reach-chest, neck, bow, keep-branch, reach-roll,\n"
-		   "                 bow-head (the\n"
+		   "                 bow-head, lean, raise-roll (the\n"
 		   "                 avatar's choices, docs/IK.md), e.g. default-bow\n"
 		   "  --chest-truth  the chest from the CSV's true chest columns (X,Y,Z: the chain origin in\n"
 		   "                 the chest frame); --chest-part: all of it, its heading only, or upright\n");
@@ -447,7 +447,9 @@ static int parse_model(const char *s)
 		      { "bow", AVATAR_BOW },
 		      { "keep-branch", AVATAR_KEEP_BRANCH },
 		      { "reach-roll", AVATAR_REACH_ROLL },
-		      { "bow-head", AVATAR_BOW_HEAD } };
+		      { "bow-head", AVATAR_BOW_HEAD },
+		      { "lean", AVATAR_LEAN },
+		      { "raise-roll", AVATAR_RAISE_ROLL } };
 	unsigned m = 0;
 	bool add = true;
 
@@ -602,7 +604,7 @@ int main(int argc, char **argv)
 			if (model < 0) {
 				fprintf(stderr, "avatargw-eval: --model paper, default, or names joined by '+': "
 						"hand-elbow, reach-first, yaw-hands, reach-chest, neck, bow, "
-						"keep-branch, reach-roll, bow-head\n");
+						"keep-branch, reach-roll, bow-head, lean, raise-roll\n");
 				return 2;
 			}
 			break;

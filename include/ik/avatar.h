@@ -31,15 +31,17 @@
  *  - AVATAR_YAW_HANDS: the chest's yaw is the head's, pulled toward the
  *    heading of the line from the left to the right hand when the two
  *    agree (the head turns more often than the chest).
- *  - AVATAR_REACH_CHEST: a hand sensor beyond the straight arm's reach
- *    moves the chest toward it, at most 8 cm (the trunk leans, the
- *    shoulder girdle protracts), before the arms are solved.
+ *  - AVATAR_REACH_CHEST: hand sensors beyond the straight arms' reach
+ *    move the chest toward them by the least move that brings them within
+ *    it, both at once, at most 8 cm (the trunk leans, the shoulder girdle
+ *    protracts), before the arms are solved.
  *  - AVATAR_NECK: the neck bends: head_offset turns about the chest origin
  *    by half of the head's tilt (its pitch and roll, the rest of a nod being
  *    the head's own joint), so a nod or a bow leaves the chest behind
  *    instead of carrying it forward and down with the head.
- *  - AVATAR_BOW: a hand the upright chest still leaves off its sensor (a
- *    joint limit in the way) tries the chest bowed forward at the waist, 15
+ *  - AVATAR_BOW: a hand below or behind the shoulders that the upright
+ *    chest still leaves off its sensor (a joint limit in the way) tries the
+ *    chest bowed forward at the waist, 15
  *    to 75 degrees about its x axis, turned with the neck and head about the
  *    head sensor; the bow that lays the arms nearest along the trunk and
  *    reaches both hands is kept. The chest is then no longer upright; its
@@ -53,8 +55,15 @@
  *    sensor.
  *  - AVATAR_KEEP_BRANCH: an elbow that moves 10 cm more than its hand in
  *    one frame (another branch of the arm) is held on the branch it was on
- *    if the hand stays within 1 mm of its sensor and 20 degrees of the
- *    jump's orientation.
+ *    if the hand stays within 1 mm of its sensor (or no farther than the
+ *    jump left it) and 20 degrees of the jump's orientation.
+ *  - AVATAR_LEAN: raised hands that the arms, against their limits, leave
+ *    off their sensors bend the trunk: sideways away from one raised arm
+ *    (5 to 20 degrees), or back (5 to 20 degrees about the head sensor),
+ *    the first bend that puts every hand on kept.
+ *  - AVATAR_RAISE_ROLL: a raised arm's shoulder rises (4 cm times the sine
+ *    of the shoulder-wrist line's elevation); the chest rolls by half the
+ *    two shoulders' difference (one arm raised: the trunk bent away).
  */
 #ifndef IK_AVATAR_H
 #define IK_AVATAR_H
@@ -76,9 +85,11 @@ extern "C" {
 #define AVATAR_KEEP_BRANCH 0x40
 #define AVATAR_REACH_ROLL 0x80
 #define AVATAR_BOW_HEAD 0x100
+#define AVATAR_LEAN 0x200
+#define AVATAR_RAISE_ROLL 0x400
 #define AVATAR_MODEL_DEFAULT                                                                                           \
 	(AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_BOW |                 \
-	 AVATAR_KEEP_BRANCH | AVATAR_REACH_ROLL | AVATAR_BOW_HEAD)
+	 AVATAR_KEEP_BRANCH | AVATAR_REACH_ROLL | AVATAR_BOW_HEAD | AVATAR_LEAN | AVATAR_RAISE_ROLL)
 
 struct avatar_body {
 	struct arm_dims dims;	 /* the right arm (and the left one unless avatar_set_left_arm() says otherwise) */
@@ -122,9 +133,7 @@ struct avatar_pose {
  * but J2 from -170 degrees, so that an arm raised over the head (a wave
  * overhead, both hands up; the shoulder blade turns with the arm) stays
  * reachable: -90 and -120 cut the motion-capture clips' overhead frames
- * (docs/FIDELITY.md, each limit decided by folds of clips), to 10: more
- * adduction swings the hanging upper arm into the trunk (across the body
- * in front of it is J3's and J1's); and J7 -30..30,
+ * (docs/FIDELITY.md, each limit decided by folds of clips); and J7 -30..30,
  * J8 -80..80: with the hand's z toward the thumb, J7 (about x, across the
  * palm) is the wrist's deviation and J8 (about z) its flexion and extension
  * (the benchmark's -70..70 and -30..30 fit a hand frame whose z is the

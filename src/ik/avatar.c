@@ -12,8 +12,6 @@ void avatar_default_limits(struct arm_limits *out)
 {
 	arm_default_limits(out);
 	out->lo[1] = SC_C(-2.9670597283903604); /* -170 degrees: an arm over the head, the shoulder blade turned */
-	/* adduction to 10 degrees: the hanging upper arm meets the trunk (across the body is J3's and J1's) */
-	out->hi[1] = SC_C(0.17453292519943295);
 	/* J7 turns the hand about its x axis, across the palm: deviation, -30..30 degrees */
 	out->lo[6] = SC_C(-0.5235987755982988);
 	out->hi[6] = SC_C(0.5235987755982988);
@@ -759,6 +757,14 @@ static void posture_err(const struct arm *a, const struct ik_target *t, const sc
 	err->rot = quat_angle_between(&ee.r, &t->r);
 }
 
+/* chests within 5 degrees of each other: the cosine of the half angle, the quaternions' dot product */
+#define SAME_CHEST SC_C(0.9990482215818578)
+
+static bool same_chest(const struct quat *a, const struct quat *b)
+{
+	return sc_abs(sc_mul(a->w, b->w) + sc_mul(a->x, b->x) + sc_mul(a->y, b->y) + sc_mul(a->z, b->z)) > SAME_CHEST;
+}
+
 /* closed-form postures tried per frame while tracking a target out of the limits' reach */
 #define TRACK_EVALS 48
 
@@ -823,6 +829,27 @@ static bool arm_jumped(const struct arm_pose *was, const struct arm_pose *now)
 	return v3_norm(&de) > v3_norm(&dh) + JUMP_MARGIN;
 }
 
+/* Newton from a posture with no closed-form search (ik_opts.max_evals = 0) */
+static void newton_from(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t,
+			const sc_t from[ARM_DOF], const struct ik_opts *o, sc_t q[ARM_DOF], struct ik_result *r,
+			struct arm_pose *s)
+{
+	struct ik_opts no = *o;
+
+	no.max_evals = 0;
+	ik_solve_pose(a, kin, t, from, &no, q, r, s);
+}
+
+/* another posture for the arm's result: its angles, result and segment poses; returns its flags */
+static unsigned take_posture(sc_t q[ARM_DOF], struct ik_result *res, struct arm_pose *seg, const sc_t q2[ARM_DOF],
+			     const struct ik_result *r2, const struct arm_pose *s2)
+{
+	ik_q_copy(q, q2);
+	*res = *r2;
+	*seg = *s2;
+	return r2->flags;
+}
+
 unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin *kin, const struct ik_opts *o,
 			  const struct ik_target *t, const struct avatar_pose *prev, struct avatar_pose *out)
 {
@@ -883,6 +910,24 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 			}
 		}
 	}
+	if ((av->body.model & AVATAR_REACH_FIRST) && prev && t->valid && (flags & IK_UNREACHABLE) &&
+	    res->err.pos > HOLD_POS && same_chest(&prev->chest.r, &out->chest.r)) {
+		/*
+		 * Still off its sensor: the compromise Newton reaches from the
+		 * last frame's posture (no search) is often nearer than the one
+		 * from the seed (a raised arm against its limits, seeded outside
+		 * them, can end a hand's length away); the hand's place first.
+		 * Not when the chest turned (a bow tried or left): the last
+		 * posture was another arm's then.
+		 */
+		struct ik_result r2;
+		struct arm_pose s2;
+		sc_t q2[ARM_DOF];
+
+		newton_from(a, kin, t, prev->q[side], o, q2, &r2, &s2);
+		if (r2.err.pos < res->err.pos)
+			flags = take_posture(q, res, &out->seg[side], q2, &r2, &s2);
+	}
 	if ((av->body.model & AVATAR_KEEP_BRANCH) && prev && t->valid &&
 	    arm_jumped(&prev->seg[side], &out->seg[side])) {
 		/*
@@ -897,13 +942,11 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 		 * or where Newton gives up the hand's place for its orientation,
 		 * the hand on its place with the elbow at its last swivel.
 		 */
-		struct ik_opts no = *o;
 		struct ik_result r2;
 		struct arm_pose s2;
 		sc_t q2[ARM_DOF];
 
-		no.max_evals = 0;
-		ik_solve_pose(a, kin, t, prev->q[side], &no, q2, &r2, &s2);
+		newton_from(a, kin, t, prev->q[side], o, q2, &r2, &s2);
 		if (!(r2.err.pos <= HOLD_POS) && hold_swivel(a, t, prev->q[side], &prev->seg[side], q2)) {
 			/* Newton gave up the hand's place for its orientation: the hand on its place at the elbow's
 			 * swivel */
@@ -911,25 +954,19 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 			arm_fk_pose(a, q2, &s2);
 			r2.flags = IK_UNREACHABLE | at_limits(a, q2);
 		}
-		if (r2.err.pos <= HOLD_POS && r2.err.rot <= res->err.rot + HOLD_ROT &&
-		    !arm_jumped(&prev->seg[side], &s2)) {
-			ik_q_copy(q, q2);
-			*res = r2;
-			out->seg[side] = s2;
-			flags = r2.flags;
-		}
+		if (r2.err.pos <= sc_max(HOLD_POS, res->err.pos) && r2.err.rot <= res->err.rot + HOLD_ROT &&
+		    !arm_jumped(&prev->seg[side], &s2))
+			flags = take_posture(q, res, &out->seg[side], q2, &r2, &s2);
 	}
 	return flags;
 }
 
 /*
- * AVATAR_REACH_CHEST: a hand sensor beyond the straight arm's reach from
- * the chest the head places (for J1 at mid-range and at both limits) moves
- * the chest toward it by what is missing, both arms' summed, at most
- * REACH_SHIFT: the trunk leans and the shoulder girdle protracts that much
- * (the head sensor is then that far from its offset: the neck bends).
- * Before the solve, so a hand that becomes reachable costs one ordinary
- * solve. Rewrites the targets; returns whether the chest moved.
+ * AVATAR_REACH_CHEST (reach_chest below): the chest's move toward hands
+ * beyond reach, at most REACH_SHIFT: the trunk leans and the shoulder
+ * girdle protracts that much (the head sensor is then that far from its
+ * offset: the neck bends). Before the solve, so a hand that becomes
+ * reachable costs one ordinary solve.
  */
 #define REACH_SHIFT SC_C(0.08)
 
@@ -955,28 +992,19 @@ static bool wrist_in_reach(const struct arm *a, const struct ik_target *t)
 }
 
 /*
- * The chest moved by d (chest frame, capped at what is left of REACH_SHIFT,
- * *left, which the move uses up) and rolled about its forward axis by the
- * angle whose sine is sr (the right shoulder down for sr > 0), both arms'
- * targets rewritten.
+ * The chest c0 moved by d (c0's frame) and rolled about its forward axis by
+ * the angle whose sine is sr (the right shoulder down for sr > 0), both
+ * arms' targets rewritten.
  */
-static void chest_shift(struct vec3 d, sc_t sr, sc_t *left, const struct dq *const hand[2], struct dq *chest,
+static void chest_shift(const struct dq *c0, struct vec3 d, sc_t sr, const struct dq *const hand[2], struct dq *chest,
 			struct ik_target t[2])
 {
 	struct vec3 dw, c;
-	struct quat r = chest->r;
-	sc_t n = v3_norm(&d);
+	struct quat r = c0->r;
 	int side;
 
-	if (n > *left) {
-		sc_t k = sc_div(*left, n);
-
-		d = (struct vec3){ sc_mul(d.x, k), sc_mul(d.y, k), sc_mul(d.z, k) };
-		n = *left;
-	}
-	*left -= n;
 	quat_rotate(&r, &d, &dw);
-	dq_translation(chest, &c);
+	dq_translation(c0, &c);
 	c = (struct vec3){ c.x + dw.x, c.y + dw.y, c.z + dw.z };
 	if (sr != 0) {
 		/* the half angle: cos = sqrt((1 + cos) / 2), sin = sin / (2 cos(half)) */
@@ -992,68 +1020,196 @@ static void chest_shift(struct vec3 d, sc_t sr, sc_t *left, const struct dq *con
 }
 
 /*
- * The shoulders' moves that give both arms what they miss, when both hands
- * are beyond reach: the least move (d, u) of the chest, d its shift and u
- * the rise of the right shoulder (and fall of the left) by a roll, such
- * that each shoulder moves toward its hand by that arm's excess:
- * (d + u ez) . ar = er, (d - u ez) . al = el. The least-norm solution of
- * these two equations in four unknowns. A lateral lean of the trunk (an arm
- * raised overhead, the other hanging: one shoulder up, one down), which no
- * shift of a rigid chest gives. false if the two are nearly one equation.
+ * The least move of the shoulders that brings every hand beyond reach
+ * within it: x = (d, u), d the chest's shift and u the rise of the right
+ * shoulder (the left falling as much) by a roll about the forward axis, the
+ * least |x| with g_i . x >= c_i for each arm i that needs it (g_i the arm's
+ * shoulder-wrist line as the shoulder moves with x: (a_i, +-a_i.z), or
+ * (a_i, 0) without the roll). A quadratic programme of at most two
+ * constraints in four unknowns, solved by its active sets: none, each one
+ * alone (if it leaves the other met), both. A lateral lean of the trunk (an
+ * arm raised overhead, the other hanging: one shoulder up, one down) is the
+ * last; no shift of a rigid chest gives it.
  */
 #define ROLL_MAX SC_C(0.3420201433256687) /* sine of 20 degrees */
 
-static bool reach_roll(const struct vec3 *ar, sc_t er, const struct vec3 *al, sc_t el, struct vec3 *d, sc_t *u)
-{
-	sc_t grr = SC_C(1) + sc_mul(ar->z, ar->z), gll = SC_C(1) + sc_mul(al->z, al->z);
-	sc_t grl = v3_dot(ar, al) - sc_mul(ar->z, al->z);
-	sc_t det = sc_mul(grr, gll) - sc_mul(grl, grl), lr, ll;
+struct reach_x {
+	sc_t v[4]; /* d.x, d.y, d.z, u */
+};
 
-	if (!(det > SC_C(0.05)))
-		return false;
-	lr = sc_div(sc_mul(gll, er) - sc_mul(grl, el), det);
-	ll = sc_div(sc_mul(grr, el) - sc_mul(grl, er), det);
-	*d = (struct vec3){ sc_mul(lr, ar->x) + sc_mul(ll, al->x), sc_mul(lr, ar->y) + sc_mul(ll, al->y),
-			    sc_mul(lr, ar->z) + sc_mul(ll, al->z) };
-	*u = sc_mul(lr, ar->z) - sc_mul(ll, al->z);
-	return true;
+static sc_t rx_dot(const struct reach_x *a, const struct reach_x *b)
+{
+	return sc_mul(a->v[0], b->v[0]) + sc_mul(a->v[1], b->v[1]) + sc_mul(a->v[2], b->v[2]) +
+	       sc_mul(a->v[3], b->v[3]);
 }
 
-/* shift_left, roll_left: what is left of REACH_SHIFT and ROLL_MAX (a second step takes no more than the first left) */
-static bool reach_chest(const struct avatar *av, const struct dq *const hand[2], struct dq *chest,
-			struct ik_target t[2], sc_t *shift_left, sc_t *roll_left)
+static void rx_scaled(const struct reach_x *g, sc_t k, struct reach_x *x)
 {
-	struct vec3 d = { 0, 0, 0 }, ax[2];
-	sc_t excess[2] = { 0, 0 }, u = 0, sr = 0;
-	int side, n = 0;
+	for (int i = 0; i < 4; i++)
+		x->v[i] = sc_mul(k, g->v[i]);
+}
 
+static void reach_qp(const struct reach_x g[2], const sc_t c[2], const bool act[2], struct reach_x *x)
+{
+	sc_t gg[2], g01, det, l0, l1;
+	int i;
+
+	*x = (struct reach_x){ { 0, 0, 0, 0 } };
+	if (!act[0] || !act[1]) {
+		i = act[0] ? 0 : 1;
+		if (act[i] && c[i] > 0)
+			rx_scaled(&g[i], sc_div(c[i], rx_dot(&g[i], &g[i])), x);
+		return;
+	}
+	gg[0] = rx_dot(&g[0], &g[0]);
+	gg[1] = rx_dot(&g[1], &g[1]);
+	if (!(c[0] > 0) && !(c[1] > 0))
+		return;
+	for (i = 0; i < 2; i++) {
+		/* the one alone, if it leaves the other's met */
+		if (c[i] > 0) {
+			rx_scaled(&g[i], sc_div(c[i], gg[i]), x);
+			if (rx_dot(&g[1 - i], x) >= c[1 - i])
+				return;
+		}
+	}
+	g01 = rx_dot(&g[0], &g[1]);
+	det = sc_mul(gg[0], gg[1]) - sc_mul(g01, g01);
+	if (!(det > SC_C(0.01))) {
+		/* nearly one line: the arm that needs more */
+		i = c[0] > c[1] ? 0 : 1;
+		rx_scaled(&g[i], sc_div(c[i], gg[i]), x);
+		return;
+	}
+	l0 = sc_div(sc_mul(gg[1], c[0]) - sc_mul(g01, c[1]), det);
+	l1 = sc_div(sc_mul(gg[0], c[1]) - sc_mul(g01, c[0]), det);
+	for (i = 0; i < 4; i++)
+		x->v[i] = sc_mul(l0, g[0].v[i]) + sc_mul(l1, g[1].v[i]);
+}
+
+/*
+ * AVATAR_REACH_CHEST: the chest moved (and, with AVATAR_REACH_ROLL, rolled)
+ * by the least move that brings the hands beyond the straight arms' reach
+ * within it, at most REACH_SHIFT and 20 degrees. The arms' lines change
+ * with the move (and the roll is not linear): REACH_ITERS rounds, each the
+ * whole move again from the chest the head placed, with every arm that
+ * needed a move in an earlier round kept in it (a move for one hand must
+ * not take the other's shoulder out of its reach). Rewrites the targets;
+ * returns whether the chest moved.
+ */
+#define REACH_ITERS 3
+/* the hand brought 2 mm inside the straight arm's reach (1 mm: Q5.26's elbow of a straight arm 1 um off double) */
+#define REACH_MARGIN SC_C(0.002)
+
+static bool reach_chest(const struct avatar *av, const struct dq *const hand[2], struct dq *chest,
+			struct ik_target t[2])
+{
+	const struct dq c0 = *chest;
+	const bool roll = (av->body.model & AVATAR_REACH_ROLL) != 0;
+	const sc_t sh = av->arm[ARM_RIGHT].dims.shoulder;
+	struct reach_x x = { { 0, 0, 0, 0 } }, g[2] = { { { 0, 0, 0, 0 } }, { { 0, 0, 0, 0 } } };
+	sc_t c[2] = { 0, 0 }, sr = 0, cr = SC_C(1);
+	bool act[2] = { false, false }, moved = false;
+	int it, side;
+
+	for (it = 0; it < REACH_ITERS; it++) {
+		bool need = false;
+
+		for (side = 0; side < 2; side++) {
+			const struct arm *a = &av->arm[side];
+			struct arm_goal gl;
+			struct vec3 ax;
+			sc_t e;
+
+			if (!t[side].valid || (!act[side] && wrist_in_reach(a, &t[side])) ||
+			    !goal_init(a, &t[side], SC_C(0), &gl) || (!act[side] && gl.in_reach))
+				continue;
+			e = v3_norm(&(struct vec3){ gl.w.x - gl.s.x, gl.w.y - gl.s.y, gl.w.z - gl.s.z }) -
+			    (a->dims.arm + a->dims.forearm) + REACH_MARGIN;
+			/* the line in the chest's frame (the left arm's mirrored back), then in c0's */
+			ax = (struct vec3){ side == ARM_LEFT ? -gl.ax.x : gl.ax.x, gl.ax.y, gl.ax.z };
+			g[side] = (struct reach_x){ { sc_mul(cr, ax.x) + sc_mul(sr, ax.z), ax.y,
+						      sc_mul(cr, ax.z) - sc_mul(sr, ax.x), 0 } };
+			if (roll)
+				g[side].v[3] = side == ARM_LEFT ? -g[side].v[2] : g[side].v[2];
+			c[side] = e + rx_dot(&g[side], &x);
+			act[side] = true;
+			need |= e > 0;
+		}
+		if (!need)
+			break;
+		reach_qp(g, c, act, &x);
+		{
+			struct vec3 d = { x.v[0], x.v[1], x.v[2] };
+			sc_t n = v3_norm(&d);
+
+			if (n > REACH_SHIFT) {
+				sc_t k = sc_div(REACH_SHIFT, n);
+
+				d = (struct vec3){ sc_mul(d.x, k), sc_mul(d.y, k), sc_mul(d.z, k) };
+				x.v[0] = d.x;
+				x.v[1] = d.y;
+				x.v[2] = d.z;
+			}
+			/* the right shoulder (S, 0, 0) rolled by a about y: (S cos a, 0, -S sin a), u = -S sin a */
+			sr = sc_clamp(-sc_div(x.v[3], sh), -ROLL_MAX, ROLL_MAX);
+			x.v[3] = -sc_mul(sr, sh);
+			cr = sc_sqrt(SC_C(1) - sc_mul(sr, sr));
+			chest_shift(&c0, d, sr, hand, chest, t);
+			moved = true;
+		}
+	}
+	return moved;
+}
+
+/*
+ * AVATAR_RAISE_ROLL: a shoulder rises with its arm raised above the
+ * horizontal (the collar bone's elevation in the shoulder blade's upward
+ * turn, about 15 degrees of a 15 cm clavicle at full elevation:
+ * RAISE_RISE), by the sine of the shoulder-hand line's elevation; the
+ * rigid chest carries the difference of the two rises as a roll about its
+ * forward axis (one arm raised: that side up, the trunk bent away from it).
+ * Their mean, a shift up, is left out: the folds of docs/FIDELITY.md chose
+ * the roll and not the shift (both arms raised: 6 clips worse by a
+ * centimetre).
+ */
+#define RAISE_RISE SC_C(0.04)
+
+/* before the targets: the hands' places in the chest's frame from their sensors, the chest's rotation rolled */
+static void raise_roll(const struct avatar *av, const struct dq *const hand[2], struct dq *chest)
+{
+	const sc_t sh = av->arm[ARM_RIGHT].dims.shoulder;
+	sc_t e[2] = { 0, 0 }, sr, ch;
+	struct quat rc, r;
+	struct vec3 o;
+	int side;
+
+	quat_conj(&chest->r, &rc);
+	dq_translation(chest, &o);
 	for (side = 0; side < 2; side++) {
-		const struct arm *a = &av->arm[side];
-		struct arm_goal g;
+		sc_t sx = side == ARM_LEFT ? -av->arm[side].dims.shoulder : av->arm[side].dims.shoulder, n;
+		struct vec3 hp, v;
 
-		if (!t[side].valid || wrist_in_reach(a, &t[side]) || !goal_init(a, &t[side], SC_C(0), &g) || g.in_reach)
+		if (!hand[side] || !dq_is_finite(hand[side]))
 			continue;
-		excess[side] = v3_norm(&(struct vec3){ g.w.x - g.s.x, g.w.y - g.s.y, g.w.z - g.s.z }) -
-			       (a->dims.arm + a->dims.forearm) + SC_C(0.001);
-		/* the right arm's frame; the left arm's mirrored back */
-		ax[side] = (struct vec3){ side == ARM_LEFT ? -g.ax.x : g.ax.x, g.ax.y, g.ax.z };
-		d.x += sc_mul(excess[side], ax[side].x);
-		d.y += sc_mul(excess[side], ax[side].y);
-		d.z += sc_mul(excess[side], ax[side].z);
-		n++;
+		dq_translation(hand[side], &hp);
+		hp = (struct vec3){ hp.x - o.x, hp.y - o.y, hp.z - o.z };
+		quat_rotate(&rc, &hp, &v);
+		v.x -= sx;
+		n = v3_norm(&v);
+		if (v.z > 0 && n > SC_C(0.05))
+			e[side] = sc_mul(RAISE_RISE, sc_div(v.z, n));
 	}
-	if (!(v3_norm(&d) > 0) && n < 2)
-		return false;
-	if ((av->body.model & AVATAR_REACH_ROLL) && n == 2 &&
-	    reach_roll(&ax[ARM_RIGHT], excess[ARM_RIGHT], &ax[ARM_LEFT], excess[ARM_LEFT], &d, &u)) {
-		sc_t sh = av->arm[ARM_RIGHT].dims.shoulder;
-
-		/* the right shoulder at (S, 0, 0) rolled by a about y goes to (S cos a, 0, -S sin a): u = -S sin a */
-		sr = sc_clamp(-sc_div(u, sh), -*roll_left, *roll_left);
-		*roll_left -= sc_abs(sr);
-	}
-	chest_shift(d, sr, shift_left, hand, chest, t);
-	return true;
+	if (e[ARM_RIGHT] == e[ARM_LEFT])
+		return;
+	/*
+	 * the right shoulder (S, 0, 0) rolled by a about y: (S cos a, 0, -S sin a), a rise u = -S sin a;
+	 * the half angle: cos = sqrt((1 + cos) / 2), sin = sin / (2 cos(half))
+	 */
+	sr = -sc_div(sc_mul(SC_C(0.5), e[ARM_RIGHT] - e[ARM_LEFT]), sh);
+	ch = sc_sqrt(sc_mul(SC_C(0.5), SC_C(1) + sc_sqrt(SC_C(1) - sc_mul(sr, sr))));
+	quat_mul(&chest->r, &(struct quat){ ch, 0, sc_div(sr, 2 * ch), 0 }, &r);
+	dq_from_rt(&r, &o, chest);
 }
 
 /*
@@ -1089,9 +1245,11 @@ static bool hand_off(const struct ik_target t[2], const struct avatar_pose *p, i
 }
 
 /*
- * A bow explains hands off their sensors only when they are low: below the
- * shoulders of the upright chest. A raised hand out of reach (a wave over
- * the head against a joint limit) is no bow.
+ * A bow explains hands off their sensors only when they are low or behind:
+ * below the shoulders of the upright chest, or behind its shoulder line
+ * (the arms swept back along a trunk bowed past the horizontal). A raised
+ * hand in front or overhead out of reach (a wave over the head against a
+ * joint limit) is no bow.
  */
 static bool bow_wanted(const struct ik_target t[2], const struct avatar_pose *p)
 {
@@ -1099,7 +1257,7 @@ static bool bow_wanted(const struct ik_target t[2], const struct avatar_pose *p)
 
 	for (side = 0; side < 2; side++)
 		if (hand_off(t, p, side)) {
-			if (!(t[side].p.z < 0))
+			if (!(t[side].p.z < 0) && !(t[side].p.y < 0))
 				return false;
 			off++;
 		}
@@ -1213,10 +1371,13 @@ static unsigned bow(const struct avatar *av, const struct ik_kin *kin, const str
 		tried[kb] = true;
 		tmp.chest = chest[kb];
 		tmp.head_yaw = out->head_yaw;
-		for (side = 0; side < 2; side++) {
+		for (side = 0; side < 2; side++)
 			avatar_arm_target(&tmp.chest, hand[side], &t[side]);
+		/* the bowed trunk's shoulders still move toward hands beyond reach */
+		if (av->body.model & AVATAR_REACH_CHEST)
+			reach_chest(av, hand, &tmp.chest, t);
+		for (side = 0; side < 2; side++)
 			f |= avatar_arm_solve(av, side, kin, &short_o, &t[side], prev, &tmp);
-		}
 		off = bow_eval(t, &tmp, &lie);
 		/* fewer hands off; among bows as many, the arms nearer along the trunk */
 		if (off < best_off || (kept && off == best_off && lie < best_lie)) {
@@ -1228,6 +1389,87 @@ static unsigned bow(const struct avatar *av, const struct ik_kin *kin, const str
 		}
 		if (!off)
 			break;
+	}
+	return flags;
+}
+
+/*
+ * AVATAR_LEAN: raised hands that their arms, against their limits, leave
+ * more than a millimetre off their sensors (J2 at -170 degrees: an arm over
+ * the head), every hand off raised: the trunk bends as a person reaching
+ * overhead does (the shoulder blade's turn, which the chain has no joint
+ * for). With one such hand it bends sideways away from it, lifting that
+ * shoulder and turning the arm's frame under the raised arm: the chest
+ * rolled about its forward axis through its origin by 5, 10, 15, 20
+ * degrees; then, and with both hands raised, it leans back: the chest
+ * pitched back about the head sensor by 5, 10, 15, 20 degrees. Both arms
+ * are solved at each with the short budget of a target out of reach; the
+ * first that puts every hand on is kept, else the chest stays.
+ */
+#define LEAN_TRIES 4
+/* the half angles of 5, 10, 15, 20 degrees */
+static const sc_t lean_c[LEAN_TRIES] = { SC_C(0.9990482215818578), SC_C(0.9961946980917455), SC_C(0.9914448613738104),
+					 SC_C(0.984807753012208) };
+static const sc_t lean_s[LEAN_TRIES] = { SC_C(0.043619387365336), SC_C(0.08715574274765817), SC_C(0.13052619222005157),
+					 SC_C(0.17364817766693033) };
+
+/* the side of the one raised hand off, 2 for both, -1 if none or a hand off is low */
+static int lean_wanted(const struct ik_target t[2], const struct avatar_pose *p)
+{
+	int side, raised = -1;
+
+	for (side = 0; side < 2; side++)
+		if (hand_off(t, p, side)) {
+			if (!(t[side].p.z > 0))
+				return -1;
+			raised = raised < 0 ? side : 2;
+		}
+	return raised;
+}
+
+static unsigned lean(const struct avatar *av, const struct ik_kin *kin, const struct ik_opts *o, const struct dq *head,
+		     const struct dq *const hand[2], const struct avatar_pose *prev, int raised,
+		     struct avatar_pose *out, unsigned flags)
+{
+	struct avatar_pose tmp;
+	struct ik_target t[2];
+	struct ik_opts short_o = *o;
+	struct vec3 hp, hc, c;
+	struct dq ci;
+	int k, side;
+
+	if (short_o.max_evals > TRACK_EVALS)
+		short_o.max_evals = TRACK_EVALS;
+	/* the head sensor in the chest's frame: where a pitch turns the chest about */
+	dq_translation(head, &hp);
+	dq_conj(&out->chest, &ci);
+	dq_transform_point(&ci, &hp, &hc);
+	for (k = raised == 2 ? LEAN_TRIES : 0; k < 2 * LEAN_TRIES; k++) {
+		const int j = k % LEAN_TRIES;
+		/* the raised arm's shoulder up: about +y for the left arm, -y for the right (x toward the right) */
+		const struct quat rq =
+			k < LEAN_TRIES ? (struct quat){ lean_c[j], 0, raised == ARM_LEFT ? lean_s[j] : -lean_s[j], 0 }
+				       : (struct quat){ lean_c[j], lean_s[j], 0, 0 };
+		struct quat r;
+		unsigned f = 0;
+
+		quat_mul(&out->chest.r, &rq, &r);
+		if (k < LEAN_TRIES) {
+			dq_translation(&out->chest, &c);
+		} else {
+			quat_rotate(&r, &hc, &c);
+			c = (struct vec3){ hp.x - c.x, hp.y - c.y, hp.z - c.z };
+		}
+		dq_from_rt(&r, &c, &tmp.chest);
+		tmp.head_yaw = out->head_yaw;
+		for (side = 0; side < 2; side++) {
+			avatar_arm_target(&tmp.chest, hand[side], &t[side]);
+			f |= avatar_arm_solve(av, side, kin, &short_o, &t[side], prev, &tmp);
+		}
+		if (!hand_off(t, &tmp, 0) && !hand_off(t, &tmp, 1)) {
+			*out = tmp;
+			return f;
+		}
 	}
 	return flags;
 }
@@ -1263,15 +1505,12 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 			out->chest = prev->chest;
 		return IK_BAD_TARGET;
 	}
+	if (av->body.model & AVATAR_RAISE_ROLL)
+		raise_roll(av, hand, &out->chest);
 	for (side = 0; side < 2; side++)
 		avatar_arm_target(&out->chest, hand[side], &t[side]);
-	if (av->body.model & AVATAR_REACH_CHEST) {
-		/* a second step where the first (linear in the roll) left a hand beyond reach, within the same caps */
-		sc_t shift_left = REACH_SHIFT, roll_left = ROLL_MAX;
-
-		if (reach_chest(av, hand, &out->chest, t, &shift_left, &roll_left))
-			reach_chest(av, hand, &out->chest, t, &shift_left, &roll_left);
-	}
+	if (av->body.model & AVATAR_REACH_CHEST)
+		reach_chest(av, hand, &out->chest, t);
 	if ((av->body.model & AVATAR_BOW) && prev && bowed(&prev->chest) && o->max_evals > TRACK_EVALS) {
 		/* out of a bow the upright chest is likely still short: its search as short as the bow's */
 		short_o = *o;
@@ -1280,6 +1519,12 @@ unsigned avatar_solve(const struct avatar *av, const struct ik_kin *kin, const s
 	}
 	for (side = 0; side < 2; side++)
 		flags |= avatar_arm_solve(av, side, kin, o1, &t[side], prev, out);
+	if (av->body.model & AVATAR_LEAN) {
+		int raised = lean_wanted(t, out);
+
+		if (raised >= 0)
+			flags = lean(av, kin, o, head, hand, prev, raised, out, flags);
+	}
 	if ((av->body.model & AVATAR_BOW) && bow_wanted(t, out)) {
 		struct dq up;
 		sc_t y;

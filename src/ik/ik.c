@@ -200,6 +200,19 @@ static inline sc_t lsq_cap(sc_t y)
 }
 
 /*
+ * lsq_cap(num / d) without the quotient itself where it is capped: past the
+ * cap it may lie past Q5.26's range too (a weak pivot far from the target,
+ * an arm raised against its limits), and the division would saturate first.
+ * The pivots are column norms of J, under 8: 4 |d| stays inside the range.
+ */
+static inline sc_t lsq_div_cap(sc_t num, sc_t d)
+{
+	if (SC_STEP_CAP > 0 && sc_abs(num) >= sc_mul(SC_C(4), sc_abs(d)))
+		return (num < 0) != (d < 0) ? SC_C(-4) : SC_C(4);
+	return lsq_cap(sc_div(num, d));
+}
+
+/*
  * The minimum-norm step of an underdetermined system, J_f y = V with J_f the
  * n >= 6 free columns of J: Householder QR of J_f^T = Q R, y = Q R^-T V.
  * Column-major: a[j] is column j of J_f^T, i.e. row j of J_f, so nothing is
@@ -299,7 +312,7 @@ static sc_t lsq_pivot(sc_t num, sc_t d, sc_t rmax, int *rank)
 	if (sc_abs(d) <= sc_mul(IK_RCOND, rmax) || rmax == 0)
 		return 0;
 	++*rank;
-	return lsq_cap(sc_div(num, d));
+	return lsq_div_cap(num, d);
 }
 
 #if SC_TYPE == SC_FIXQ
@@ -580,7 +593,7 @@ int ik_lsq_step(const sc_t J[6][ARM_DOF], const sc_t V[6], const bool *free, sc_
 				y[j] = 0;
 				continue;
 			}
-			y[j] = lsq_cap(sc_div(y[j] - sc_acc_get(s), a[j][j]));
+			y[j] = lsq_div_cap(y[j] - sc_acc_get(s), a[j][j]);
 			rank++;
 		}
 		for (j = 0; j < n; j++)

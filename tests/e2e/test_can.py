@@ -34,7 +34,7 @@ EFF = 0x80000000
 DATA = os.path.join(ROOT, "tests", "data")
 # the limits of the DESCRIBE, degrees: chest yaw (the head's heading: any), then the default j1..j8 of
 # config/avatargw.conf for each arm
-LIMITS = [(-180, 180)] + [(-30, 30), (-170, 10), (-60, 120), (-90, 90), (-90, 60), (-90, 90), (-30, 30), (-80, 80)] * 2
+LIMITS = [(-180, 180)] + [(-30, 30), (-170, 30), (-60, 120), (-90, 90), (-90, 60), (-90, 90), (-30, 30), (-80, 80)] * 2
 F_VALID, F_SAFE, F_LIMITED = 0x80, 0x40, 0x10
 
 

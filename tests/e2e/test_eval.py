@@ -138,6 +138,35 @@ class WristTest(unittest.TestCase):
             self.assertLessEqual(a["elbow"]["median"], a["best_swivel"]["median"] + 1.0, side)
 
 
+# hands off their sensors although the arm reaches them from the true chest, before the reach move for both hands,
+# the trunk's bend under raised arms and the bow for hands behind: 71, 82, 34 and 24 arm-frames
+HANDS = ["bandai_dataset-1_bye_active_001", "bandai_dataset-2_wave-left-hand_active_001",
+         "bandai_dataset-1_byebye_masculinity_001", "bandai_dataset-1_bow_childish_001"]
+
+
+class HandsTest(unittest.TestCase):
+    """a hand the arm can reach from the true chest is on its sensor: fast waves at full stretch, an arm over the
+    head against its limits, arms swept back along a deep bow"""
+
+    def test_hands_on_their_sensors(self):
+        missing = [c for c in HANDS if not os.path.exists(os.path.join(MOCAP, c + ".csv"))]
+        if missing:
+            raise AssertionError("%s not found in %s: the shared mocap clips are needed (SHARED=...)" % (
+                ", ".join(missing), MOCAP))
+        with tempfile.TemporaryDirectory() as tmp:
+            out = os.path.join(tmp, "eval.json")
+            p = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "eval.py"), "--build", BUILD, "--mocap",
+                                MOCAP, "--clips", ",".join(HANDS), "--trials", "0", "--no-plots", "--no-keyframes",
+                                "--no-rules", "--out", "", "--json", out], capture_output=True, text=True, timeout=300)
+            if p.returncode != 0:
+                raise AssertionError("eval.py failed: " + p.stderr)
+            with open(out) as f:
+                res = json.load(f)["clips"]
+        for c in HANDS:
+            for side in ("right", "left"):
+                self.assertEqual(res[c]["arms"][side]["resid_reachable"], 0, "%s %s" % (c, side))
+
+
 FOLD_CLIPS = ["cmu_141_16", "cmu_16_11", "bandai_dataset-1_bow_normal_001", BENT]
 
 
@@ -184,7 +213,7 @@ class FoldsTest(unittest.TestCase):
         self.assertEqual(len(folds), 4)
         rules = self.res["rules"]
         for r in ("hand-elbow", "reach-first", "yaw-hands", "reach-chest", "neck", "bow", "keep-branch",
-                  "reach-roll", "j2-overhead", "j2-adduction", "wrist-thumb"):
+                  "reach-roll", "bow-head", "lean", "raise-roll", "j2-overhead", "j2-adduction", "wrist-thumb"):
             self.assertIn(r, rules)
             d = rules[r]
             self.assertTrue(set(d["chosen"]) <= folds, r)
