@@ -533,7 +533,8 @@ static bool goal_posture_cs(const struct arm *a, const struct arm_goal *g, sc_t 
 {
 	const struct arm_limits *lim = &a->lim;
 	struct vec3 e, u, f, zu, yu, xu, v;
-	sc_t Ru[3][3], M[3][3], Rf[3][3], N[3][3], k, s5, c5;
+	sc_t Ru[3][3], M[3][3], Rf[3][3], N[3][3], k, s5, c5, va;
+	bool in_plane = true;
 	int i, j;
 
 	v = (struct vec3){ sc_mul(cp, g->d0.x) + sc_mul(sp, g->d1.x), sc_mul(cp, g->d0.y) + sc_mul(sp, g->d1.y),
@@ -556,10 +557,13 @@ static bool goal_posture_cs(const struct arm *a, const struct arm_goal *g, sc_t 
 		ik_add_scaled(&yu, -k, &zu, &yu);
 		if (v3_unit(&yu) < SC_C(1e-6))
 			return false;
+		in_plane = false; /* f is (nearly) along zu, not exactly in the plane of yu and zu */
 	}
 	v3_cross(&yu, &zu, &xu);
 	q[0] = g->q1;
-	q[4] = sc_atan2(v3_dot(&f, &zu), v3_dot(&f, &yu));
+	c5 = v3_dot(&f, &yu);
+	s5 = v3_dot(&f, &zu);
+	q[4] = sc_atan2(s5, c5);
 	for (i = 0; i < 3; i++) {
 		Ru[i][0] = i == 0 ? xu.x : i == 1 ? xu.y : xu.z;
 		Ru[i][1] = i == 0 ? yu.x : i == 1 ? yu.y : yu.z;
@@ -571,9 +575,13 @@ static bool goal_posture_cs(const struct arm *a, const struct arm_goal *g, sc_t 
 		M[1][i] = sc_mul(g->c1, Ru[1][i]) - sc_mul(g->s1, Ru[0][i]);
 		M[2][i] = Ru[2][i];
 	}
-	ik_euler_yxz((const sc_t(*)[3])M, lim, 1, &q[1]);
-	/* the forearm frame Ru Rx(q5), then Rf^T R = Ry(q6) Rx(q7) Rz(q8) */
-	sc_sincos(q[4], &s5, &c5);
+	va = ik_euler_yxz((const sc_t(*)[3])M, lim, 1, &q[1]);
+	/*
+	 * the forearm frame Ru Rx(q5), then Rf^T R = Ry(q6) Rx(q7) Rz(q8); f, a
+	 * unit vector in the plane of yu and zu, is (cos q5, sin q5) there
+	 */
+	if (!in_plane)
+		sc_sincos(q[4], &s5, &c5);
 	for (i = 0; i < 3; i++) {
 		Rf[i][0] = Ru[i][0];
 		Rf[i][1] = sc_mul(c5, Ru[i][1]) + sc_mul(s5, Ru[i][2]);
@@ -582,17 +590,12 @@ static bool goal_posture_cs(const struct arm *a, const struct arm_goal *g, sc_t 
 	for (i = 0; i < 3; i++)
 		for (j = 0; j < 3; j++)
 			N[i][j] = ik_m3_tdot((const sc_t(*)[3])Rf, (const sc_t(*)[3])g->R, i, j);
-	ik_euler_yxz((const sc_t(*)[3])N, lim, 5, &q[5]);
-	*v_arm = 0;
-	*v_wrist = 0;
-	for (i = 0; i < ARM_DOF; i++) {
+	/* the violations of J2..J4 and J6..J8 as the angle triples' choice summed them */
+	*v_wrist = ik_euler_yxz((const sc_t(*)[3])N, lim, 5, &q[5]);
+	*v_arm = va + ik_violation(q[4], lim->lo[4], lim->hi[4]);
+	for (i = 0; i < ARM_DOF; i++)
 		if (!sc_isfinite(q[i]))
 			return false;
-		if (i >= 1 && i <= 4)
-			*v_arm += ik_violation(q[i], lim->lo[i], lim->hi[i]);
-		else if (i >= 5)
-			*v_wrist += ik_violation(q[i], lim->lo[i], lim->hi[i]);
-	}
 	return true;
 }
 

@@ -37,6 +37,16 @@ static inline sc_t ik_m3_tdot(const sc_t a[3][3], const sc_t b[3][3], int i, int
 }
 
 /*
+ * sc_wrap_pi of an angle in [0, 2 pi] (one from atan2 plus or minus pi):
+ * the same value in one comparison (NaN stays NaN: the callers' ranking
+ * chooses the same branch either way)
+ */
+static inline sc_t ik_wrap_0_2pi(sc_t x)
+{
+	return x >= SC_PI ? x - 2 * SC_PI : x;
+}
+
+/*
  * M = Ry(a) Rx(b) Rz(c): both angle triples, the one inside the limits
  * [i0, i0+2] chosen (else the one violating them least). Returns the
  * violation in radians.
@@ -63,7 +73,7 @@ static inline sc_t ik_euler_yxz(const sc_t m[3][3], const struct arm_limits *lim
 #else
 	const sc_t *lo = &lim->lo[i0], *hi = &lim->hi[i0];
 	sc_t b = sc_asin(-m[1][2]), a = sc_atan2(m[0][2], m[2][2]), c = sc_atan2(m[1][0], m[1][1]);
-	sc_t a1 = sc_wrap_pi(a + SC_PI), b1 = sc_wrap_pi(SC_PI - b), c1 = sc_wrap_pi(c + SC_PI);
+	sc_t a1 = ik_wrap_0_2pi(a + SC_PI), b1 = ik_wrap_0_2pi(SC_PI - b), c1 = ik_wrap_0_2pi(c + SC_PI);
 	sc_t v0 = ik_violation(a, lo[0], hi[0]) + ik_violation(b, lo[1], hi[1]) + ik_violation(c, lo[2], hi[2]);
 	sc_t v1 = ik_violation(a1, lo[0], hi[0]) + ik_violation(b1, lo[1], hi[1]) + ik_violation(c1, lo[2], hi[2]);
 
