@@ -789,9 +789,11 @@ static unsigned solve(const struct arm *a, const struct ik_kin *kin, const struc
 	res->iters = 0;
 	res->evals = 0;
 	res->err = (struct ik_err){ 0, 0 };
-	if (seed && q_finite(seed)) {
-		for (i = 0; i < ARM_DOF; i++)
-			pref[i] = seed[i];
+	if (seed && ik_q_inside(a, seed)) {
+		/* inside the limits (and finite): nothing to clamp */
+		ik_q_copy(pref, seed);
+	} else if (seed && q_finite(seed)) {
+		ik_q_copy(pref, seed);
 		arm_clamp(a, pref);
 	} else {
 		if (seed)

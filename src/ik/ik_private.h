@@ -24,6 +24,15 @@ static inline void ik_q_copy(sc_t dst[ARM_DOF], const sc_t src[ARM_DOF])
 		dst[i] = src[i];
 }
 
+/* every joint of q inside its limits and in [-pi, pi) (false for NaN): what arm_clamp leaves alone */
+static inline bool ik_q_inside(const struct arm *a, const sc_t q[ARM_DOF])
+{
+	for (int i = 0; i < ARM_DOF; i++)
+		if (!(q[i] >= a->lim.lo[i] && q[i] <= a->lim.hi[i] && q[i] >= -SC_PI && q[i] < SC_PI))
+			return false;
+	return true;
+}
+
 /* how far v lies outside [lo, hi], 0 inside */
 static inline sc_t ik_violation(sc_t v, sc_t lo, sc_t hi)
 {

@@ -176,11 +176,22 @@ bool encode_frame_finite(const struct wire_frame *f, bool solved)
 		bad |= nonfinite_bits(f->in.analog, WIRE_SENSORS * WIRE_ANALOG);
 	if (!solved)
 		return !bad; /* the posture is NaN throughout: unknown */
-	for (int side = 0; side < WIRE_ARMS; side++)
-		bad |= nonfinite_bits(&f->arm[side].pos_err, 1);
+	{
+		float pos_err[WIRE_ARMS];
+
+		for (int side = 0; side < WIRE_ARMS; side++)
+			pos_err[side] = f->arm[side].pos_err;
+		bad |= nonfinite_bits(pos_err, WIRE_ARMS);
+	}
 	/* the head segment is the head sensor's own pose: NaN while the sensor is missing */
-	if (f->sensor[WIRE_S_HEAD].state != WIRE_SENSOR_MISSING)
-		bad |= nonfinite_bits(&f->segment[WIRE_SEG_HEAD], 7);
+	if (f->sensor[WIRE_S_HEAD].state != WIRE_SENSOR_MISSING) {
+		/* the joints and every segment: one run of floats (the assertion) */
+		_Static_assert(offsetof(struct wire_frame, segment) ==
+				       offsetof(struct wire_frame, joint) + WIRE_JOINTS * sizeof(float),
+			       "the segments follow the joints without a gap");
+		return !(bad | nonfinite_bits((const uint8_t *)f + offsetof(struct wire_frame, joint),
+					      WIRE_JOINTS + WIRE_SEGMENTS * 7));
+	}
 	return !(bad | nonfinite_bits(f->joint, WIRE_JOINTS) | nonfinite_bits(f->segment, WIRE_SEG_HEAD * 7) |
 		 nonfinite_bits(&f->segment[WIRE_SEG_HEAD + 1], (WIRE_SEGMENTS - WIRE_SEG_HEAD - 1) * 7));
 }
