@@ -74,6 +74,7 @@ struct arm {
 	 */
 	struct vec3 axis[ARM_DOF];
 	struct vec3 trans[ARM_DOF];
+	sc_t sgn[ARM_DOF];	 /* +-1: joint i's axis on its coordinate (the left arm's y and z reversed) */
 	sc_t lim_cs[ARM_DOF][4]; /* cos lo, sin lo, cos hi, sin hi: limit tests without atan2 */
 };
 
