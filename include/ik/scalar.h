@@ -267,11 +267,18 @@ static inline void sc_sincos8(const sc_t a[8], sc_t s[8], sc_t c[8])
 {
 	int i;
 #ifdef SC_VEC
-	bool small = true;
+	sc_t m = 0;
 
-	for (i = 0; i < 8; i++)
-		small &= a[i] <= SC_C(8) && a[i] >= SC_C(-8);
-	if (small) {
+	/*
+	 * the largest |a[i]| (a NaN may be passed over: the polynomials give NaN
+	 * for it as libm does, and an infinity is never passed over)
+	 */
+	for (i = 0; i < 8; i++) {
+		sc_t v = sc_builtin_fabs(a[i]);
+
+		m = v > m ? v : m;
+	}
+	if (m <= SC_C(8)) {
 		for (i = 0; i < 8; i += 4) {
 			sc_v4 va, vs, vc;
 
