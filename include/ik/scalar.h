@@ -298,15 +298,15 @@ static inline void sc_sincos8(const sc_t a[8], sc_t s[8], sc_t c[8])
  * atan2 with one division: of |y| and |x| the smaller over the larger is
  * t in [0, 1]; beyond tan(pi/12) the argument is taken down by pi/6 in the
  * same quotient, (sqrt3 lo - hi) / (sqrt3 hi + lo) = tan(atan t - pi/6),
- * so |t| <= tan(pi/12) where an odd polynomial of degree 15 is accurate to
- * 4e-15 (libm's atan2 costs several times more, and the IK's closed-form search
+ * so |t| <= tan(pi/12) where the odd series to t^19 is accurate to 1e-13
+ * (libm's atan2 costs several times more, and the IK's closed-form search
  * and the avatar's posture call it in their inner loops). The octant is
  * put back without branches on the value. atan2 in (-pi, pi];
  * atan2(0, 0) = 0.
  */
 static inline sc_t sc_atan2(sc_t y, sc_t x)
 {
-	sc_t ax = sc_builtin_fabs(x), ay = sc_builtin_fabs(y), lo, hi, t, t2, p, a;
+	sc_t ax = sc_builtin_fabs(x), ay = sc_builtin_fabs(y), lo, hi, t, t2, nt2, p, a;
 	bool steep = ay > ax, far;
 
 	/* one test each for inf and NaN (the library's rules; also for sums past 1e300) and for (0, 0) */
@@ -320,18 +320,19 @@ static inline sc_t sc_atan2(sc_t y, sc_t x)
 	t = far ? (SC_C(1.7320508075688772) * lo - hi) / (SC_C(1.7320508075688772) * hi + lo) : lo / hi;
 	t2 = t * t;
 	/*
-	 * atan t = t - t^3 P(t^2), P = 1/3 - t^2 / 5 + ... as a polynomial of
-	 * degree 6 fitted on [0, tan^2(pi/12)] (Chebyshev, 50 digits): a relative
-	 * error under 4e-15 evaluated in double, where the series to t^19 (two
-	 * terms more) stopped at 2e-13
+	 * atan t = t - t^3 (1/3 - t^2 (1/5 - t^2 (1/7 - ...))); c - t^2 p
+	 * written c + (-t^2) p, the same value, which needs no register for c
 	 */
-	p = SC_C(0.053702359506276874958);
-	p = SC_C(-0.075698785289394515796) + t2 * p;
-	p = SC_C(0.090850422341085678254) + t2 * p;
-	p = SC_C(-0.11110965406091910903) + t2 * p;
-	p = SC_C(0.14285712553774305423) + t2 * p;
-	p = SC_C(-0.19999999992254230231) + t2 * p;
-	p = SC_C(0.33333333333327662335) + t2 * p;
+	nt2 = -t2;
+	p = SC_C(1.0 / 19);
+	p = SC_C(1.0 / 17) + nt2 * p;
+	p = SC_C(1.0 / 15) + nt2 * p;
+	p = SC_C(1.0 / 13) + nt2 * p;
+	p = SC_C(1.0 / 11) + nt2 * p;
+	p = SC_C(1.0 / 9) + nt2 * p;
+	p = SC_C(1.0 / 7) + nt2 * p;
+	p = SC_C(1.0 / 5) + nt2 * p;
+	p = SC_C(1.0 / 3) + nt2 * p;
 	a = (far ? SC_C(0.52359877559829887) : SC_C(0)) + (t - t * t2 * p);
 	a = steep ? SC_HALF_PI - a : a;
 	a = x < 0 ? SC_PI - a : a;
