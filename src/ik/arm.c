@@ -53,6 +53,8 @@ void arm_init(struct arm *a, enum arm_side side, const struct arm_dims *dims, co
 		sc_sincos(a->lim.lo[i], &a->lim_cs[i][1], &a->lim_cs[i][0]);
 		sc_sincos(a->lim.hi[i], &a->lim_cs[i][3], &a->lim_cs[i][2]);
 	}
+	a->inv_arm = dims->arm > 0 ? sc_div(SC_C(1), dims->arm) : SC_C(0);
+	a->inv_forearm = dims->forearm > 0 ? sc_div(SC_C(1), dims->forearm) : SC_C(0);
 	a->trans[0].x = sc_mul(mirror, dims->shoulder);
 	a->trans[3].z = -dims->arm;
 	a->trans[4].y = dims->forearm;

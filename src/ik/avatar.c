@@ -368,7 +368,7 @@ static bool goal_init(const struct arm *a, const struct ik_target *t, sc_t q1, s
 	g->r = r2 > 0 ? sc_sqrt(r2) : SC_C(0);
 	g->c5 = g->s5 = 0;
 	if (dm->arm > 0 && dm->forearm > 0) {
-		sc_t ia = sc_div(SC_C(1), dm->arm), iF = sc_div(SC_C(1), dm->forearm);
+		sc_t ia = a->inv_arm, iF = a->inv_forearm;
 
 		g->ua = sc_mul(g->x, ia);
 		g->uv = sc_mul(g->r, ia);
