@@ -82,10 +82,16 @@ static inline sc_t ik_euler_yxz(const sc_t m[3][3], const struct arm_limits *lim
 #else
 	const sc_t *lo = &lim->lo[i0], *hi = &lim->hi[i0];
 	sc_t b = sc_asin(-m[1][2]), a = sc_atan2(m[0][2], m[2][2]), c = sc_atan2(m[1][0], m[1][1]);
-	sc_t a1 = ik_wrap_0_2pi(a + SC_PI), b1 = ik_wrap_0_2pi(SC_PI - b), c1 = ik_wrap_0_2pi(c + SC_PI);
-	sc_t v0 = ik_violation(a, lo[0], hi[0]) + ik_violation(b, lo[1], hi[1]) + ik_violation(c, lo[2], hi[2]);
-	sc_t v1 = ik_violation(a1, lo[0], hi[0]) + ik_violation(b1, lo[1], hi[1]) + ik_violation(c1, lo[2], hi[2]);
+	sc_t v0 = ik_violation(a, lo[0], hi[0]) + ik_violation(b, lo[1], hi[1]) + ik_violation(c, lo[2], hi[2]), a1, b1,
+	     c1, v1;
 
+	if (v0 == 0) {
+		/* inside: the other triple cannot violate less */
+		out[0] = a, out[1] = b, out[2] = c;
+		return v0;
+	}
+	a1 = ik_wrap_0_2pi(a + SC_PI), b1 = ik_wrap_0_2pi(SC_PI - b), c1 = ik_wrap_0_2pi(c + SC_PI);
+	v1 = ik_violation(a1, lo[0], hi[0]) + ik_violation(b1, lo[1], hi[1]) + ik_violation(c1, lo[2], hi[2]);
 	if (v1 < v0) {
 		out[0] = a1, out[1] = b1, out[2] = c1;
 		return v1;
