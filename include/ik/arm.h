@@ -74,7 +74,9 @@ struct arm {
 	 */
 	struct vec3 axis[ARM_DOF];
 	struct vec3 trans[ARM_DOF];
-	sc_t lim_cs[ARM_DOF][4]; /* cos lo, sin lo, cos hi, sin hi: limit tests without atan2 */
+	sc_t sgn[ARM_DOF];	   /* +-1: joint i's axis on its coordinate (the left arm's y and z reversed) */
+	sc_t inv_arm, inv_forearm; /* 1 / A and 1 / F (0 for a length that is not positive) */
+	sc_t lim_cs[ARM_DOF][4];   /* cos lo, sin lo, cos hi, sin hi: limit tests without atan2 */
 };
 
 #define arm_default_limits SCN(arm_default_limits)

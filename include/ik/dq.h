@@ -340,13 +340,14 @@ DQ_INL void dq_from_rt(const struct quat *r, const struct vec3 *t, struct dq *ou
 	;
 #else
 {
-	struct quat tq, rr = *r;
+	/* d = (0, h) r with h = t / 2: quat_mul's sums without its products by the zero (the same values) */
+	struct quat rr = *r;
+	sc_t hx = sc_mul(t->x, SC_C(0.5)), hy = sc_mul(t->y, SC_C(0.5)), hz = sc_mul(t->z, SC_C(0.5));
 
-	tq.w = 0;
-	tq.x = sc_mul(t->x, SC_C(0.5));
-	tq.y = sc_mul(t->y, SC_C(0.5));
-	tq.z = sc_mul(t->z, SC_C(0.5));
-	quat_mul(&tq, &rr, &out->d);
+	out->d.w = sc_acc_get(sc_msb(sc_msb(sc_msb(sc_acc0(), hx, rr.x), hy, rr.y), hz, rr.z));
+	out->d.x = sc_acc_get(sc_msb(sc_mac(sc_mac(sc_acc0(), hx, rr.w), hy, rr.z), hz, rr.y));
+	out->d.y = sc_acc_get(sc_mac(sc_mac(sc_msb(sc_acc0(), hx, rr.z), hy, rr.w), hz, rr.x));
+	out->d.z = sc_acc_get(sc_mac(sc_msb(sc_mac(sc_acc0(), hx, rr.y), hy, rr.x), hz, rr.w));
 	out->r = rr;
 }
 #endif

@@ -267,11 +267,18 @@ static inline void sc_sincos8(const sc_t a[8], sc_t s[8], sc_t c[8])
 {
 	int i;
 #ifdef SC_VEC
-	bool small = true;
+	sc_t m = 0;
 
-	for (i = 0; i < 8; i++)
-		small &= a[i] <= SC_C(8) && a[i] >= SC_C(-8);
-	if (small) {
+	/*
+	 * the largest |a[i]| (a NaN may be passed over: the polynomials give NaN
+	 * for it as libm does, and an infinity is never passed over)
+	 */
+	for (i = 0; i < 8; i++) {
+		sc_t v = sc_builtin_fabs(a[i]);
+
+		m = v > m ? v : m;
+	}
+	if (m <= SC_C(8)) {
 		for (i = 0; i < 8; i += 4) {
 			sc_v4 va, vs, vc;
 
@@ -299,28 +306,33 @@ static inline void sc_sincos8(const sc_t a[8], sc_t s[8], sc_t c[8])
  */
 static inline sc_t sc_atan2(sc_t y, sc_t x)
 {
-	sc_t ax = sc_builtin_fabs(x), ay = sc_builtin_fabs(y), lo, hi, t, t2, p, a;
+	sc_t ax = sc_builtin_fabs(x), ay = sc_builtin_fabs(y), lo, hi, t, t2, nt2, p, a;
 	bool steep = ay > ax, far;
 
-	if (ax == 0 && ay == 0)
-		return 0;
-	if (!(ax < SC_C(1e300)) || !(ay < SC_C(1e300)))
-		return sc_builtin_atan2(y, x); /* inf and NaN: the library's rules */
+	/* one test each for inf and NaN (the library's rules; also for sums past 1e300) and for (0, 0) */
+	if (!(ax + ay < SC_C(1e300)))
+		return sc_builtin_atan2(y, x);
 	lo = steep ? ax : ay;
 	hi = steep ? ay : ax;
+	if (hi == 0)
+		return 0;
 	far = lo > SC_C(0.26794919243112270) * hi;
 	t = far ? (SC_C(1.7320508075688772) * lo - hi) / (SC_C(1.7320508075688772) * hi + lo) : lo / hi;
 	t2 = t * t;
-	/* atan t = t - t^3 (1/3 - t^2 (1/5 - t^2 (1/7 - ...))) */
+	/*
+	 * atan t = t - t^3 (1/3 - t^2 (1/5 - t^2 (1/7 - ...))); c - t^2 p
+	 * written c + (-t^2) p, the same value, which needs no register for c
+	 */
+	nt2 = -t2;
 	p = SC_C(1.0 / 19);
-	p = SC_C(1.0 / 17) - t2 * p;
-	p = SC_C(1.0 / 15) - t2 * p;
-	p = SC_C(1.0 / 13) - t2 * p;
-	p = SC_C(1.0 / 11) - t2 * p;
-	p = SC_C(1.0 / 9) - t2 * p;
-	p = SC_C(1.0 / 7) - t2 * p;
-	p = SC_C(1.0 / 5) - t2 * p;
-	p = SC_C(1.0 / 3) - t2 * p;
+	p = SC_C(1.0 / 17) + nt2 * p;
+	p = SC_C(1.0 / 15) + nt2 * p;
+	p = SC_C(1.0 / 13) + nt2 * p;
+	p = SC_C(1.0 / 11) + nt2 * p;
+	p = SC_C(1.0 / 9) + nt2 * p;
+	p = SC_C(1.0 / 7) + nt2 * p;
+	p = SC_C(1.0 / 5) + nt2 * p;
+	p = SC_C(1.0 / 3) + nt2 * p;
 	a = (far ? SC_C(0.52359877559829887) : SC_C(0)) + (t - t * t2 * p);
 	a = steep ? SC_HALF_PI - a : a;
 	a = x < 0 ? SC_PI - a : a;

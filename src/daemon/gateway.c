@@ -562,23 +562,24 @@ int gw_cycle(struct gateway *g, const struct tracker_clock *now)
 			 * same frame; and a 60 Hz tracker in a 240 Hz loop would cost
 			 * four solves per sample.
 			 */
-			in.pose = &a->pose;
+			in.pose = &a->pose[a->cur];
 		} else if (pf->state[0] != WIRE_SENSOR_MISSING) {
-			struct avatar_pose next;
+			struct avatar_pose *next = &a->pose[a->cur ^ 1u];
 
 			a->solved_missing = missing;
-			avatar_solve(a->av, a->kin, &a->opts, s[0], s[1], s[2], a->have_pose ? &a->pose : NULL, &next);
-			a->pose = next;
+			avatar_solve(a->av, a->kin, &a->opts, s[0], s[1], s[2], a->have_pose ? &a->pose[a->cur] : NULL,
+				     next);
+			a->cur ^= 1u;
 			a->have_pose = true;
-			in.pose = &a->pose;
+			in.pose = next;
 			for (int side = 0; side < 2; side++) {
-				ctr_add(&a->st.ik_iters, (uint64_t)next.res[side].iters);
-				if (next.res[side].flags & (IK_UNREACHABLE | IK_BAD_TARGET))
+				ctr_add(&a->st.ik_iters, (uint64_t)next->res[side].iters);
+				if (next->res[side].flags & (IK_UNREACHABLE | IK_BAD_TARGET))
 					ctr_add(&a->st.ik_unreached, 1);
 			}
 			ctr_add(&a->st.ik_solves, 2);
 		} else if (a->have_pose) {
-			in.pose = &a->pose;
+			in.pose = &a->pose[a->cur];
 			in.held = true;
 			ctr_add(&a->st.held, 1);
 		}

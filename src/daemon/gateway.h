@@ -45,7 +45,8 @@ struct gw_avatar {
 	const struct ik_kin *kin;
 	struct ik_opts opts;
 	struct frame_source fs;
-	struct avatar_pose pose;
+	struct avatar_pose pose[2]; /* the posture, pose[cur], and where the next solve writes (no copy) */
+	unsigned cur;
 	bool have_pose;
 	uint8_t solved_missing; /* sensors MISSING at the last solve (bit per sensor) */
 	uint32_t seq, dseq;

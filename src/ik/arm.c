@@ -46,12 +46,15 @@ void arm_init(struct arm *a, enum arm_side side, const struct arm_dims *dims, co
 			break;
 		}
 		a->axis[i] = ax;
+		a->sgn[i] = ax.x + ax.y + ax.z;
 		a->trans[i] = (struct vec3){ 0, 0, 0 };
 	}
 	for (i = 0; i < ARM_DOF; i++) {
 		sc_sincos(a->lim.lo[i], &a->lim_cs[i][1], &a->lim_cs[i][0]);
 		sc_sincos(a->lim.hi[i], &a->lim_cs[i][3], &a->lim_cs[i][2]);
 	}
+	a->inv_arm = dims->arm > 0 ? sc_div(SC_C(1), dims->arm) : SC_C(0);
+	a->inv_forearm = dims->forearm > 0 ? sc_div(SC_C(1), dims->forearm) : SC_C(0);
 	a->trans[0].x = sc_mul(mirror, dims->shoulder);
 	a->trans[3].z = -dims->arm;
 	a->trans[4].y = dims->forearm;
@@ -203,8 +206,7 @@ void arm_chain_eval(const struct arm *a, const sc_t q[ARM_DOF], struct arm_chain
 	 * of a general quaternion's 16 (a dual quaternion's 48). Its translation
 	 * runs along one column of R(r[i+1]): 6 products for the column.
 	 */
-	const sc_t sg[ARM_DOF] = { a->axis[0].z, a->axis[1].y, a->axis[2].x, a->axis[3].z,
-				   a->axis[4].x, a->axis[5].y, a->axis[6].x, a->axis[7].z };
+	const sc_t *sg = a->sgn;
 	sc_t h[ARM_DOF], s[ARM_DOF], c[ARM_DOF];
 	struct quat *r = ch->r;
 	struct vec3 *p = ch->p, u1x, u4z, u5y, u8y;

@@ -315,6 +315,13 @@ struct arm_goal {
 	struct vec3 d0, d1; /* unit, across ax */
 	sc_t x, r;	    /* the circle: centre s + x ax, radius r */
 	sc_t q1, s1, c1;
+	/*
+	 * the upper arm (x ax + r v) / A = ua ax + uv v and the forearm
+	 * (w - elbow) / F = fa ax + fv v for the elbow at v on the circle, and
+	 * J5's cosine and sine (the forearm on the upper arm's frame), none of
+	 * which depends on the swivel; c5 = 0 when the lengths do not allow them
+	 */
+	sc_t ua, uv, fa, fv, c5, s5;
 	bool in_reach; /* false: the wrist is beyond A + F, the circle is the straight arm's */
 };
 
@@ -357,6 +364,18 @@ static bool goal_init(const struct arm *a, const struct ik_target *t, sc_t q1, s
 	g->x = sc_div(sc_mul(dm->arm, dm->arm) - sc_mul(dm->forearm, dm->forearm) + sc_mul(L, L), 2 * L);
 	r2 = sc_mul(dm->arm, dm->arm) - sc_mul(g->x, g->x);
 	g->r = r2 > 0 ? sc_sqrt(r2) : SC_C(0);
+	g->c5 = g->s5 = 0;
+	if (dm->arm > 0 && dm->forearm > 0) {
+		sc_t ia = a->inv_arm, iF = a->inv_forearm;
+
+		g->ua = sc_mul(g->x, ia);
+		g->uv = sc_mul(g->r, ia);
+		g->fa = sc_mul(L - g->x, iF);
+		g->fv = -sc_mul(g->r, iF);
+		/* f . yu and f . zu for yu = uv ax - ua v, zu = -(ua ax + uv v) (goal_posture_cs) */
+		g->c5 = sc_mul(g->fa, g->uv) - sc_mul(g->fv, g->ua);
+		g->s5 = -(sc_mul(g->fa, g->ua) + sc_mul(g->fv, g->uv));
+	}
 	g->d0 = (struct vec3){ 0, 0, SC_C(-1) };
 	k = v3_dot(&g->d0, &g->ax);
 	ik_add_scaled(&g->d0, -k, &g->ax, &g->d0);
@@ -530,34 +549,66 @@ static bool goal_posture_cs(const struct arm *a, const struct arm_goal *g, sc_t 
 			    sc_t *v_arm, sc_t *v_wrist)
 {
 	const struct arm_limits *lim = &a->lim;
-	struct vec3 e, u, f, zu, yu, xu, v;
-	sc_t Ru[3][3], M[3][3], Rf[3][3], N[3][3], k, s5, c5;
+	struct vec3 zu, yu, xu, v;
+	sc_t Ru[3][3], M[3][3], Rf[3][3], N[3][3], k, s5 = g->s5, c5 = g->c5, va;
+	bool in_plane = true;
 	int i, j;
 
+	/*
+	 * (cp, sp) to unit length (a Newton step for 1 / |(cp, sp)|: goal_swivel's
+	 * come from Taylor turns, 1e-6 off, which would leave the posture that
+	 * far from exact), else the frame below is not orthonormal
+	 */
+	k = SC_C(1.5) - sc_mul(SC_C(0.5), sc_mul(cp, cp) + sc_mul(sp, sp));
+	cp = sc_mul(cp, k);
+	sp = sc_mul(sp, k);
 	v = (struct vec3){ sc_mul(cp, g->d0.x) + sc_mul(sp, g->d1.x), sc_mul(cp, g->d0.y) + sc_mul(sp, g->d1.y),
 			   sc_mul(cp, g->d0.z) + sc_mul(sp, g->d1.z) };
-	e = g->s;
-	ik_add_scaled(&e, g->x, &g->ax, &e);
-	ik_add_scaled(&e, g->r, &v, &e);
-	u = (struct vec3){ e.x - g->s.x, e.y - g->s.y, e.z - g->s.z };
-	f = (struct vec3){ g->w.x - e.x, g->w.y - e.y, g->w.z - e.z };
-	v3_unit(&u);
-	v3_unit(&f);
-	zu = (struct vec3){ -u.x, -u.y, -u.z };
-	/* the bend plane: the forearm's part across the upper arm; a straight arm bends away from the elbow's side */
-	yu = f;
-	k = v3_dot(&yu, &zu);
-	ik_add_scaled(&yu, -k, &zu, &yu);
-	if (v3_unit(&yu) < SC_C(1e-4)) {
-		yu = (struct vec3){ -v.x, -v.y, -v.z };
+	if (c5 >= SC_C(1e-4)) {
+		/*
+		 * The upper arm's frame: -z along the upper arm, y across it toward
+		 * the forearm (the bend plane is that of ax and v), x = y x z the
+		 * elbow's axis, -(ax x v) = sin phi d0 - cos phi d1: no root, no
+		 * division (ax, d0, d1 are orthonormal and x^2 + r^2 = A^2)
+		 */
+		zu = (struct vec3){ -(sc_mul(g->ua, g->ax.x) + sc_mul(g->uv, v.x)),
+				    -(sc_mul(g->ua, g->ax.y) + sc_mul(g->uv, v.y)),
+				    -(sc_mul(g->ua, g->ax.z) + sc_mul(g->uv, v.z)) };
+		yu = (struct vec3){ sc_mul(g->uv, g->ax.x) - sc_mul(g->ua, v.x),
+				    sc_mul(g->uv, g->ax.y) - sc_mul(g->ua, v.y),
+				    sc_mul(g->uv, g->ax.z) - sc_mul(g->ua, v.z) };
+		xu = (struct vec3){ sc_mul(sp, g->d0.x) - sc_mul(cp, g->d1.x),
+				    sc_mul(sp, g->d0.y) - sc_mul(cp, g->d1.y),
+				    sc_mul(sp, g->d0.z) - sc_mul(cp, g->d1.z) };
+	} else {
+		/* the arm (nearly) straight: the bend plane from the elbow's side */
+		struct vec3 e = g->s, u, f;
+
+		ik_add_scaled(&e, g->x, &g->ax, &e);
+		ik_add_scaled(&e, g->r, &v, &e);
+		u = (struct vec3){ e.x - g->s.x, e.y - g->s.y, e.z - g->s.z };
+		f = (struct vec3){ g->w.x - e.x, g->w.y - e.y, g->w.z - e.z };
+		v3_unit(&u);
+		v3_unit(&f);
+		zu = (struct vec3){ -u.x, -u.y, -u.z };
+		/* the forearm's part across the upper arm; a straight arm bends away from the elbow's side */
+		yu = f;
 		k = v3_dot(&yu, &zu);
 		ik_add_scaled(&yu, -k, &zu, &yu);
-		if (v3_unit(&yu) < SC_C(1e-6))
-			return false;
+		if (v3_unit(&yu) < SC_C(1e-4)) {
+			yu = (struct vec3){ -v.x, -v.y, -v.z };
+			k = v3_dot(&yu, &zu);
+			ik_add_scaled(&yu, -k, &zu, &yu);
+			if (v3_unit(&yu) < SC_C(1e-6))
+				return false;
+			in_plane = false; /* f is (nearly) along zu, not exactly in the plane of yu and zu */
+		}
+		v3_cross(&yu, &zu, &xu);
+		c5 = v3_dot(&f, &yu);
+		s5 = v3_dot(&f, &zu);
 	}
-	v3_cross(&yu, &zu, &xu);
 	q[0] = g->q1;
-	q[4] = sc_atan2(v3_dot(&f, &zu), v3_dot(&f, &yu));
+	q[4] = sc_atan2(s5, c5);
 	for (i = 0; i < 3; i++) {
 		Ru[i][0] = i == 0 ? xu.x : i == 1 ? xu.y : xu.z;
 		Ru[i][1] = i == 0 ? yu.x : i == 1 ? yu.y : yu.z;
@@ -569,9 +620,13 @@ static bool goal_posture_cs(const struct arm *a, const struct arm_goal *g, sc_t 
 		M[1][i] = sc_mul(g->c1, Ru[1][i]) - sc_mul(g->s1, Ru[0][i]);
 		M[2][i] = Ru[2][i];
 	}
-	ik_euler_yxz((const sc_t(*)[3])M, lim, 1, &q[1]);
-	/* the forearm frame Ru Rx(q5), then Rf^T R = Ry(q6) Rx(q7) Rz(q8) */
-	sc_sincos(q[4], &s5, &c5);
+	va = ik_euler_yxz((const sc_t(*)[3])M, lim, 1, &q[1]);
+	/*
+	 * the forearm frame Ru Rx(q5), then Rf^T R = Ry(q6) Rx(q7) Rz(q8); f, a
+	 * unit vector in the plane of yu and zu, is (cos q5, sin q5) there
+	 */
+	if (!in_plane)
+		sc_sincos(q[4], &s5, &c5);
 	for (i = 0; i < 3; i++) {
 		Rf[i][0] = Ru[i][0];
 		Rf[i][1] = sc_mul(c5, Ru[i][1]) + sc_mul(s5, Ru[i][2]);
@@ -580,17 +635,12 @@ static bool goal_posture_cs(const struct arm *a, const struct arm_goal *g, sc_t 
 	for (i = 0; i < 3; i++)
 		for (j = 0; j < 3; j++)
 			N[i][j] = ik_m3_tdot((const sc_t(*)[3])Rf, (const sc_t(*)[3])g->R, i, j);
-	ik_euler_yxz((const sc_t(*)[3])N, lim, 5, &q[5]);
-	*v_arm = 0;
-	*v_wrist = 0;
-	for (i = 0; i < ARM_DOF; i++) {
+	/* the violations of J2..J4 and J6..J8 as the angle triples' choice summed them */
+	*v_wrist = ik_euler_yxz((const sc_t(*)[3])N, lim, 5, &q[5]);
+	*v_arm = va + ik_violation(q[4], lim->lo[4], lim->hi[4]);
+	for (i = 0; i < ARM_DOF; i++)
 		if (!sc_isfinite(q[i]))
 			return false;
-		if (i >= 1 && i <= 4)
-			*v_arm += ik_violation(q[i], lim->lo[i], lim->hi[i]);
-		else if (i >= 5)
-			*v_wrist += ik_violation(q[i], lim->lo[i], lim->hi[i]);
-	}
 	return true;
 }
 

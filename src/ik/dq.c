@@ -457,6 +457,15 @@ void dq_exp(const struct screw *s, struct dq *out)
 
 bool dq_is_finite(const struct dq *a)
 {
-	return sc_isfinite(a->r.w) && sc_isfinite(a->r.x) && sc_isfinite(a->r.y) && sc_isfinite(a->r.z) &&
-	       sc_isfinite(a->d.w) && sc_isfinite(a->d.x) && sc_isfinite(a->d.y) && sc_isfinite(a->d.z);
+#if SC_TYPE == SC_FIXQ
+	(void)a;
+	return true; /* every fixed-point value is finite */
+#else
+	/* x - x is 0 for a finite x and NaN for an infinity or a NaN: one test for all eight */
+	const sc_t *v = SC_CV(&a->r), *u = SC_CV(&a->d);
+	sc_t z = ((v[0] - v[0]) + (v[1] - v[1])) + ((v[2] - v[2]) + (v[3] - v[3])) +
+		 (((u[0] - u[0]) + (u[1] - u[1])) + ((u[2] - u[2]) + (u[3] - u[3])));
+
+	return z == 0;
+#endif
 }

@@ -709,7 +709,7 @@ unsigned ik_newton(const struct arm *a, const struct ik_kin *kin, const struct i
 #define NEWTON_STALL SC_C(1e-4)
 
 static void newton_limited(const struct arm *a, const struct ik_kin *kin, const struct ik_target *t,
-			   const struct ik_opts *o, sc_t center, sc_t q[ARM_DOF], struct ik_result *res,
+			   const struct ik_opts *o, int max_iter, sc_t center, sc_t q[ARM_DOF], struct ik_result *res,
 			   struct arm_chain *ch, bool *ch_at)
 {
 	sc_t J[6][ARM_DOF], V[6], W[6], x[ARM_DOF], z[ARM_DOF], e, e_prev = 0, e_prev2 = 0;
@@ -721,7 +721,7 @@ static void newton_limited(const struct arm *a, const struct ik_kin *kin, const 
 		bool centre = it == 0 && center != 0;
 
 		/* every way out follows an evaluation at the final q */
-		if (kin_eval(kin, a, q, t, o, J, V, &res->err, ch, ch_at) || it >= o->max_iter)
+		if (kin_eval(kin, a, q, t, o, J, V, &res->err, ch, ch_at) || it >= max_iter)
 			break;
 		/*
 		 * Stalled: the error changed by under NEWTON_STALL of itself in the
@@ -802,9 +802,11 @@ static unsigned solve(const struct arm *a, const struct ik_kin *kin, const struc
 	res->iters = 0;
 	res->evals = 0;
 	res->err = (struct ik_err){ 0, 0 };
-	if (seed && q_finite(seed)) {
-		for (i = 0; i < ARM_DOF; i++)
-			pref[i] = seed[i];
+	if (seed && ik_q_inside(a, seed)) {
+		/* inside the limits (and finite): nothing to clamp */
+		ik_q_copy(pref, seed);
+	} else if (seed && q_finite(seed)) {
+		ik_q_copy(pref, seed);
 		arm_clamp(a, pref);
 	} else {
 		if (seed)
@@ -821,24 +823,20 @@ static unsigned solve(const struct arm *a, const struct ik_kin *kin, const struc
 		/* no search: Newton from the seed, within the limits, and what it reaches */
 		for (i = 0; i < ARM_DOF; i++)
 			q[i] = pref[i];
-		newton_limited(a, kin, t, o, 0, q, res, chp, ch_at);
+		newton_limited(a, kin, t, o, o->max_iter, 0, q, res, chp, ch_at);
 		goto done;
 	}
 	if (seed && !(res->flags & IK_BAD_TARGET) && o->warm_iter > 0) {
 		/* tracking: a few limited Newton steps from the previous posture move the arm least */
-		struct ik_opts wo = *o;
-
-		wo.max_iter = o->warm_iter;
-		for (i = 0; i < ARM_DOF; i++)
-			q[i] = pref[i];
-		newton_limited(a, kin, t, &wo, o->center_gain, q, res, chp, ch_at);
+		ik_q_copy(q, pref);
+		newton_limited(a, kin, t, o, o->warm_iter, o->center_gain, q, res, chp, ch_at);
 		if (err_ok(&res->err, o))
 			goto done;
 	}
 	if (ik_swivel_solve(a, t, pref, o, q, &res->evals))
 		res->flags |= IK_ANALYTIC;
 	arm_clamp(a, q);
-	newton_limited(a, kin, t, o, 0, q, res, chp, ch_at);
+	newton_limited(a, kin, t, o, o->max_iter, 0, q, res, chp, ch_at);
 done:
 	if (err_ok(&res->err, o))
 		res->flags |= IK_REACHED;

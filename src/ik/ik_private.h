@@ -24,6 +24,15 @@ static inline void ik_q_copy(sc_t dst[ARM_DOF], const sc_t src[ARM_DOF])
 		dst[i] = src[i];
 }
 
+/* every joint of q inside its limits and in [-pi, pi) (false for NaN): what arm_clamp leaves alone */
+static inline bool ik_q_inside(const struct arm *a, const sc_t q[ARM_DOF])
+{
+	for (int i = 0; i < ARM_DOF; i++)
+		if (!(q[i] >= a->lim.lo[i] && q[i] <= a->lim.hi[i] && q[i] >= -SC_PI && q[i] < SC_PI))
+			return false;
+	return true;
+}
+
 /* how far v lies outside [lo, hi], 0 inside */
 static inline sc_t ik_violation(sc_t v, sc_t lo, sc_t hi)
 {
@@ -34,6 +43,16 @@ static inline sc_t ik_violation(sc_t v, sc_t lo, sc_t hi)
 static inline sc_t ik_m3_tdot(const sc_t a[3][3], const sc_t b[3][3], int i, int j)
 {
 	return sc_acc_get(sc_mac(sc_mac(sc_mac(sc_acc0(), a[0][i], b[0][j]), a[1][i], b[1][j]), a[2][i], b[2][j]));
+}
+
+/*
+ * sc_wrap_pi of an angle in [0, 2 pi] (one from atan2 plus or minus pi):
+ * the same value in one comparison (NaN stays NaN: the callers' ranking
+ * chooses the same branch either way)
+ */
+static inline sc_t ik_wrap_0_2pi(sc_t x)
+{
+	return x >= SC_PI ? x - 2 * SC_PI : x;
 }
 
 /*
@@ -63,10 +82,16 @@ static inline sc_t ik_euler_yxz(const sc_t m[3][3], const struct arm_limits *lim
 #else
 	const sc_t *lo = &lim->lo[i0], *hi = &lim->hi[i0];
 	sc_t b = sc_asin(-m[1][2]), a = sc_atan2(m[0][2], m[2][2]), c = sc_atan2(m[1][0], m[1][1]);
-	sc_t a1 = sc_wrap_pi(a + SC_PI), b1 = sc_wrap_pi(SC_PI - b), c1 = sc_wrap_pi(c + SC_PI);
-	sc_t v0 = ik_violation(a, lo[0], hi[0]) + ik_violation(b, lo[1], hi[1]) + ik_violation(c, lo[2], hi[2]);
-	sc_t v1 = ik_violation(a1, lo[0], hi[0]) + ik_violation(b1, lo[1], hi[1]) + ik_violation(c1, lo[2], hi[2]);
+	sc_t v0 = ik_violation(a, lo[0], hi[0]) + ik_violation(b, lo[1], hi[1]) + ik_violation(c, lo[2], hi[2]), a1, b1,
+	     c1, v1;
 
+	if (v0 == 0) {
+		/* inside: the other triple cannot violate less */
+		out[0] = a, out[1] = b, out[2] = c;
+		return v0;
+	}
+	a1 = ik_wrap_0_2pi(a + SC_PI), b1 = ik_wrap_0_2pi(SC_PI - b), c1 = ik_wrap_0_2pi(c + SC_PI);
+	v1 = ik_violation(a1, lo[0], hi[0]) + ik_violation(b1, lo[1], hi[1]) + ik_violation(c1, lo[2], hi[2]);
 	if (v1 < v0) {
 		out[0] = a1, out[1] = b1, out[2] = c1;
 		return v1;

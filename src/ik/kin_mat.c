@@ -108,8 +108,7 @@ static void rot_log(const sc_t R[3][3], struct vec3 *w, sc_t *angle)
 static bool kin_mat(const struct arm *a, const sc_t q[ARM_DOF], const struct ik_target *t, bool check, sc_t tol_pos,
 		    sc_t tol_rot, sc_t J[6][ARM_DOF], sc_t V[6], struct ik_err *err)
 {
-	const sc_t sg[ARM_DOF] = { a->axis[0].z, a->axis[1].y, a->axis[2].x, a->axis[3].z,
-				   a->axis[4].x, a->axis[5].y, a->axis[6].x, a->axis[7].z };
+	const sc_t *sg = a->sgn;
 	struct m3c R[ARM_DOF + 1];
 	struct vec3 p[ARM_DOF + 1], w, tr, wt, wwt, dp;
 	sc_t s[ARM_DOF], c[ARM_DOF], E[3][3], th, x, kk;

@@ -334,7 +334,16 @@ static sc_t search_eval_cs(struct search *s, const struct swivel_ctx *x, sc_t ph
 		s->best_v = v;
 		s->best_q1 = x->q1;
 		s->best_phi = phi;
-		ik_q_copy(s->best_q, q);
+		/*
+		 * a bound (full false, outside the limits) left J2..J4 and J6..J8
+		 * unwritten: the fallback posture is evaluated whole (it was the
+		 * caller's uninitialised or stale entries: results that changed
+		 * from run to run)
+		 */
+		if (!full && v > 0)
+			ctx_eval_cs(x, cp, sp, s->best_q, true);
+		else
+			ik_q_copy(s->best_q, q);
 	}
 	return v;
 }

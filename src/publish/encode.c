@@ -21,18 +21,24 @@
 #include <stdio.h>
 #include <string.h>
 
+/* a pose whose translation t is known */
+static void put_pose_t(const struct dq *d, const struct vec3 *t, struct wire_pose *p)
+{
+	p->p[0] = (float)t->x;
+	p->p[1] = (float)t->y;
+	p->p[2] = (float)t->z;
+	p->q[0] = (float)d->r.w;
+	p->q[1] = (float)d->r.x;
+	p->q[2] = (float)d->r.y;
+	p->q[3] = (float)d->r.z;
+}
+
 static void put_pose(const struct dq *d, struct wire_pose *p)
 {
 	struct vec3 t;
 
 	dq_translation(d, &t);
-	p->p[0] = (float)t.x;
-	p->p[1] = (float)t.y;
-	p->p[2] = (float)t.z;
-	p->q[0] = (float)d->r.w;
-	p->q[1] = (float)d->r.x;
-	p->q[2] = (float)d->r.y;
-	p->q[3] = (float)d->r.z;
+	put_pose_t(d, &t, p);
 }
 
 /* the chest's rotation as a matrix (cm) and its position (cp): a point in the chest frame to the world */
@@ -101,11 +107,9 @@ void encode_frame(const struct encode_in *in, struct wire_frame *out)
 	dq_translation(&pose->chest, &cp);
 	quat_to_mat3(&pose->chest.r, cm);
 	out->joint[0] = (float)pose->head_yaw;
-	put_pose(&pose->chest, &out->segment[WIRE_SEG_CHEST]);
-	if (pf->state[WIRE_S_HEAD] == WIRE_SENSOR_MISSING)
-		nan_pose(&out->segment[WIRE_SEG_HEAD]);
-	else
-		put_pose(&pf->sensor[WIRE_S_HEAD], &out->segment[WIRE_SEG_HEAD]);
+	put_pose_t(&pose->chest, &cp, &out->segment[WIRE_SEG_CHEST]);
+	/* the head segment is the head sensor's pose, written above */
+	out->segment[WIRE_SEG_HEAD] = out->sensor[WIRE_S_HEAD].pose;
 	for (int side = 0; side < 2; side++) {
 		const struct ik_result *r = &pose->res[side];
 		const struct arm_pose *ap;
@@ -147,6 +151,14 @@ static uint32_t nonfinite_bits(const void *src, size_t n)
 	u32x4 m4 = { 0, 0, 0, 0 };
 	uint32_t m = 0;
 
+	/* two vectors a round where the run is long (half the loop's own instructions) */
+	for (; end - b >= 2 * (ptrdiff_t)sizeof(m4); b += 2 * sizeof(m4)) {
+		u32x4 v, w;
+
+		memcpy(&v, b, sizeof(v));
+		memcpy(&w, b + sizeof(v), sizeof(w));
+		m4 |= ((v & 0x7f800000u) + 0x00800000u) | ((w & 0x7f800000u) + 0x00800000u);
+	}
 	for (; end - b >= (ptrdiff_t)sizeof(m4); b += sizeof(m4)) {
 		u32x4 v;
 
@@ -176,11 +188,22 @@ bool encode_frame_finite(const struct wire_frame *f, bool solved)
 		bad |= nonfinite_bits(f->in.analog, WIRE_SENSORS * WIRE_ANALOG);
 	if (!solved)
 		return !bad; /* the posture is NaN throughout: unknown */
-	for (int side = 0; side < WIRE_ARMS; side++)
-		bad |= nonfinite_bits(&f->arm[side].pos_err, 1);
+	{
+		float pos_err[WIRE_ARMS];
+
+		for (int side = 0; side < WIRE_ARMS; side++)
+			pos_err[side] = f->arm[side].pos_err;
+		bad |= nonfinite_bits(pos_err, WIRE_ARMS);
+	}
 	/* the head segment is the head sensor's own pose: NaN while the sensor is missing */
-	if (f->sensor[WIRE_S_HEAD].state != WIRE_SENSOR_MISSING)
-		bad |= nonfinite_bits(&f->segment[WIRE_SEG_HEAD], 7);
+	if (f->sensor[WIRE_S_HEAD].state != WIRE_SENSOR_MISSING) {
+		/* the joints and every segment: one run of floats (the assertion) */
+		_Static_assert(offsetof(struct wire_frame, segment) ==
+				       offsetof(struct wire_frame, joint) + WIRE_JOINTS * sizeof(float),
+			       "the segments follow the joints without a gap");
+		return !(bad | nonfinite_bits((const uint8_t *)f + offsetof(struct wire_frame, joint),
+					      WIRE_JOINTS + WIRE_SEGMENTS * 7));
+	}
 	return !(bad | nonfinite_bits(f->joint, WIRE_JOINTS) | nonfinite_bits(f->segment, WIRE_SEG_HEAD * 7) |
 		 nonfinite_bits(&f->segment[WIRE_SEG_HEAD + 1], (WIRE_SEGMENTS - WIRE_SEG_HEAD - 1) * 7));
 }

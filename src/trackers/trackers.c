@@ -159,17 +159,12 @@ static bool publishable(const struct dq *pose, double max_distance)
 	q[1] = (float)pose->r.x;
 	q[2] = (float)pose->r.y;
 	q[3] = (float)pose->r.z;
-	for (int i = 0; i < 3; i++) {
-		if (!isfinite(p[i]))
-			return false;
+	/* an infinite or NaN float makes its sum of squares infinite or NaN (no test per value) */
+	for (int i = 0; i < 3; i++)
 		d2 += (double)p[i] * p[i];
-	}
-	for (int i = 0; i < 4; i++) {
-		if (!isfinite(q[i]))
-			return false;
+	for (int i = 0; i < 4; i++)
 		n2 += (double)q[i] * q[i];
-	}
-	return d2 <= max_distance * max_distance && fabs(sqrt(n2) - 1.0) <= TRACKER_QUAT_TOL;
+	return isfinite(d2) && d2 <= max_distance * max_distance && fabs(sqrt(n2) - 1.0) <= TRACKER_QUAT_TOL;
 }
 
 void tracker_put(struct tracker *t, int sensor, const struct dq *local, uint64_t t_ns, uint64_t arrival_ns)
