@@ -27,6 +27,7 @@
  * listed for the control thread to log (replay_damage()).
  */
 #include "trackers/replay.h"
+#include "base/clock.h"
 #include "base/log.h"
 
 #include "config/builtin.h"
@@ -40,7 +41,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <sys/timerfd.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -791,23 +791,17 @@ static int replay_open(struct tracker *t, char *err, size_t errlen)
 	rp->cur_inst = -1;
 	rp->last_sample = -1;
 	rp->sample_period = 1.0 / opts_of(t->cfg)->sample_rate;
-	rp->tfd = timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
-	/* event mode: wake at the instants' mean rate, or the sample rate when interpolating */
 	rp->rlast = -1;
+	/* event mode: wake at the instants' mean rate, or the sample rate when interpolating */
 	dt = opts_of(t->cfg)->interpolate ? rp->sample_period
 	     : rp->n_inst		  ? rp->duration / (double)rp->n_inst
 					  : 1.0 / 240; /* only remote avatars: about a loop period */
 	dt /= opts_of(t->cfg)->step ? 1.0 : opts_of(t->cfg)->speed;
 	if (!(dt <= 1.0))
 		dt = 1.0; /* instants far apart (or a clip whose times are absurd): a look a second is enough */
-	if (rp->tfd >= 0) {
-		long ns = (long)(dt * 1e9);
-		struct itimerspec its = { { ns / 1000000000, ns % 1000000000 }, { ns / 1000000000, ns % 1000000000 } };
-
-		if (ns < 100000)
-			its.it_interval.tv_nsec = its.it_value.tv_nsec = 100000;
-		timerfd_settime(rp->tfd, 0, &its, NULL);
-	}
+	else if (dt < 0)
+		dt = 0;
+	rp->tfd = periodic_timerfd((uint64_t)(dt * 1e9));
 	t->priv = rp;
 	return 0;
 }

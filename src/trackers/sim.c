@@ -16,6 +16,7 @@
  */
 #include "trackers/tracker.h"
 #include "trackers/sim.h"
+#include "base/clock.h"
 
 #include "ik/arm.h"
 #include "ik/avatar.h"
@@ -25,7 +26,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <stdbool.h>
-#include <sys/timerfd.h>
 #include <unistd.h>
 
 static const struct cfg_key sim_keys[] = {
@@ -163,7 +163,6 @@ static int sim_open(struct tracker *t, char *err, size_t errlen)
 	const struct arm_dims dims = { 0.1732, 0.2886, 0.1955, 0.0 };
 	const struct vec3 head_off = { 0.008, -0.0386, 0.0967 };
 	struct avatar av;
-	struct timespec now;
 
 	if (!s) {
 		snprintf(err, errlen, "[source %s]: out of memory", cfg->name);
@@ -181,18 +180,9 @@ static int sim_open(struct tracker *t, char *err, size_t errlen)
 	for (int i = 0; i < s->n_table; i++)
 		sim_pose_at(&av, opts_of(cfg)->seed, i / opts_of(cfg)->sample_rate, &s->table[i * SIM_ROLES]);
 	s->period_ns = (uint64_t)llround(1e9 / opts_of(cfg)->sample_rate);
-	clock_gettime(CLOCK_MONOTONIC, &now);
-	s->t0_ns = (uint64_t)now.tv_sec * 1000000000ull + (uint64_t)now.tv_nsec;
+	s->t0_ns = mono_ns();
 	s->last = -1;
-	s->tfd = timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
-	if (s->tfd >= 0) {
-		struct itimerspec its = { { 0, (long)s->period_ns }, { 0, (long)s->period_ns } };
-
-		if (s->period_ns >= 1000000000ull)
-			its.it_interval = its.it_value = (struct timespec){ (time_t)(s->period_ns / 1000000000ull),
-									    (long)(s->period_ns % 1000000000ull) };
-		timerfd_settime(s->tfd, 0, &its, NULL);
-	}
+	s->tfd = periodic_timerfd(s->period_ns);
 	t->priv = s;
 	return 0;
 }
