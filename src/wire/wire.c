@@ -331,16 +331,26 @@ size_t wire_encode_frame(const struct wire_frame *f, uint8_t *buf)
 	return finish(&w);
 }
 
-int wire_decode_frame(const uint8_t *buf, size_t len, struct wire_frame *f)
+/* the header of a message of type want, and a reader of its payload; 0 or -WIRE_E* */
+static int payload_of(const uint8_t *buf, size_t len, int want, struct wire_header *h, struct rbuf *r)
 {
-	int type = wire_peek(buf, len, &f->h);
-	struct rbuf r;
+	int type = wire_peek(buf, len, h);
 
 	if (type < 0)
 		return type;
-	if (type != WIRE_FRAME)
+	if (type != want)
 		return -WIRE_ETYPE;
-	r = (struct rbuf){ buf, f->h.header_len, (size_t)f->h.header_len + f->h.payload_len, 0 };
+	*r = (struct rbuf){ buf, h->header_len, (size_t)h->header_len + h->payload_len, 0 };
+	return 0;
+}
+
+int wire_decode_frame(const uint8_t *buf, size_t len, struct wire_frame *f)
+{
+	struct rbuf r;
+	int rc = payload_of(buf, len, WIRE_FRAME, &f->h, &r);
+
+	if (rc)
+		return rc;
 	for (int i = 0; i < WIRE_SENSORS; i++) {
 		f->sensor[i].state = get_u8(&r);
 		(void)get_u8(&r);
@@ -447,14 +457,11 @@ size_t wire_encode_describe(const struct wire_describe *d, uint8_t *buf)
 
 int wire_decode_describe(const uint8_t *buf, size_t len, struct wire_describe *d)
 {
-	int type = wire_peek(buf, len, &d->h);
 	struct rbuf r;
+	int rc = payload_of(buf, len, WIRE_DESCRIBE, &d->h, &r);
 
-	if (type < 0)
-		return type;
-	if (type != WIRE_DESCRIBE)
-		return -WIRE_ETYPE;
-	r = (struct rbuf){ buf, d->h.header_len, (size_t)d->h.header_len + d->h.payload_len, 0 };
+	if (rc)
+		return rc;
 	d->rate_hz = get_f32(&r);
 	for (int i = 0; i < 4; i++)
 		d->dims[i] = get_f32(&r);
