@@ -23,6 +23,7 @@ static void check_names(const struct wire_describe *d)
 		FUZZ_CHECK(memchr(d->segment[i].name, 0, sizeof(d->segment[i].name)), "segment %d name", i);
 	for (int i = 0; i < WIRE_SENSORS; i++)
 		FUZZ_CHECK(memchr(d->sensor[i], 0, sizeof(d->sensor[i])), "sensor %d name", i);
+	FUZZ_CHECK(memchr(d->site.name, 0, sizeof(d->site.name)), "site name not terminated");
 }
 
 /* a name is a C string: what follows its first NUL is not part of it (nor encoded again) */
@@ -44,6 +45,7 @@ static void clean_names(struct wire_describe *d)
 		clean(d->segment[i].name, sizeof(d->segment[i].name));
 	for (int i = 0; i < WIRE_SENSORS; i++)
 		clean(d->sensor[i], sizeof(d->sensor[i]));
+	clean(d->site.name, sizeof(d->site.name));
 }
 
 /* what the encoder writes of its own (version, lengths, counts) may differ from a later version's */
