@@ -1144,8 +1144,11 @@ static void reach_qp(const struct reach_x g[2], const sc_t c[2], const bool act[
  * with the move (and the roll is not linear): REACH_ITERS rounds, each the
  * whole move again from the chest the head placed, with every arm that
  * needed a move in an earlier round kept in it (a move for one hand must
- * not take the other's shoulder out of its reach). Rewrites the targets;
- * returns whether the chest moved.
+ * not take the other's shoulder out of its reach). The linearised rounds
+ * need not improve on each other (arms spread to both sides: two lines
+ * nearly opposite, where the moves for either hand undo the other's), so
+ * the chest kept is the round's that leaves the hands least beyond reach,
+ * the last of equals. Rewrites the targets; returns whether the chest moved.
  */
 #define REACH_ITERS 3
 /* the hand brought 2 mm inside the straight arm's reach (1 mm: Q5.26's elbow of a straight arm 1 um off double) */
@@ -1158,12 +1161,14 @@ static bool reach_chest(const struct avatar *av, const struct dq *const hand[2],
 	const bool roll = (av->body.model & AVATAR_REACH_ROLL) != 0;
 	const sc_t sh = av->arm[ARM_RIGHT].dims.shoulder;
 	struct reach_x x = { { 0, 0, 0, 0 } }, g[2] = { { { 0, 0, 0, 0 } }, { { 0, 0, 0, 0 } } };
-	sc_t c[2] = { 0, 0 }, sr = 0, cr = SC_C(1);
+	sc_t c[2] = { 0, 0 }, sr = 0, cr = SC_C(1), best = SC_C(1e9), best_sr = 0;
+	struct vec3 dm = { 0, 0, 0 }, best_d = { 0, 0, 0 };
 	bool act[2] = { false, false }, moved = false;
 	int it, side;
 
-	for (it = 0; it < REACH_ITERS; it++) {
+	for (it = 0;; it++) {
 		bool need = false;
+		sc_t over = 0; /* the farthest hand beyond reach with this round's chest */
 
 		for (side = 0; side < 2; side++) {
 			const struct arm *a = &av->arm[side];
@@ -1185,8 +1190,14 @@ static bool reach_chest(const struct avatar *av, const struct dq *const hand[2],
 			c[side] = e + rx_dot(&g[side], &x);
 			act[side] = true;
 			need |= e > 0;
+			over = sc_max(over, e - REACH_MARGIN);
 		}
-		if (!need)
+		if (!(over > best)) {
+			best = over;
+			best_d = dm;
+			best_sr = sr;
+		}
+		if (!need || it == REACH_ITERS)
 			break;
 		reach_qp(g, c, act, &x);
 		{
@@ -1206,9 +1217,12 @@ static bool reach_chest(const struct avatar *av, const struct dq *const hand[2],
 			x.v[3] = -sc_mul(sr, sh);
 			cr = sc_sqrt(SC_C(1) - sc_mul(sr, sr));
 			chest_shift(&c0, d, sr, hand, chest, t);
+			dm = d;
 			moved = true;
 		}
 	}
+	if (moved && (best_d.x != dm.x || best_d.y != dm.y || best_d.z != dm.z || best_sr != sr))
+		chest_shift(&c0, best_d, best_sr, hand, chest, t);
 	return moved;
 }
 
