@@ -27,7 +27,8 @@
  *    hand both the sensor's position and its orientation, the hand still
  *    goes to the sensor's position and the wrist turns as far toward the
  *    orientation as its limits allow (the paper's Newton iteration and our
- *    solver otherwise trade position for orientation).
+ *    solver otherwise trade position for orientation). An option: the
+ *    folds of docs/FIDELITY.md do not choose it.
  *  - AVATAR_YAW_HANDS: the chest's yaw is the head's, pulled toward the
  *    heading of the line from the left to the right hand when the two
  *    agree (the head turns more often than the chest).
@@ -88,8 +89,8 @@ extern "C" {
 #define AVATAR_LEAN 0x200
 #define AVATAR_RAISE_ROLL 0x400
 #define AVATAR_MODEL_DEFAULT                                                                                           \
-	(AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_BOW |                 \
-	 AVATAR_KEEP_BRANCH | AVATAR_REACH_ROLL | AVATAR_BOW_HEAD | AVATAR_LEAN | AVATAR_RAISE_ROLL)
+	(AVATAR_HAND_ELBOW | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_BOW | AVATAR_KEEP_BRANCH |                 \
+	 AVATAR_REACH_ROLL | AVATAR_BOW_HEAD | AVATAR_LEAN | AVATAR_RAISE_ROLL)
 
 struct avatar_body {
 	struct arm_dims dims;	 /* the right arm (and the left one unless avatar_set_left_arm() says otherwise) */
