@@ -1072,7 +1072,7 @@ def discussion(results, names, cv, sa, sn):
              "two shoulder-wrist lines point nearly opposite ways and the reach move's rounds can undo each other: "
              "the round that leaves the farthest hand least beyond reach is kept. Position first (`reach-first`: the "
              "hand on its sensor, the wrist turned as far as it goes, or Newton's compromise from the last frame's "
-             "posture) is an option: it keeps 2 arm-frames of `cmu_131_02` on their sensors, and in 3 frames of "
+             "posture) is an option: it keeps a hand of `cmu_131_02` on its sensor in a frame or two, and in 3 frames of "
              "another clip it takes the place of the trunk's bend, which gives the elbow better.")
     if cv:
         key = config_key(toggled(SHIPPED, "hand-elbow"))
