@@ -709,6 +709,16 @@ static void test_hand_elbow(void **state)
 	assert_true(found[0] < n / 2);
 }
 
+/* the avatar of the reach tests: the sensors at the wrists (no hand length), the head 25 cm above the chain origin */
+static void wrist_avatar(struct avatar *av, struct ik_opts *o)
+{
+	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.0 };
+	const struct vec3 off = { 0, 0, 0.25 };
+
+	avatar_init(av, &dims, &off, NULL);
+	ik_default_opts(o);
+}
+
 /*
  * A right hand the arm reaches, turned beyond the wrist's deviation limit:
  * J2..J8 at random inside the middle 70 % of their ranges, J7 at 60 to 83
@@ -733,16 +743,13 @@ static void deviated_hand(const struct avatar *av, unsigned *seed, sc_t q[ARM_DO
  */
 static void test_reach_first(void **state)
 {
-	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.0 };
-	const struct vec3 off = { 0, 0, 0.25 };
 	struct avatar av;
 	struct ik_opts o;
 	unsigned seed = 11;
 	int off_paper = 0, unreachable = 0, n = 100;
 
 	(void)state;
-	avatar_init(&av, &dims, &off, NULL);
-	ik_default_opts(&o);
+	wrist_avatar(&av, &o);
 	for (int k = 0; k < n; k++) {
 		sc_t q[ARM_DOF] = { 0 };
 		struct dq head, ee, lee, fk;
@@ -789,17 +796,14 @@ static void test_reach_first(void **state)
  */
 static void test_track_compromise(void **state)
 {
-	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.0 };
-	const struct vec3 off = { 0, 0, 0.25 };
 	struct avatar av;
 	struct ik_opts o;
 	unsigned seed = 5;
 	int held = 0, worse = 0;
 
 	(void)state;
-	avatar_init(&av, &dims, &off, NULL);
+	wrist_avatar(&av, &o);
 	av.body.model |= AVATAR_REACH_FIRST; /* the compromise with the hand on its sensor */
-	ik_default_opts(&o);
 	for (int k = 0; k < 40; k++) {
 		sc_t q[ARM_DOF] = { 0 };
 		struct dq head, ee, lee;
@@ -946,16 +950,14 @@ static void test_chest_heading_consistent(void **state)
  */
 static void test_reach_spread(void **state)
 {
-	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.0 };
-	const struct vec3 off = { 0, 0, 0.25 }, hp = { 0.1, 0.3, 1.6 };
+	const struct vec3 hp = { 0.1, 0.3, 1.6 };
 	struct avatar av;
 	struct ik_opts o;
 	unsigned seed = 3;
 	int off_hands = 0, n = 3000;
 
 	(void)state;
-	avatar_init(&av, &dims, &off, NULL);
-	ik_default_opts(&o);
+	wrist_avatar(&av, &o);
 	for (int k = 0; k < n; k++) {
 		sc_t q[2][ARM_DOF];
 		struct dq head, chest, hand[2];
@@ -974,9 +976,9 @@ static void test_reach_spread(void **state)
 		quat_from_axis_angle(&(struct vec3){ 0, 1, 0 }, 0.05 * (2 * rnd01(&seed) - 1), &roll);
 		dq_from_rt(&(struct quat){ 1, 0, 0, 0 }, &hp, &head);
 		dq_from_rt(&roll,
-			   &(struct vec3){ hp.x - off.x + 0.02 * (2 * rnd01(&seed) - 1),
-					   hp.y - off.y + 0.02 * (2 * rnd01(&seed) - 1),
-					   hp.z - off.z + 0.02 * (2 * rnd01(&seed) - 1) },
+			   &(struct vec3){ hp.x - av.body.head_offset.x + 0.02 * (2 * rnd01(&seed) - 1),
+					   hp.y - av.body.head_offset.y + 0.02 * (2 * rnd01(&seed) - 1),
+					   hp.z - av.body.head_offset.z + 0.02 * (2 * rnd01(&seed) - 1) },
 			   &chest);
 		for (int side = 0; side < 2; side++) {
 			struct dq ee;
