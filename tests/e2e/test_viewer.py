@@ -10,6 +10,7 @@ replay grey, survive a restart of the daemon, and say so when it has no
 WebGL.
 
 Run from the repository root: python3 -m unittest tests/e2e/test_viewer.py"""
+import contextlib
 import json
 import signal
 import math
@@ -30,6 +31,24 @@ from wireframe import UdpListener  # noqa: E402
 from wsclient import WsClient  # noqa: E402
 
 AVATAR_RGB = (0x4F, 0xC3, 0xF7)  # the first colour of the page's palette
+
+
+@contextlib.contextmanager
+def viewer_page(test, conf):
+    """a daemon on conf (its viewer on {port}) and a headless Chromium on its page: (daemon, browser); the
+    browser closed and the daemon stopped (and its exit status checked) after"""
+    with tempfile.TemporaryDirectory() as tmp, tempfile.TemporaryDirectory() as profile:
+        port = free_port(socket.SOCK_STREAM)
+        d = Daemon(tmp, conf.format(port=port))
+        try:
+            b = Chromium(profile)
+            try:
+                b.call("Page.navigate", url="http://127.0.0.1:%d/" % port)
+                yield d, b
+            finally:
+                b.close()
+        finally:
+            test.assertEqual(d.stop(), 0)
 
 
 def close_to(a, b):
@@ -307,23 +326,13 @@ rate = 20
 """
 
     def test_stale_avatar_is_grey(self):
-        with tempfile.TemporaryDirectory() as tmp, tempfile.TemporaryDirectory() as profile:
-            port = free_port(socket.SOCK_STREAM)
-            d = Daemon(tmp, self.CONF.format(port=port))
-            try:
-                b = Chromium(profile)
-                try:
-                    b.call("Page.navigate", url="http://127.0.0.1:%d/" % port)
-                    st = wait_for(b, lambda s: s["frames"] >= 5 and s["staleAvatars"] == 1 and s["renders"] >= 5
-                                  and s["bodies"] == 1 and s["list"] and s["list"][0]["columns"] >= 2)
-                    shot = artefact("viewer-stale.png")
-                    b.screenshot(shot)
-                    cards = b.evaluate("document.getElementById('avatars').innerText")
-                    no_errors(self, b)
-                finally:
-                    b.close()
-            finally:
-                self.assertEqual(d.stop(), 0)
+        with viewer_page(self, self.CONF) as (d, b):
+            st = wait_for(b, lambda s: s["frames"] >= 5 and s["staleAvatars"] == 1 and s["renders"] >= 5
+                          and s["bodies"] == 1 and s["list"] and s["list"][0]["columns"] >= 2)
+            shot = artefact("viewer-stale.png")
+            b.screenshot(shot)
+            cards = b.evaluate("document.getElementById('avatars').innerText")
+            no_errors(self, b)
         self.assertEqual(st["greySensors"], 3)
         self.assertEqual(st["bonesDrawn"], 9)
         av = st["list"][0]
@@ -361,24 +370,14 @@ port = {port}
 """
 
     def test_hands_drop_out(self):
-        with tempfile.TemporaryDirectory() as tmp, tempfile.TemporaryDirectory() as profile:
-            port = free_port(socket.SOCK_STREAM)
-            d = Daemon(tmp, self.CONF.format(port=port))
-            try:
-                b = Chromium(profile)
-                try:
-                    b.call("Page.navigate", url="http://127.0.0.1:%d/" % port)
-                    st = wait_for(b, lambda s: s["list"] and s["list"][0]["sensors"] == ["OK", "STALE", "STALE"]
-                                  and s["list"][0]["strip"] == [0, 1, 1] and s["bodies"] == 1, PAGE_TIMEOUT + 20)
-                    # a second more of the dropout on the strip, for the picture
-                    wait_for(b, lambda s: s["list"][0]["columns"] >= st["list"][0]["columns"] + 4)
-                    b.screenshot(artefact("viewer-dropout.png"))
-                    card = b.evaluate("document.querySelector('#avatars .card .state').textContent")
-                    no_errors(self, b)
-                finally:
-                    b.close()
-            finally:
-                self.assertEqual(d.stop(), 0)
+        with viewer_page(self, self.CONF) as (d, b):
+            st = wait_for(b, lambda s: s["list"] and s["list"][0]["sensors"] == ["OK", "STALE", "STALE"]
+                          and s["list"][0]["strip"] == [0, 1, 1] and s["bodies"] == 1, PAGE_TIMEOUT + 20)
+            # a second more of the dropout on the strip, for the picture
+            wait_for(b, lambda s: s["list"][0]["columns"] >= st["list"][0]["columns"] + 4)
+            b.screenshot(artefact("viewer-dropout.png"))
+            card = b.evaluate("document.querySelector('#avatars .card .state').textContent")
+            no_errors(self, b)
         self.assertEqual(card, "stale: L hand, R hand")
         self.assertEqual(st["greySensors"], 2)
         self.assertEqual(st["staleAvatars"], 1)
@@ -408,45 +407,35 @@ port = {port}
 """
 
     def test_two_avatars_and_follow(self):
-        with tempfile.TemporaryDirectory() as tmp, tempfile.TemporaryDirectory() as profile:
-            port = free_port(socket.SOCK_STREAM)
-            d = Daemon(tmp, self.CONF.format(port=port))
-            try:
-                b = Chromium(profile)
-                try:
-                    b.call("Page.navigate", url="http://127.0.0.1:%d/" % port)
-                    st = wait_for(b, lambda s: s["avatars"] == 2 and s["bodies"] == 2 and s["renders"] >= 10
-                                  and len(s["list"]) == 2 and all(a["name"] for a in s["list"])
-                                  and s["offSensors"] == 2 and sorted(a["off"] for a in s["list"]) == [0, 2])
-                    b.screenshot(artefact("viewer-two.png"))
-                    cards = b.evaluate("document.getElementById('avatars').innerText")
-                    ids = {a["name"]: a["id"] for a in st["list"]}
-                    # both are on the picture, apart
-                    pa = b.evaluate("window.avatargwProject(%d)" % ids["alice"])
-                    pb = b.evaluate("window.avatargwProject(%d)" % ids["bob"])
-                    # a click on bob's body follows bob (the camera may still be moving to frame them both:
-                    # click where he is now, again until the page follows someone)
-                    deadline = time.time() + PAGE_TIMEOUT
-                    followed_bob = None
-                    while followed_bob is None and time.time() < deadline:
-                        p = b.evaluate("window.avatargwProject(%d)" % ids["bob"])
-                        for kind in ("mousePressed", "mouseReleased"):
-                            b.call("Input.dispatchMouseEvent", type=kind, x=p[0], y=p[1], button="left", clickCount=1)
-                        t = time.time()
-                        while followed_bob is None and time.time() < t + 2:
-                            followed_bob = b.evaluate("window.avatargwStats.following")
-                            time.sleep(0.1)
-                    # a click on alice's card follows her
-                    b.evaluate("document.querySelectorAll('#avatars .card')[%d].click()"
-                               % [a["name"] for a in st["list"]].index("alice"))
-                    followed_alice = wait_for(b, lambda s: s["following"] == ids["alice"], 10)["following"]
-                    b.evaluate("document.getElementById('frameall').click()")
-                    unfollowed = wait_for(b, lambda s: s["following"] is None, 10)
-                    no_errors(self, b)
-                finally:
-                    b.close()
-            finally:
-                self.assertEqual(d.stop(), 0)
+        with viewer_page(self, self.CONF) as (d, b):
+            st = wait_for(b, lambda s: s["avatars"] == 2 and s["bodies"] == 2 and s["renders"] >= 10
+                          and len(s["list"]) == 2 and all(a["name"] for a in s["list"])
+                          and s["offSensors"] == 2 and sorted(a["off"] for a in s["list"]) == [0, 2])
+            b.screenshot(artefact("viewer-two.png"))
+            cards = b.evaluate("document.getElementById('avatars').innerText")
+            ids = {a["name"]: a["id"] for a in st["list"]}
+            # both are on the picture, apart
+            pa = b.evaluate("window.avatargwProject(%d)" % ids["alice"])
+            pb = b.evaluate("window.avatargwProject(%d)" % ids["bob"])
+            # a click on bob's body follows bob (the camera may still be moving to frame them both:
+            # click where he is now, again until the page follows someone)
+            deadline = time.time() + PAGE_TIMEOUT
+            followed_bob = None
+            while followed_bob is None and time.time() < deadline:
+                p = b.evaluate("window.avatargwProject(%d)" % ids["bob"])
+                for kind in ("mousePressed", "mouseReleased"):
+                    b.call("Input.dispatchMouseEvent", type=kind, x=p[0], y=p[1], button="left", clickCount=1)
+                t = time.time()
+                while followed_bob is None and time.time() < t + 2:
+                    followed_bob = b.evaluate("window.avatargwStats.following")
+                    time.sleep(0.1)
+            # a click on alice's card follows her
+            b.evaluate("document.querySelectorAll('#avatars .card')[%d].click()"
+                       % [a["name"] for a in st["list"]].index("alice"))
+            followed_alice = wait_for(b, lambda s: s["following"] == ids["alice"], 10)["following"]
+            b.evaluate("document.getElementById('frameall').click()")
+            unfollowed = wait_for(b, lambda s: s["following"] is None, 10)
+            no_errors(self, b)
         self.assertEqual(sorted(ids), ["alice", "bob"])
         self.assertEqual({a["name"]: a["off"] for a in st["list"]}, {"alice": 0, "bob": 2})
         self.assertLess(st["boneMismatch"], 0.002)  # bob's short bones too
