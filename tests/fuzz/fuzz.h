@@ -14,6 +14,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <arpa/inet.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <stddef.h>
@@ -28,6 +29,20 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 int LLVMFuzzerInitialize(int *argc, char ***argv);
+
+/* a TCP port of the loopback that was free a moment ago (for a harness's own server) */
+static inline int fuzz_free_port(void)
+{
+	struct sockaddr_in a = { .sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK) };
+	socklen_t l = sizeof(a);
+	int fd = socket(AF_INET, SOCK_STREAM, 0), p;
+
+	if (fd < 0 || bind(fd, (struct sockaddr *)&a, sizeof(a)) || getsockname(fd, (struct sockaddr *)&a, &l))
+		abort();
+	p = ntohs(a.sin_port);
+	close(fd);
+	return p;
+}
 
 #define FUZZ_CHECK(cond, ...)                                                                                          \
 	do {                                                                                                           \

@@ -39,25 +39,12 @@ static int port;
 static uint8_t frame[2][WIRE_MAX_MSG];
 static struct wire_frame wf[2];
 
-static int free_port(void)
-{
-	struct sockaddr_in a = { .sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK) };
-	socklen_t l = sizeof(a);
-	int fd = socket(AF_INET, SOCK_STREAM, 0), p;
-
-	if (fd < 0 || bind(fd, (struct sockaddr *)&a, sizeof(a)) || getsockname(fd, (struct sockaddr *)&a, &l))
-		abort();
-	p = ntohs(a.sin_port);
-	close(fd);
-	return p;
-}
-
 static void setup(void)
 {
 	static const uint16_t ids[2] = { 0, 7 };
 	char text[512], err[256];
 	for (int tries = 0;; tries++) {
-		port = free_port();
+		port = fuzz_free_port();
 		snprintf(text, sizeof(text),
 			 "[source s]\ntype = sim\npeople = 2\n[avatar a]\nid = 0\nperson = s/p0\n[avatar b]\nid = 7\n"
 			 "person = s/p1\n[output v]\ntype = vrpn\naddress = 127.0.0.1\nport = %d\nmax_clients = 2\n"
