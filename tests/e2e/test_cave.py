@@ -5,11 +5,12 @@ driving an avatar: the second's hands follow the first's published hand
 poses within 1 mm), the server stopped and started again, over UDP and
 over TCP only; against fake servers written here (garbage instead of a
 cookie, a message of a length no VRPN peer writes, a stall in the middle
-of a message, cut UDP datagrams, a flood), each counted while the daemon
-runs on; the dtrack source fed frames over UDP from the published format
+of a message, cut UDP datagrams, a flood, values no tracker reports),
+each counted while the daemon runs on; the dtrack source fed frames over UDP from the published format
 (poses, a Flystick's buttons and joystick, bodies appearing and
 disappearing, untracked bodies, empty frames, very long lines, CRLF, cut
-datagrams, a sender that stops and starts again); avatargw --probe.
+datagrams, hostile values, a sender that stops and starts again);
+avatargw --probe.
 
 Run from the repository root: python3 -m unittest tests/e2e/test_cave.py
 (BUILD=build-san selects the sanitizer build)."""
@@ -190,6 +191,24 @@ class VrpnLoopbackTest(unittest.TestCase):
 
 # ---- fake VRPN servers -----------------------------------------------------------------
 
+def check_published(tc, frames, limit=100.0):
+    """every number a frame publishes for a sensor that is not MISSING is finite, within limit metres of the
+    origin, its rotation a unit quaternion; every joint angle finite unless all are NaN (no solution)"""
+    for f in frames:
+        for s in f["sensors"]:
+            if s["state"] == "MISSING":
+                continue
+            for v in s["p"] + s["q"]:
+                tc.assertTrue(v is not None and math.isfinite(v), "a non-finite sensor value published: %r" % (f,))
+            tc.assertLessEqual(math.sqrt(sum(v * v for v in s["p"])), limit * 1.0001, "beyond max_distance: %r" % s)
+            tc.assertAlmostEqual(math.sqrt(sum(v * v for v in s["q"])), 1.0, delta=1e-3)
+        # avatargw-dump prints a number that is not finite as null: the joints and segments are all numbers,
+        # or all null (no solution yet)
+        nums = list(f["joints"].values()) + [v for seg in f["segments"].values() for v in seg["p"] + seg["q"]]
+        if any(v is not None for v in nums):
+            tc.assertTrue(all(v is not None for v in nums), "a non-finite joint or segment published: %r" % (f,))
+
+
 class FakeServer:
     """a TCP server speaking (or not) VRPN, one behaviour per instance; each connection in a thread"""
 
@@ -333,6 +352,29 @@ def flood(srv, conn):
     time.sleep(3)
 
 
+def hostile(srv, conn):
+    """channel 0 good throughout; channel 1 good, then values no tracker reports (non-finite, beyond float32,
+    500 m away, rotations that are not rotations) among good ones; channel 2 good, then only hostile"""
+    conn.sendall(vc.cookie())
+    srv.read_cookie_and_udp(conn)
+    srv.describe(conn)
+    inf, nan = float("inf"), float("nan")
+    bad = [((inf, 0, 1), (0, 0, 0, 1)), ((0, nan, 1), (0, 0, 0, 1)), ((0, 0, 1e300), (0, 0, 0, 1)),
+           ((500, 0, 1), (0, 0, 0, 1)), ((0, 0, 1), (0, 0, 0, 0)), ((0, 0, 1), (0, 3, 0, 0)),
+           ((0, 0, 1), (nan, 0, 0, 1)), ((0, 0, 1), (0, 0, 0, 1e300))]
+    for i in range(300):
+        msg = pos_quat(0, (0.1, 0.2, 1.6), (0, 0, 0, 1))
+        if i < 20 or i % 2:
+            msg += pos_quat(1, (-0.3, 0.1, 1.1), (0, 0, 0, 1))
+        else:
+            msg += pos_quat(1, *bad[(i // 2) % len(bad)])
+        msg += pos_quat(2, *(((0.3, 0.1, 1.1), (0, 0, 0, 1)) if i < 20 else bad[i % len(bad)]))
+        conn.sendall(msg)
+        time.sleep(0.01)
+    srv.hostile_done = True
+    time.sleep(30)
+
+
 FAKE_CONF_HEAD = """
 [daemon]
 rate = 240
@@ -345,6 +387,10 @@ person = sim/p0
 head = good/0
 left_hand = good/0
 right_hand = good/0
+[avatar hostile]
+head = hostile/0
+left_hand = hostile/1
+right_hand = hostile/2
 [output udp]
 type = udp
 address = 127.0.0.1
@@ -367,7 +413,8 @@ class VrpnFakeServerTest(unittest.TestCase):
     def setUpClass(cls):
         cls.tmpd = tempfile.TemporaryDirectory()
         cls.servers = {"cookie": FakeServer(garbage_cookie), "good": FakeServer(good_then_bad),
-                       "stall": FakeServer(stall), "cut": FakeServer(udp_cut), "flood": FakeServer(flood)}
+                       "stall": FakeServer(stall), "cut": FakeServer(udp_cut), "flood": FakeServer(flood),
+                       "hostile": FakeServer(hostile)}
         cls.uport = free_port()
         conf = FAKE_CONF_HEAD.format(uport=cls.uport)
         for name, srv in cls.servers.items():
@@ -420,6 +467,27 @@ class VrpnFakeServerTest(unittest.TestCase):
     def test_flood(self):
         wait_for("the flood read", lambda: source(self.d, "flood")["samples"] > 10000, limit=30)
         self.assertLoopRuns()
+
+    def test_hostile_values(self):
+        """values no tracker reports are counted as malformed and never published: the sensor keeps its last
+        good pose (STALE when only hostile values come), every published number finite, within max_distance,
+        every rotation a unit quaternion"""
+        srv = self.servers["hostile"]
+        seen = []
+        end = time.time() + 30
+        while not getattr(srv, "hostile_done", False) and time.time() < end:
+            seen += [m for _, m in dump(["--udp", "127.0.0.1:%d" % self.uport], 150, timeout=10)
+                     if m["type"] == "frame" and m["avatar"] == 2]
+        self.assertTrue(getattr(srv, "hostile_done", False), "the hostile server never finished")
+        st = wait_for("the hostile reports counted", lambda: (lambda s: s if s["malformed"] >= 250 else None)(
+            source(self.d, "hostile")))
+        self.assertGreater(len(seen), 50, "too few frames of the hostile source's avatar")
+        check_published(self, seen)
+        # the right hand had only hostile values after its first 20 reports: STALE at its last good pose
+        last = seen[-1]["sensors"][2]
+        self.assertEqual(last["state"], "STALE")
+        self.assertEqual([round(v, 5) for v in last["p"]], [0.3, 0.1, 1.1])
+        self.assertGreater(st["samples"], 300)
 
     def assertLoopRuns(self):
         """the loop was never held by the source: it keeps making cycles and the simulated avatar stays OK
@@ -535,6 +603,35 @@ class DtrackTest(unittest.TestCase):
         self.assertAlmostEqual(ins["right_hand"]["analog"][0], -0.5, places=6)
         self.assertAlmostEqual(ins["right_hand"]["analog"][1], 1.0, places=6)
         self.assertEqual(self.d.status()["sources"][0]["malformed"], malformed)
+
+    def test_hostile_values(self):
+        """positions and rotations no tracker reports (nan, inf, beyond float32, 200 m away, a matrix that is
+        not a rotation) are counted as malformed and never published; the body keeps its last good pose"""
+        st0 = self.d.status()["sources"][0]
+        bad_pos = ["nan 0 1700", "0 inf 1700", "1e42 0 1700", "200000 0 1700", "0 0 -inf"]
+        zero = " ".join(["0.0"] * 9)
+        twice = " ".join(["2.0" if i in (0, 4, 8) else "0.0" for i in range(9)])
+
+        def make(k):
+            type(self).fr += 1
+            good = k < 20
+            p0 = "100 200 1700" if good or k % 2 else bad_pos[k % len(bad_pos)]
+            m1 = IDENT if good else (zero, twice, "nan " + IDENT[9:])[k % 3]
+            lines = ["fr %d" % self.fr, "6d 2 [0 1.000][%s][%s] [1 1.000][-300 100 1000][%s]" % (p0, IDENT, m1)]
+            return ("\n".join(lines) + "\n").encode()
+        t = self.stream(3, make)
+        got = self.frames(400)
+        t.join()
+        st = wait_for("the hostile bodies counted", lambda: (lambda s: s if s["malformed"] - st0["malformed"] >= 100
+                                                              else None)(self.d.status()["sources"][0]))
+        check_published(self, got)
+        heads = [f["sensors"][0] for f in got if f["sensors"][0]["state"] != "MISSING"]
+        self.assertTrue(heads)
+        for h in heads:
+            self.assertEqual([round(v, 4) for v in h["p"]], [0.1, 0.2, 1.7])
+        lefts = [f["sensors"][1] for f in got if f["sensors"][1]["state"] != "MISSING"]
+        self.assertIn("STALE", [s_["state"] for s_ in lefts], "the left hand had only hostile rotations")
+        self.assertGreater(st["samples"], st0["samples"])
 
     def test_odd_frames(self):
         """bodies appearing, disappearing and untracked go STALE, never frozen OK; empty frames, CRLF, very
