@@ -627,6 +627,63 @@ static void test_replay_remote_only(void **state)
 	unlink(path);
 }
 
+/* a stepped replay plays the remote avatars too: at each instant, what was recorded up to its time */
+static void test_replay_remote_stepped(void **state)
+{
+	static struct rec_buf r;
+	static struct config cfg;
+	static struct wire_describe d, dout;
+	char path[] = "/tmp/avatargw-test-recfile-XXXXXX", text[256], err[512];
+	struct tracker_clock now = { 1000000000000ull, 0 };
+	struct wire_frame f, out;
+	struct tracker t;
+	uint8_t msg[WIRE_MAX_MSG];
+	bool described, fresh;
+
+	(void)state;
+	/* instants every 10 ms from 1 ms, the remote avatar's frames 5 ms after each */
+	remote_start(&r, &d, 1000000);
+	for (int i = 0; i < 6; i++) {
+		for (uint16_t s = 0; s < 3; s++)
+			put_sample(&r, 0, s, 1000000 + 10000000 * (uint64_t)i, false);
+		memset(&f, 0, sizeof(f));
+		f.h.avatar_id = 1000;
+		f.h.sample_time_ns = 77 + (uint64_t)i;
+		f.joint[5] = 0.1f * (float)i;
+		put_remote(&r, 6000000 + 10000000 * (uint64_t)i, msg, wire_encode_frame(&f, msg));
+	}
+	write_temp(&r, path);
+	snprintf(text, sizeof(text), "[source r]\ntype = replay\nfile = %s\nstep = yes\nloop = no\n", path);
+	assert_int_equal(config_load_text(&cfg, "t.conf", text, err, sizeof(err)), 0);
+	assert_int_equal(tracker_open(&t, &cfg.source[0], err, sizeof(err)), 0);
+	assert_int_equal(t.drv->solved_count(&t), 1);
+	/* the first instant: the DESCRIBE recorded with it, no frame yet */
+	assert_int_equal(t.drv->poll(&t, &now), 3);
+	assert_false(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	/* no step, however long: nothing new */
+	now.mono_ns += 1000000000;
+	assert_int_equal(t.drv->poll(&t, &now), 0);
+	assert_false(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	for (int k = 1; k < 6; k++) {
+		assert_int_equal(replay_step(&t, 1), 0);
+		now.mono_ns += 1000000;
+		assert_int_equal(t.drv->poll(&t, &now), 3);
+		assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+		assert_true(fresh);
+		assert_true(out.h.sample_time_ns == 77 + (uint64_t)(k - 1) && out.joint[5] == 0.1f * (float)(k - 1));
+	}
+	/* the step past the last instant ends the source and plays the frame recorded after it */
+	assert_int_equal(replay_step(&t, 1), 0);
+	now.mono_ns += 1000000;
+	assert_int_equal(t.drv->poll(&t, &now), 0);
+	assert_int_equal(atomic_load(&t.st.state), TRACKER_ENDED);
+	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	assert_true(out.h.sample_time_ns == 82 && out.joint[5] == 0.5f);
+	tracker_close(&t);
+	config_free(&cfg);
+	unlink(path);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -642,6 +699,7 @@ int main(void)
 		cmocka_unit_test(test_no_session),
 		cmocka_unit_test(test_index_remote),
 		cmocka_unit_test(test_replay_remote_only),
+		cmocka_unit_test(test_replay_remote_stepped),
 		cmocka_unit_test(test_replay_damaged_first_session),
 		cmocka_unit_test(test_replay_nonfinite_analog),
 	};

@@ -995,12 +995,17 @@ static int poll_stepped(struct tracker *t, struct replay *rp, const struct track
 
 		if (!opts_of(t->cfg)->loop && next >= (int64_t)rp->n_inst) {
 			atomic_store_explicit(&t->st.state, TRACKER_ENDED, memory_order_relaxed);
+			play_remote(rp, 0, rp->duration, now->mono_ns); /* the remote avatars' last messages */
 			break;
 		}
 		for (size_t i = rp->inst[k]; i < rp->inst[k + 1]; i++, put++)
 			put_event(t, &rp->ev[i], now->mono_ns, now);
 		rp->cur_inst = next;
 	}
+	/* the remote avatars as they were at the instant played (recorded up to its time, this pass) */
+	if (rp->cur_inst >= 0)
+		play_remote(rp, rp->cur_inst / (int64_t)rp->n_inst,
+			    rp->ev[rp->inst[rp->cur_inst % (int64_t)rp->n_inst]].t, now->mono_ns);
 	return put;
 }
 
@@ -1039,13 +1044,11 @@ static int poll_interpolated(struct tracker *t, struct replay *rp, const struct 
 		ct = el;
 		if (ct > rp->duration) {
 			atomic_store_explicit(&t->st.state, TRACKER_ENDED, memory_order_relaxed);
-			if (!opts_of(cfg)->step)
-				play_remote(rp, 0, ct, now->mono_ns); /* the remote avatars' last messages */
+			play_remote(rp, 0, ct, now->mono_ns); /* the remote avatars' last messages */
 			return 0;
 		}
 	}
-	if (!opts_of(cfg)->step)
-		play_remote(rp, opts_of(cfg)->loop ? (int64_t)floor(el / rp->duration) : 0, ct, now->mono_ns);
+	play_remote(rp, opts_of(cfg)->loop ? (int64_t)floor(el / rp->duration) : 0, ct, now->mono_ns);
 	for (uint32_t s = 0; s < rp->n_sensors; s++) {
 		struct replay_track *tk = &rp->track[s];
 		struct kf_pose o;
