@@ -791,6 +791,26 @@ static void test_out_extended_ids(void **state)
 	out_teardown(x);
 }
 
+/* the identifiers are checked again at start with every avatar carried (a replayed recording's remote
+ * avatars are known only then): two configured avatars fit below 0x7FF from 0x7F0, a third does not */
+static void test_out_id_room_at_start(void **state)
+{
+	struct config c;
+	struct output o;
+	char text[1024], err[512];
+	const uint16_t ids[3] = { 0, 1, 1000 };
+
+	(void)state;
+	snprintf(text, sizeof(text), out_conf, "agwnocan0", "base_id = 0x7F0\n");
+	assert_int_equal(config_load_text(&c, "can.conf", text, err, sizeof(err)), 0);
+	assert_int_equal(output_open(&o, &c.output[0], ids, 2, NULL, err, sizeof(err)), 0);
+	output_close(&o);
+	assert_int_not_equal(output_open(&o, &c.output[0], ids, 3, NULL, err, sizeof(err)), 0);
+	print_message("%s\n", err);
+	assert_non_null(strstr(err, "[output can]: base_id: 3 avatars need identifiers up to 0x804, above 0x7FF"));
+	config_free(&c);
+}
+
 static void test_out_without_can(void **state)
 {
 	struct out_fx *x = out_setup("agwnocan0", "");
@@ -1019,6 +1039,7 @@ int main(void)
 		cmocka_unit_test(test_out_safe_stops),
 		cmocka_unit_test(test_out_full_queue),
 		cmocka_unit_test(test_out_extended_ids),
+		cmocka_unit_test(test_out_id_room_at_start),
 		cmocka_unit_test(test_out_without_can),
 		cmocka_unit_test(test_in_golden),
 		cmocka_unit_test(test_in_records),

@@ -73,20 +73,25 @@ static const struct cfg_key can_keys[] = {
 	  .doc = "safe mode: fastest change of any joint's command" },
 };
 
-/* the identifiers of every avatar the output carries exist (8 per avatar, 5 used: docs/CAN.md) */
-static int can_out_check(const struct config *c, const void *section, const char **key, char *why, size_t len)
+/* the identifiers of n avatars exist (8 per avatar, 5 used: docs/CAN.md); -1 and why if not */
+static int id_room(const struct can_out_opts *opt, long n, char *why, size_t len)
 {
-	const struct cfg_output *o = section;
-	const struct can_out_opts *opt = o->opt;
-	long n = cfg_output_avatars(c, o), max = opt->extended_ids ? 0x1FFFFFFFL : 0x7FFL;
-	long last = opt->base_id + 8 * (n - 1) + 4;
+	long max = opt->extended_ids ? 0x1FFFFFFFL : 0x7FFL, last = opt->base_id + 8 * (n - 1) + 4;
 
 	if (!n || last <= max)
 		return 0;
-	*key = "type";
 	snprintf(why, len, "base_id: %ld avatars need identifiers up to 0x%lX, above 0x%lX%s", n, last, max,
 		 opt->extended_ids ? "" : " (extended_ids = yes gives 29 bits)");
 	return -1;
+}
+
+/* at configuration time: the configured avatars and [site]'s slots */
+static int can_out_check(const struct config *c, const void *section, const char **key, char *why, size_t len)
+{
+	const struct cfg_output *o = section;
+
+	*key = "type";
+	return id_room(o->opt, cfg_output_avatars(c, o), why, len);
 }
 
 static const struct can_out_opts *opts_of(const struct cfg_output *c)
@@ -150,6 +155,12 @@ static int can_out_open(struct output *o, char *err, size_t errlen)
 	}
 	for (int i = 0; i < o->n_avatars; i++)
 		c->slot[i] = o->wants[i] ? c->n++ : -1;
+	/* at start: every avatar carried, a replayed recording's remote avatars too */
+	if (id_room(opts_of(cfg), c->n, why, sizeof(why))) {
+		snprintf(err, errlen, "[output %s]: %s", cfg->name, why);
+		free_priv(c);
+		return -EINVAL;
+	}
 	rc = can_port_open(&c->port, opts_of(cfg)->interface, false, why, sizeof(why));
 	if (rc) {
 		/* not a reason to stop the daemon: this output stays quiet, the others run */
