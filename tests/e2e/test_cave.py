@@ -121,7 +121,8 @@ class VrpnLoopbackTest(unittest.TestCase):
         assert rcs == [0, 0, 0], "daemon exit statuses %s" % rcs
 
     def follow(self, listener, name):
-        """the reader's published sensors are the publisher's published sensors, within 1 mm"""
+        """each of the reader's published sensors is one of the publisher's published poses of that sensor,
+        within 1 mm"""
         def ok_frames(lst):
             return len([f for f in lst.snapshot() if all(s["state"] == 0 for s in f["sensors"])])
         # both streams: a loaded host may start one daemon later than the other
@@ -140,10 +141,12 @@ class VrpnLoopbackTest(unittest.TestCase):
             lo = bisect.bisect_left(times, f["t_ns"] - 100000000)
             hi = bisect.bisect_right(times, f["t_ns"] + 100000000)
             self.assertLess(lo, hi, "%s: no published frame near the sample time %d" % (name, f["t_ns"]))
-            best = min(max(math.dist(a, b) for a, b in zip(mine, r)) for _, r in pub[lo:hi])
-            worst = max(worst, best)
+            # sensor by sensor: VRPN sends each channel's report alone, so a reader's cycle may take the head
+            # of one published frame and a hand of the next (a frame's movement apart, 8 mm on fast motion)
+            for i, a in enumerate(mine):
+                worst = max(worst, min(math.dist(a, r[i]) for _, r in pub[lo:hi]))
             distinct.add(tuple(mine))
-        self.assertLess(worst, 0.001, "%s: a frame's sensors are %.4f m from every published frame's" % (name, worst))
+        self.assertLess(worst, 0.001, "%s: a sensor is %.4f m from every pose the publisher published for it" % (name, worst))
         # they move: not one pose held
         self.assertGreater(len(distinct), 50)
         return worst
