@@ -684,6 +684,61 @@ static void test_replay_remote_stepped(void **state)
 	unlink(path);
 }
 
+/* a remote avatar whose site left while recording (its DESCRIBE saying gone): no frames in the replay from
+ * then on, as live, until a frame of it comes again (then its DESCRIBE at once) */
+static void test_replay_remote_departure(void **state)
+{
+	static struct rec_buf r;
+	static struct config cfg;
+	static struct wire_describe d, dout;
+	char path[] = "/tmp/avatargw-test-recfile-XXXXXX", text[256], err[512];
+	struct tracker_clock now = { 1000000000000ull, 0 };
+	struct wire_frame f, out;
+	struct tracker t;
+	uint8_t msg[WIRE_MAX_MSG];
+	bool described, fresh;
+
+	(void)state;
+	remote_start(&r, &d, 1000000);
+	for (int i = 0; i < 4; i++) {
+		memset(&f, 0, sizeof(f));
+		f.h.avatar_id = 1000;
+		f.h.sample_time_ns = 77 + (uint64_t)(i == 3 ? 100 : i);
+		put_remote(&r, 1000000 + 10000000 * (uint64_t)(i == 3 ? 10 : i), msg, wire_encode_frame(&f, msg));
+		if (i == 2) {
+			d.site.state = WIRE_SITE_GONE; /* 25 ms: its site left */
+			put_remote(&r, 26000000, msg, wire_encode_describe(&d, msg));
+			d.site.state = WIRE_SITE_PRESENT;
+		}
+	}
+	write_temp(&r, path);
+	snprintf(text, sizeof(text), "[source r]\ntype = replay\nfile = %s\nloop = no\n", path);
+	assert_int_equal(config_load_text(&cfg, "t.conf", text, err, sizeof(err)), 0);
+	assert_int_equal(tracker_open(&t, &cfg.source[0], err, sizeof(err)), 0);
+	t.drv->poll(&t, &now);
+	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	assert_true(described && out.h.sample_time_ns == 77);
+	now.mono_ns += 21000000;
+	t.drv->poll(&t, &now);
+	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	assert_true(fresh && !described && out.h.sample_time_ns == 79);
+	/* gone: nothing, not even stale frames */
+	for (int k = 0; k < 7; k++) {
+		now.mono_ns += 10000000;
+		t.drv->poll(&t, &now);
+		assert_false(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	}
+	/* back at 100 ms: its frame, and its DESCRIBE again */
+	now.mono_ns += 10000000;
+	t.drv->poll(&t, &now);
+	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	assert_true(fresh && described && out.h.sample_time_ns == 177);
+	assert_int_equal(dout.site.state, WIRE_SITE_PRESENT);
+	tracker_close(&t);
+	config_free(&cfg);
+	unlink(path);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -700,6 +755,7 @@ int main(void)
 		cmocka_unit_test(test_index_remote),
 		cmocka_unit_test(test_replay_remote_only),
 		cmocka_unit_test(test_replay_remote_stepped),
+		cmocka_unit_test(test_replay_remote_departure),
 		cmocka_unit_test(test_replay_damaged_first_session),
 		cmocka_unit_test(test_replay_nonfinite_analog),
 	};

@@ -163,10 +163,16 @@ struct wire_segment_desc {
 #define WIRE_SITE_NAME_MAX 31
 #define WIRE_SITE_BLOCK 1 /* the block's tag */
 
+/* a remote avatar's site as the daemon sees it (its DESCRIBE's site block) */
+enum wire_site_state {
+	WIRE_SITE_PRESENT = 0,
+	WIRE_SITE_GONE = 1, /* left (its lease ran out, or it said goodbye) */
+};
+
 struct wire_site {
 	bool present;
 	char name[WIRE_SITE_NAME_MAX + 1];
-	uint8_t state;	       /* 0 present, 1 gone */
+	uint8_t state;	       /* enum wire_site_state */
 	uint16_t avatars;      /* the site's avatars here now */
 	float rate_hz;	       /* its frames arriving per second, all its avatars */
 	uint32_t frames;       /* received from it */

@@ -237,7 +237,8 @@ static double us(uint64_t ns)
 /*
  * Remote avatar k (gateway av[n_avatars + k]): its name ("SITE/NAME") and
  * state word; false for a slot that never had one. A [site] slot whose site
- * left is GONE; a replayed one counts once it has published.
+ * left is GONE; a replayed one counts once it has published, and is GONE
+ * where the recording says its site left.
  */
 static bool remote_row(struct gateway *g, int k, char *name, size_t len, const char **state, const char **via)
 {
@@ -256,6 +257,7 @@ static bool remote_row(struct gateway *g, int k, char *name, size_t len, const c
 			return false;
 		snprintf(name, len, "%s", a->solved_trk->drv->solved_name(a->solved_trk, a->solved_k, &id));
 		*via = a->solved_trk->name;
+		live = !atomic_load_explicit(&a->st.gone, memory_order_relaxed);
 	}
 	*state = live ? sensor_states[st] : "GONE";
 	return true;

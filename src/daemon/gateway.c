@@ -470,6 +470,26 @@ static int queue_describe(struct gateway *g, struct gw_avatar *a, int i, uint64_
 }
 
 /*
+ * A remote avatar that published and now left (its site's lease ran out or
+ * it stopped; in a replay, the recording says so): recorded as its DESCRIBE
+ * with the site block saying gone, which a replay takes as the departure.
+ */
+static void remote_left(struct gateway *g, struct gw_avatar *a, int k, uint64_t now_ns)
+{
+	struct wire_describe d = *a->describe;
+	uint8_t msg[WIRE_MAX_MSG];
+
+	atomic_store_explicit(&a->st.gone, 1, memory_order_relaxed);
+	if (!g->rec)
+		return;
+	if (k < g->n_site)
+		site_remote_site(g->site, k, &d.site);
+	d.site.present = true;
+	d.site.state = WIRE_SITE_GONE;
+	recorder_remote(g->rec, now_ns, msg, wire_encode_describe(&d, msg));
+}
+
+/*
  * The other sites' avatars ([site]): their frames come solved, the joint
  * angles as the sending site published them; only the header is ours
  * (source, id, sequence, revision). A newcomer's DESCRIBE goes out at once.
@@ -485,8 +505,12 @@ static int remote_frames(struct gateway *g, uint64_t now_ns, int n, int *frames)
 
 		if (k < g->n_site ? !site_remote(g->site, k, now_ns, wf, a->describe, &described, &fresh)
 				  : !a->solved_trk->drv->solved(a->solved_trk, a->solved_k, now_ns, g->stale_ns, wf,
-								a->describe, &described, &fresh))
+								a->describe, &described, &fresh)) {
+			if (ctr_get(&a->st.frames) && !atomic_load_explicit(&a->st.gone, memory_order_relaxed))
+				remote_left(g, a, k, now_ns);
 			continue;
+		}
+		atomic_store_explicit(&a->st.gone, 0, memory_order_relaxed);
 		if (described) {
 			a->describe->h.source_id = g->source_id;
 			a->describe->h.avatar_id = a->id;

@@ -29,6 +29,7 @@ struct gw_avatar_stats {
 	_Atomic uint64_t ik_unreached; /* arms whose target was out of reach or invalid */
 	_Atomic uint64_t nan_blocked;  /* frames not published because a number was not finite */
 	_Atomic uint32_t state;	       /* worst sensor state of the last frame (enum wire_sensor_state) */
+	_Atomic uint32_t gone;	       /* a remote avatar that left after it had published (its site, as recorded) */
 	struct hist latency;	       /* newest sample's arrival -> datagrams sent */
 };
 

@@ -968,7 +968,7 @@ static void figures_update(struct site *s, uint64_t now)
 		memset(&u, 0, sizeof(u));
 		u.ws.present = true;
 		snprintf(u.ws.name, sizeof(u.ws.name), "%s", p->name);
-		u.ws.state = peer_present(s, p, now) ? 0 : 1;
+		u.ws.state = peer_present(s, p, now) ? WIRE_SITE_PRESENT : WIRE_SITE_GONE;
 		u.ws.avatars = (uint16_t)ctr_get(&p->avatars);
 		u.ws.rate_hz = peer_rate(p);
 		u.ws.frames = (uint32_t)f;

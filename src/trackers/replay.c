@@ -139,6 +139,7 @@ struct replay_solved {
 	struct wire_describe d;
 	uint64_t arrival; /* CLOCK_MONOTONIC when its newest frame was played */
 	bool have_f, have_d, new_f, new_d;
+	bool gone; /* its site had left when recorded (a DESCRIBE saying so), until its next frame */
 };
 
 struct replay {
@@ -875,6 +876,10 @@ static void play_rmsg(struct replay *rp, const struct replay_rmsg *m, uint64_t n
 		if (wire_decode_frame(b, m->len, &a->wf) == 0) {
 			a->have_f = a->new_f = true;
 			a->arrival = now_mono;
+			if (a->gone) {
+				a->gone = false;
+				a->new_d = true; /* back: its DESCRIBE at once, as a site that comes back sends it */
+			}
 		}
 	} else {
 		struct wire_describe *d = &rp->dtmp;
@@ -882,12 +887,16 @@ static void play_rmsg(struct replay *rp, const struct replay_rmsg *m, uint64_t n
 
 		/* recorded once a second: a new one only when the skeleton changed (its site's figures always) */
 		memset(d, 0, sizeof(*d));
-		if (wire_decode_describe(b, m->len, d) == 0) {
-			if (!a->have_d || memcmp((const char *)d + from, (const char *)&a->d + from, to - from))
-				a->new_d = true;
-			a->d = *d;
-			a->have_d = true;
+		if (wire_decode_describe(b, m->len, d))
+			return;
+		if (d->site.present && d->site.state == WIRE_SITE_GONE) {
+			a->gone = true; /* the recording daemon saw it leave: no frames until it comes back */
+			return;
 		}
+		if (!a->have_d || memcmp((const char *)d + from, (const char *)&a->d + from, to - from))
+			a->new_d = true;
+		a->d = *d;
+		a->have_d = true;
 	}
 }
 
@@ -1105,7 +1114,7 @@ static bool replay_solved(struct tracker *t, int k, uint64_t now_mono, uint64_t 
 	uint64_t age;
 
 	*described = *fresh = false;
-	if (!a->have_f || !a->have_d)
+	if (!a->have_f || !a->have_d || a->gone)
 		return false;
 	if (a->new_d) {
 		*d = a->d;

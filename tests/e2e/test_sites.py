@@ -341,7 +341,7 @@ class SitesTest(unittest.TestCase):
         DDS, publishes it again with its name, id and the joint angles lab-b published live"""
         la, lb, lc = self.listener(), self.listener(), self.listener()
         rec = os.path.join(self.tmp.name, "rec")
-        self.site("lab-a", la.port, people=1)
+        a = self.site("lab-a", la.port, people=1)
         d = os.path.join(self.tmp.name, "lab-b-rec")
         os.mkdir(d)
         text = ("[daemon]\nrate = 240\nlock_memory = no\nrecord_dir = %s\nrecord_flush = 0.1\n"
@@ -352,9 +352,17 @@ class SitesTest(unittest.TestCase):
                 (rec, lb.port, self.tag, self.domain, LEASE, DEADLINE_MS, REMOTE_ID))
         b = Daemon(d, text)
         self.daemons.append(b)
+        # (four seconds: the replay's checks below want three DESCRIBEs, a second apart, before the departure)
         lb.wait(lambda: lb.names.get(REMOTE_ID) == "lab-a/person0" and
-                len([f for f in lb.of(REMOTE_ID) if f["flags"] & 8]) >= 300, 20,
-                "300 new frames of lab-a's avatar at lab-b while it records")
+                len([f for f in lb.of(REMOTE_ID) if f["flags"] & 8]) >= 960, 30,
+                "960 new frames of lab-a's avatar at lab-b while it records")
+        # lab-a leaves while lab-b records: its departure is recorded too
+        self.assertEqual(a.stop(), 0)
+        t_end = time.monotonic() + 10
+        while time.monotonic() < t_end and ("lab-a/person0", "GONE") not in [(x["name"], x["state"])
+                                                                             for x in b.status()["avatars"]]:
+            time.sleep(0.05)
+        self.assertIn(("lab-a/person0", "GONE"), [(x["name"], x["state"]) for x in b.status()["avatars"]])
         b.stop()
         lb.drain()
         live = {}
@@ -366,7 +374,7 @@ class SitesTest(unittest.TestCase):
         path = os.path.join(rec, files[0])
         info = json.loads(subprocess.run([REC, "info", "--json", path], capture_output=True, text=True).stdout)
         self.assertEqual([(a["name"], a["id"]) for a in info["remote_avatars"]], [("lab-a/person0", REMOTE_ID)])
-        self.assertGreaterEqual(info["remote_avatars"][0]["frames"], 300)
+        self.assertGreaterEqual(info["remote_avatars"][0]["frames"], 960)
         # the replay: a daemon with no [site] (no DDS), lab-b's own person solved again from its samples
         d = os.path.join(self.tmp.name, "replay")
         os.mkdir(d)
@@ -390,9 +398,22 @@ class SitesTest(unittest.TestCase):
         lc.wait(lambda: len(lc.revs.get(REMOTE_ID, [])) >= 3, 10, "three DESCRIBEs of the replayed avatar")
         self.assertEqual(len(set(lc.revs[REMOTE_ID])), 1, lc.revs[REMOTE_ID])
         # in the replaying daemon's status: the remote avatar as what it is
-        names = {a["name"]: a for a in st["avatars"]}
+        names = {x["name"]: x for x in st["avatars"]}
         self.assertEqual(names["lab-a/person0"]["id"], REMOTE_ID)
         self.assertTrue(names["lab-a/person0"]["remote"])
+        # the departure replayed: GONE, as it was live, and no frames of it from then on (not stale ones)
+        t_end = time.monotonic() + 20
+        while time.monotonic() < t_end and ("lab-a/person0", "GONE") not in [(x["name"], x["state"])
+                                                                             for x in r.status()["avatars"]]:
+            time.sleep(0.05)
+        self.assertIn(("lab-a/person0", "GONE"), [(x["name"], x["state"]) for x in r.status()["avatars"]])
+        lc.drain()
+        time.sleep(0.3)  # frames already in the socket before the departure
+        lc.drain()
+        n = len(lc.of(REMOTE_ID))
+        t = time.monotonic()
+        lc.wait(lambda: time.monotonic() - t > 0.5 and len(lc.of(7)) > 0, 2, "a quiet half second")
+        self.assertEqual(len(lc.of(REMOTE_ID)), n, "frames of a departed replayed avatar still sent")
 
     def test_site_figures_in_dump_stats_and_the_viewer(self):
         """per remote site: rate, loss, one-way delay, clock offset, round trip and presence travel in
