@@ -473,6 +473,37 @@ static void write_temp(const struct rec_buf *r, char *path)
 	assert_int_equal(fclose(f), 0);
 }
 
+/* r as a replay source's file (a temporary one, its name in path) with the keys given; opened */
+static void replay_open(const struct rec_buf *r, char *path, const char *keys, struct config *cfg, struct tracker *t)
+{
+	char text[256], err[512];
+
+	write_temp(r, path);
+	snprintf(text, sizeof(text), "[source r]\ntype = replay\nfile = %s\n%s", path, keys);
+	assert_int_equal(config_load_text(cfg, "t.conf", text, err, sizeof(err)), 0);
+	assert_int_equal(tracker_open(t, &cfg->source[0], err, sizeof(err)), 0);
+}
+
+static void replay_close(struct tracker *t, struct config *cfg, const char *path)
+{
+	tracker_close(t);
+	config_free(cfg);
+	unlink(path);
+}
+
+/* a FRAME of remote avatar 1000 (remote_start's) at mono, its sample time and J5 given */
+static void put_remote_frame(struct rec_buf *r, uint64_t mono, uint64_t sample_time, float j5)
+{
+	struct wire_frame f;
+	uint8_t msg[WIRE_MAX_MSG];
+
+	memset(&f, 0, sizeof(f));
+	f.h.avatar_id = 1000;
+	f.h.sample_time_ns = sample_time;
+	f.joint[5] = j5;
+	put_remote(r, mono, msg, wire_encode_frame(&f, msg));
+}
+
 /*
  * The replay source names a recording's sensors at configuration time from
  * the first record alone; when that one is damaged, the loader finds the
@@ -574,27 +605,18 @@ static void test_replay_remote_only(void **state)
 	static struct rec_buf r;
 	static struct config cfg;
 	static struct wire_describe d, dout;
-	char path[] = "/tmp/avatargw-test-recfile-XXXXXX", text[256], err[512];
+	char path[] = "/tmp/avatargw-test-recfile-XXXXXX";
 	struct tracker_clock now = { 1000000000000ull, 0 };
-	struct wire_frame f, out;
+	struct wire_frame out;
 	struct tracker t;
-	uint8_t msg[WIRE_MAX_MSG];
 	bool described, fresh;
 	uint16_t id;
 
 	(void)state;
 	remote_start(&r, &d, 5000000);
-	for (int i = 0; i < 10; i++) {
-		memset(&f, 0, sizeof(f));
-		f.h.avatar_id = 1000;
-		f.h.sample_time_ns = 77 + (uint64_t)i;
-		f.joint[5] = 0.1f * (float)i;
-		put_remote(&r, 5000000 + 10000000 * (uint64_t)i, msg, wire_encode_frame(&f, msg));
-	}
-	write_temp(&r, path);
-	snprintf(text, sizeof(text), "[source r]\ntype = replay\nfile = %s\nloop = no\n", path);
-	assert_int_equal(config_load_text(&cfg, "t.conf", text, err, sizeof(err)), 0);
-	assert_int_equal(tracker_open(&t, &cfg.source[0], err, sizeof(err)), 0);
+	for (int i = 0; i < 10; i++)
+		put_remote_frame(&r, 5000000 + 10000000 * (uint64_t)i, 77 + (uint64_t)i, 0.1f * (float)i);
+	replay_open(&r, path, "loop = no\n", &cfg, &t);
 	assert_int_equal(t.drv->solved_count(&t), 1);
 	assert_string_equal(t.drv->solved_name(&t, 0, &id), "lab-a/person0");
 	assert_int_equal(id, 1000);
@@ -622,9 +644,7 @@ static void test_replay_remote_only(void **state)
 	assert_false(fresh);
 	assert_true((out.h.flags & WIRE_F_STALE) && out.sensor[0].state == WIRE_SENSOR_STALE);
 	assert_int_equal(atomic_load(&t.st.state), TRACKER_ENDED);
-	tracker_close(&t);
-	config_free(&cfg);
-	unlink(path);
+	replay_close(&t, &cfg, path);
 }
 
 /* a stepped replay plays the remote avatars too: at each instant, what was recorded up to its time */
@@ -633,11 +653,10 @@ static void test_replay_remote_stepped(void **state)
 	static struct rec_buf r;
 	static struct config cfg;
 	static struct wire_describe d, dout;
-	char path[] = "/tmp/avatargw-test-recfile-XXXXXX", text[256], err[512];
+	char path[] = "/tmp/avatargw-test-recfile-XXXXXX";
 	struct tracker_clock now = { 1000000000000ull, 0 };
-	struct wire_frame f, out;
+	struct wire_frame out;
 	struct tracker t;
-	uint8_t msg[WIRE_MAX_MSG];
 	bool described, fresh;
 
 	(void)state;
@@ -646,16 +665,9 @@ static void test_replay_remote_stepped(void **state)
 	for (int i = 0; i < 6; i++) {
 		for (uint16_t s = 0; s < 3; s++)
 			put_sample(&r, 0, s, 1000000 + 10000000 * (uint64_t)i, false);
-		memset(&f, 0, sizeof(f));
-		f.h.avatar_id = 1000;
-		f.h.sample_time_ns = 77 + (uint64_t)i;
-		f.joint[5] = 0.1f * (float)i;
-		put_remote(&r, 6000000 + 10000000 * (uint64_t)i, msg, wire_encode_frame(&f, msg));
+		put_remote_frame(&r, 6000000 + 10000000 * (uint64_t)i, 77 + (uint64_t)i, 0.1f * (float)i);
 	}
-	write_temp(&r, path);
-	snprintf(text, sizeof(text), "[source r]\ntype = replay\nfile = %s\nstep = yes\nloop = no\n", path);
-	assert_int_equal(config_load_text(&cfg, "t.conf", text, err, sizeof(err)), 0);
-	assert_int_equal(tracker_open(&t, &cfg.source[0], err, sizeof(err)), 0);
+	replay_open(&r, path, "step = yes\nloop = no\n", &cfg, &t);
 	assert_int_equal(t.drv->solved_count(&t), 1);
 	/* the first instant: the DESCRIBE recorded with it, no frame yet */
 	assert_int_equal(t.drv->poll(&t, &now), 3);
@@ -679,9 +691,7 @@ static void test_replay_remote_stepped(void **state)
 	assert_int_equal(atomic_load(&t.st.state), TRACKER_ENDED);
 	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
 	assert_true(out.h.sample_time_ns == 82 && out.joint[5] == 0.5f);
-	tracker_close(&t);
-	config_free(&cfg);
-	unlink(path);
+	replay_close(&t, &cfg, path);
 }
 
 /* a remote avatar whose site left while recording (its DESCRIBE saying gone): no frames in the replay from
@@ -691,30 +701,22 @@ static void test_replay_remote_departure(void **state)
 	static struct rec_buf r;
 	static struct config cfg;
 	static struct wire_describe d, dout;
-	char path[] = "/tmp/avatargw-test-recfile-XXXXXX", text[256], err[512];
+	char path[] = "/tmp/avatargw-test-recfile-XXXXXX";
 	struct tracker_clock now = { 1000000000000ull, 0 };
-	struct wire_frame f, out;
+	struct wire_frame out;
 	struct tracker t;
 	uint8_t msg[WIRE_MAX_MSG];
 	bool described, fresh;
 
 	(void)state;
 	remote_start(&r, &d, 1000000);
-	for (int i = 0; i < 4; i++) {
-		memset(&f, 0, sizeof(f));
-		f.h.avatar_id = 1000;
-		f.h.sample_time_ns = 77 + (uint64_t)(i == 3 ? 100 : i);
-		put_remote(&r, 1000000 + 10000000 * (uint64_t)(i == 3 ? 10 : i), msg, wire_encode_frame(&f, msg));
-		if (i == 2) {
-			d.site.state = WIRE_SITE_GONE; /* 25 ms: its site left */
-			put_remote(&r, 26000000, msg, wire_encode_describe(&d, msg));
-			d.site.state = WIRE_SITE_PRESENT;
-		}
-	}
-	write_temp(&r, path);
-	snprintf(text, sizeof(text), "[source r]\ntype = replay\nfile = %s\nloop = no\n", path);
-	assert_int_equal(config_load_text(&cfg, "t.conf", text, err, sizeof(err)), 0);
-	assert_int_equal(tracker_open(&t, &cfg.source[0], err, sizeof(err)), 0);
+	for (int i = 0; i < 3; i++)
+		put_remote_frame(&r, 1000000 + 10000000 * (uint64_t)i, 77 + (uint64_t)i, 0);
+	d.site.state = WIRE_SITE_GONE; /* 25 ms: its site left */
+	put_remote(&r, 26000000, msg, wire_encode_describe(&d, msg));
+	d.site.state = WIRE_SITE_PRESENT;
+	put_remote_frame(&r, 101000000, 177, 0); /* 100 ms: back */
+	replay_open(&r, path, "loop = no\n", &cfg, &t);
 	t.drv->poll(&t, &now);
 	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
 	assert_true(described && out.h.sample_time_ns == 77);
@@ -734,9 +736,7 @@ static void test_replay_remote_departure(void **state)
 	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
 	assert_true(fresh && described && out.h.sample_time_ns == 177);
 	assert_int_equal(dout.site.state, WIRE_SITE_PRESENT);
-	tracker_close(&t);
-	config_free(&cfg);
-	unlink(path);
+	replay_close(&t, &cfg, path);
 }
 
 int main(void)

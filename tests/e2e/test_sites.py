@@ -336,6 +336,15 @@ class SitesTest(unittest.TestCase):
                 matched += 1
         self.assertGreaterEqual(matched, 20, "too few JointState samples matched the UDP stream by stamp")
 
+    def wait_gone(self, daemon, name, timeout):
+        """until daemon's status says the avatar name is GONE"""
+        def row():
+            return (name, "GONE") in [(x["name"], x["state"]) for x in daemon.status()["avatars"]]
+        t_end = time.monotonic() + timeout
+        while not row() and time.monotonic() < t_end:
+            time.sleep(0.05)
+        self.assertTrue(row(), "%s not GONE within %g s" % (name, timeout))
+
     def test_recorded_session_replays_the_remote_avatars(self):
         """a recording at lab-b holds lab-a's avatar as solved there; its replay, with no [site] and no
         DDS, publishes it again with its name, id and the joint angles lab-b published live"""
@@ -358,11 +367,7 @@ class SitesTest(unittest.TestCase):
                 "960 new frames of lab-a's avatar at lab-b while it records")
         # lab-a leaves while lab-b records: its departure is recorded too
         self.assertEqual(a.stop(), 0)
-        t_end = time.monotonic() + 10
-        while time.monotonic() < t_end and ("lab-a/person0", "GONE") not in [(x["name"], x["state"])
-                                                                             for x in b.status()["avatars"]]:
-            time.sleep(0.05)
-        self.assertIn(("lab-a/person0", "GONE"), [(x["name"], x["state"]) for x in b.status()["avatars"]])
+        self.wait_gone(b, "lab-a/person0", 10)
         b.stop()
         lb.drain()
         live = {}
@@ -402,11 +407,7 @@ class SitesTest(unittest.TestCase):
         self.assertEqual(names["lab-a/person0"]["id"], REMOTE_ID)
         self.assertTrue(names["lab-a/person0"]["remote"])
         # the departure replayed: GONE, as it was live, and no frames of it from then on (not stale ones)
-        t_end = time.monotonic() + 20
-        while time.monotonic() < t_end and ("lab-a/person0", "GONE") not in [(x["name"], x["state"])
-                                                                             for x in r.status()["avatars"]]:
-            time.sleep(0.05)
-        self.assertIn(("lab-a/person0", "GONE"), [(x["name"], x["state"]) for x in r.status()["avatars"]])
+        self.wait_gone(r, "lab-a/person0", 20)
         lc.drain()
         time.sleep(0.3)  # frames already in the socket before the departure
         lc.drain()
