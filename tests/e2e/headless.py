@@ -210,7 +210,8 @@ def main():
         try:
             b.call("Page.navigate", url=a.url)
             deadline = time.time() + a.timeout
-            while not b.evaluate("!!(%s)" % a.wait):
+            # (the expression may read what the page has not made yet: an error counts as not yet)
+            while not b.evaluate("(() => { try { return !!(%s); } catch (e) { return false; } })()" % a.wait):
                 if time.time() > deadline:
                     print("headless: not true within %g s: %s" % (a.timeout, a.wait), file=sys.stderr)
                     return 1
