@@ -717,6 +717,29 @@ class ProbeTest(unittest.TestCase):
         lines = [ln for ln in out.splitlines() if ln.startswith(("0 ", "2 ", "f0 "))]
         self.assertEqual(len(lines), 3, out)
 
+    def test_probe_vrpn_our_server(self):
+        """a daemon's VRPN server probed both ways (called back with UDP reports, and TCP): its 13 tracker
+        channels listed with their rates, and the configuration lines that read them"""
+        vport, uport = free_port(socket.SOCK_STREAM), free_port()
+        with tempfile.TemporaryDirectory() as tmp:
+            d = Daemon(tmp, PUBLISHER.format(uport=uport, vport=vport))
+            try:
+                for url, how in (("vrpn://Avatar0@127.0.0.1:%d" % vport, "called back"),
+                                 ("vrpn://Avatar0@tcp://127.0.0.1:%d" % vport, "we connected")):
+                    out = subprocess.run([DAEMON, "--probe", url], capture_output=True, text=True, timeout=30)
+                    self.assertEqual(out.returncode, 0, out.stdout + out.stderr)
+                    self.assertIn(how, out.stdout)
+                    self.assertIn("type = vrpn", out.stdout)
+                    self.assertIn("device = %s" % url[len("vrpn://"):], out.stdout)
+                    self.assertIn("sensors = 13", out.stdout)
+                    rows = [ln.split() for ln in out.stdout.splitlines() if ln[:1].isdigit()]
+                    self.assertEqual([int(r[0]) for r in rows], list(range(13)), out.stdout)
+                    # every channel reported, about as often as the publisher's frames (240 Hz; a loaded host less)
+                    for r in rows:
+                        self.assertGreater(float(r[2]), 30, out.stdout)
+            finally:
+                self.assertEqual(d.stop(), 0)
+
     def test_probe_vrpn_nothing(self):
         port = free_port(socket.SOCK_STREAM)
         out = subprocess.run([DAEMON, "--probe", "vrpn://Tracker0@tcp://127.0.0.1:%d" % port], capture_output=True,
