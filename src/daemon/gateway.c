@@ -212,6 +212,8 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 	for (int k = 0, t = 0, j = 0; k < g->n_remote; k++) {
 		struct gw_avatar *a = &g->av[g->n_avatars + k];
 
+		a->describe_msg = g->describe + (size_t)(g->n_avatars + k) * WIRE_MAX_MSG;
+		a->describe = &g->describes[g->n_avatars + k];
 		if (k < g->n_site) {
 			a->id = site_remote_id(g->site, k);
 			if (kept) {
@@ -221,6 +223,14 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 				a->seq = o->seq;
 				a->dseq = o->dseq;
 				a->describe_rev = o->describe_rev;
+				/* and its description: the site does not describe it again (no new revision) */
+				*a->describe = *o->describe;
+				memcpy(a->describe_msg, o->describe_msg, o->describe_len);
+				a->describe_len = o->describe_len;
+				atomic_store_explicit(&a->st.frames, ctr_get(&o->st.frames), memory_order_relaxed);
+				atomic_store_explicit(&a->st.gone,
+						      atomic_load_explicit(&o->st.gone, memory_order_relaxed),
+						      memory_order_relaxed);
 			}
 		} else {
 			/* a recording's remote avatar: the id it had at the recording site */
@@ -247,8 +257,6 @@ int gw_open(struct gateway *g, struct config *cfg, struct gateway *old, uint32_t
 					goto fail;
 				}
 		}
-		a->describe_msg = g->describe + (size_t)(g->n_avatars + k) * WIRE_MAX_MSG;
-		a->describe = &g->describes[g->n_avatars + k];
 		ids[g->n_avatars + k] = a->id;
 	}
 	describe_soon(g, mono_ns());

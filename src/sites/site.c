@@ -1192,10 +1192,8 @@ bool site_keeps_describe(const struct site *s, int idx, const struct wire_descri
 
 void site_adopt(struct site *s, const struct config *cfg)
 {
+	/* the new gateway took the remote avatars' descriptions over: the loop's view of the slots stays */
 	s->stale_ns = (uint64_t)(cfg->daemon.stale_ms * 1e6);
-	/* the new gateway's remote avatars are described again from the slots, at its first cycle */
-	for (int k = 0; k < s->n_remote; k++)
-		s->rs[k].l_gen = 0;
 }
 
 int site_start(struct site *s, char *err, size_t errlen)

@@ -506,9 +506,14 @@ class SitesTest(unittest.TestCase):
         t = time.monotonic()
         lb.wait(lambda: len([f for f in lb.of(REMOTE_ID, t) if f["flags"] & 8]) >= 50, 10,
                 "lab-a's frames at lab-b after the reload")
-        # the remote avatar's numbering goes on: no FRAME sequence started over
+        # the remote avatar's numbering goes on: no FRAME sequence started over, and its description is the
+        # same revision (its skeleton did not change: a renderer has nothing to read again)
         seqs = [f["seq"] for f in lb.of(REMOTE_ID)]
         self.assertEqual(seqs, sorted(seqs), "the remote avatar's FRAME numbering started over")
+        self.assertEqual(len({f["rev"] for f in lb.of(REMOTE_ID)}), 1, "a new revision after the reload")
+        n_rev = len(lb.revs.get(REMOTE_ID, []))
+        lb.wait(lambda: len(lb.revs.get(REMOTE_ID, [])) >= n_rev + 2, 10, "DESCRIBEs after the reload")
+        self.assertEqual(len(set(lb.revs[REMOTE_ID])), 1, lb.revs[REMOTE_ID])
         # 2. a changed [site] key is applied: a new participant, the remote avatar under its new id
         text2 = text.replace("remote_id = %d\n" % REMOTE_ID, "remote_id = %d\n" % (REMOTE_ID + 500))
         st = self.reload(b, text2)

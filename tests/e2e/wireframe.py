@@ -32,8 +32,8 @@ def decode_frame(buf):
         v = struct.unpack_from("<7f", buf, p)
         segments.append({"p": v[0:3], "q": v[3:7]})  # q: w x y z
         p += 28
-    return {"avatar": avatar, "seq": seq, "flags": flags, "source": source, "t_ns": t_ns, "sensors": sensors,
-            "joints": joints, "segments": segments}
+    return {"avatar": avatar, "seq": seq, "rev": rev, "flags": flags, "source": source, "t_ns": t_ns,
+            "sensors": sensors, "joints": joints, "segments": segments}
 
 
 class UdpListener:
