@@ -344,9 +344,9 @@ def plot_keyframes(kf, outdir):
 
 # model bits as avatargw-eval --model names them (include/ik/avatar.h); DEFAULT_BITS is AVATAR_MODEL_DEFAULT
 BITS = ["hand-elbow", "reach-first", "yaw-hands", "reach-chest", "neck", "bow", "keep-branch", "reach-roll",
-        "bow-head", "lean", "raise-roll"]
+        "bow-head", "lean", "raise-roll", "arm-twist"]
 DEFAULT_BITS = ["hand-elbow", "yaw-hands", "reach-chest", "bow", "keep-branch", "reach-roll", "bow-head", "lean",
-                "raise-roll"]
+                "raise-roll", "arm-twist"]
 # joint limits (degrees): the benchmark's (arm_default_limits), the rules that change them (joint, bound, value),
 # and the avatar's (avatar_default_limits)
 BENCH_LIMITS = [(-30, 30), (-90, 30), (-60, 120), (-90, 90), (-90, 60), (-90, 90), (-70, 70), (-30, 30)]
@@ -364,6 +364,7 @@ RULES = [("hand-elbow", "the elbow where the hand's orientation is plausible (ha
          ("bow-head", "a bow at the waist when the head pitches more than the neck's 30°"),
          ("lean", "the trunk leaning sideways or back when raised hands are off their sensors"),
          ("raise-roll", "the chest rolled as a raised arm's shoulder rises (the trunk bent away from it)"),
+         ("arm-twist", "with hand-elbow, a nearly straight arm's swivel pulled toward the upper arm's untwisted place"),
          ("j2-overhead", "J2 to -170° (arm raised sideways overhead; benchmark -90°)"),
          ("j2-adduction", "J2 adduction to 10° only (benchmark 30°)"),
          ("wrist-thumb", "J7 ±30°, J8 ±80° (deviation narrow, flexion wide; benchmark J7 ±70°, J8 ±30°)")]
