@@ -1107,8 +1107,10 @@ def discussion(results, names, cv, sa, sn):
                  "it helps %d clips and hurts %d, and %d folds of 8 choose it: an option." % (
                      tw["helped"], tw["hurt"], len(tw["chosen"])))
     P.append("**CMU motion for the fit.** Besides the three `cmu_*` clips, eight CMU trials retargeted to a "
-             "Reallusion rig (`DragonForgedTheArtist/IClone-CMU-Mocap`, subjects 2, 5 and 6: punches, swordplay, "
-             "washing, dance, basketball; `bvh2sensors.py --map` to its `CC_Base_*` joints; not committed). The "
+             "Reallusion rig (`DragonForgedTheArtist/IClone-CMU-Mocap`, trials 02_05, 02_06, 02_07, 02_10, 05_02, "
+             "05_12, 06_14, 06_15: punches, swordplay, washing, dance, basketball; `bvh2sensors.py --map` to "
+             "`CC_Base_Spine02`, `_Head`, `_Pelvis` and each side's `_Clavicle`, `_Upperarm`, `_Forearm`, `_Hand`; "
+             "not committed). The "
              "twist's weight 1 to 10, its bound 0.15 to 1 of the upper arm and an offset of the untwisted axis of "
              "-15 to 45° were tried on these eleven: their pooled elbow median is least at 6, 0.7 and 0 (5.55 cm, "
              "6.08 without the rule; the retargeted arms fit the avatar's chain poorly, 4 to 10 cm). The Bandai "
