@@ -720,6 +720,81 @@ static void wrist_avatar(struct avatar *av, struct ik_opts *o)
 }
 
 /*
+ * The elbow of a nearly straight right arm (bent 15 degrees) held at
+ * shoulder height, forward and turned out by `out` degrees, the hand palm
+ * up (the thumb outward, across the line): the unit offset of the elbow
+ * from the shoulder-wrist line. The sensor sits at the wrist.
+ */
+static struct vec3 palm_up_elbow(unsigned model, double out)
+{
+	const double a = out * M_PI / 180, bend = 15 * M_PI / 180;
+	struct avatar av;
+	struct ik_opts o;
+	struct dq head, hand[2];
+	struct avatar_pose p;
+	struct arm_pose got;
+	struct quat r;
+	struct vec3 u = { sin(a), cos(a), 0 }, w, e;
+	double L, k;
+	sc_t m[3][3];
+
+	wrist_avatar(&av, &o);
+	av.body.model = model;
+	L = sqrt(0.30 * 0.30 + 0.26 * 0.26 + 2 * 0.30 * 0.26 * cos(bend));
+	w = (struct vec3){ 0.18 + L * u.x, L * u.y, 0 };
+	/* columns x, y (along the hand), z (the thumb: outward, horizontal) */
+	m[0][1] = u.x, m[1][1] = u.y, m[2][1] = 0;
+	m[0][2] = u.y, m[1][2] = -u.x, m[2][2] = 0;
+	m[0][0] = 0, m[1][0] = 0, m[2][0] = -1;
+	quat_from_mat3((const sc_t(*)[3])m, &r);
+	dq_from_rt(&r, &w, &hand[ARM_RIGHT]);
+	arm_mirror_dq(&hand[ARM_RIGHT], &hand[ARM_LEFT]);
+	origin_head(&av, &head);
+	avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
+	assert_true(p.res[ARM_RIGHT].flags & IK_REACHED);
+	assert_true(arm_in_limits(&av.arm[ARM_RIGHT], p.q[ARM_RIGHT]));
+	arm_fk_pose(&av.arm[ARM_RIGHT], p.q[ARM_RIGHT], &got);
+	assert_true(dist3(&got.wrist, &w) < 1e-4);
+	/* the elbow's offset across the shoulder-wrist line, to unit length */
+	w = (struct vec3){ got.wrist.x - got.shoulder.x, got.wrist.y - got.shoulder.y, got.wrist.z - got.shoulder.z };
+	e = (struct vec3){ got.elbow.x - got.shoulder.x, got.elbow.y - got.shoulder.y, got.elbow.z - got.shoulder.z };
+	k = (e.x * w.x + e.y * w.y + e.z * w.z) / (w.x * w.x + w.y * w.y + w.z * w.z);
+	e = (struct vec3){ e.x - k * w.x, e.y - k * w.y, e.z - k * w.z };
+	k = sqrt(e.x * e.x + e.y * e.y + e.z * e.z);
+	assert_true(k > 0.02);
+	return (struct vec3){ e.x / k, e.y / k, e.z / k };
+}
+
+/*
+ * AVATAR_ARM_TWIST (an option): a nearly straight arm held forward and
+ * out with the palm up (a guiding gesture). The wrist's cost spares the
+ * forearm its supination by turning the whole arm about its line: held 30
+ * degrees out or more, the elbow ends straight above the line (measured:
+ * -0.98 down), turned half round; with the upper arm's twist charged too
+ * it stays within 30 degrees of straight below, where the untwisted arm
+ * has it and where the motion-capture arms of such gestures hold it.
+ */
+static void test_arm_twist(void **state)
+{
+	int lifted = 0;
+
+	(void)state;
+	for (int out = -15; out <= 60; out += 15) {
+		struct vec3 e0 = palm_up_elbow(AVATAR_MODEL_DEFAULT, out),
+			    e1 = palm_up_elbow(AVATAR_MODEL_DEFAULT | AVATAR_ARM_TWIST, out);
+
+		print_message("palm up, %d degrees out: the elbow's offset from the line, down %.2f (default), %.2f "
+			      "(arm-twist)\n",
+			      out, -e0.z, -e1.z);
+		lifted += -e0.z < 0.7;
+		/* within 30 degrees of straight below the line, and never higher than without the rule */
+		assert_true(-e1.z > 0.866);
+		assert_true(-e1.z > -e0.z - 0.01);
+	}
+	assert_true(lifted > 0);
+}
+
+/*
  * A right hand the arm reaches, turned beyond the wrist's deviation limit:
  * J2..J8 at random inside the middle 70 % of their ranges, J7 at 60 to 83
  * degrees (its limit is 30); ee the right hand, lee its mirror image.
@@ -1010,6 +1085,7 @@ int main(void)
 		cmocka_unit_test(test_lost_hand),
 		cmocka_unit_test(test_wave_clip),
 		cmocka_unit_test(test_hand_elbow),
+		cmocka_unit_test(test_arm_twist),
 		cmocka_unit_test(test_reach_first),
 		cmocka_unit_test(test_track_compromise),
 		cmocka_unit_test(test_branch_held),

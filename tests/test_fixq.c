@@ -792,18 +792,18 @@ static void test_avatar_clip_bench_arm(void **state)
  * hands are on their sensors in both builds, and the Q5.26 avatar lies on
  * the double one.
  */
-static void test_avatar_straight_arms(void **state)
+static void straight_arms(const char *what, unsigned options)
 {
 	enum { N = 48 };
-	static const struct ikx_avatar_setup body = { .dims = { 0.18, 0.30, 0.26, 0.08 },
-						      .head_offset = { 0, 0, 0.25 } };
+	const struct ikx_avatar_setup body = { .dims = { 0.18, 0.30, 0.26, 0.08 },
+					       .head_offset = { 0, 0, 0.25 },
+					       .options = options };
 	/* upright and facing +y: the chest is the head's place less the offset, unturned */
 	const double head[3] = { 0.2, -0.1, 1.6 }, chest[3] = { 0.2, -0.1, 1.6 - 0.25 };
 	static struct ikx_avatar_frame in[N];
 	static struct ikx_avatar_out od[N], oq[N];
 	double tol_d, tol_q, rot_d, rot_q, worst = 0;
 
-	(void)state;
 	for (int i = 0; i < N; i++) {
 		/* the arm from down and out to forward and up, its upper arm turning, the elbow nearly straight */
 		const double q[ARM_DOF] = { 0,
@@ -831,7 +831,7 @@ static void test_avatar_straight_arms(void **state)
 	ikx_avatar_run_d(&body, in, N, od);
 	ikx_avatar_run_qs(&body, in, N, oq);
 	for (int i = 0; i < N; i++) {
-		set_ctx("straight arms, frame %d", i);
+		set_ctx("%s, frame %d", what, i);
 		if (oq[i].saturations)
 			fail_msg("%s: %lu results saturated in Q5.26", ctx, oq[i].saturations);
 		for (int side = ARM_RIGHT; side <= ARM_LEFT; side++) {
@@ -846,7 +846,31 @@ static void test_avatar_straight_arms(void **state)
 			worst = fmax(worst, dist3(hq, hd));
 		}
 	}
-	print_message("straight arms: hands Q5.26 against double %.3g um at most\n", worst * 1e6);
+	print_message("%s: hands Q5.26 against double %.3g um at most\n", what, worst * 1e6);
+}
+
+static void test_avatar_straight_arms(void **state)
+{
+	(void)state;
+	straight_arms("straight arms", 0);
+}
+
+/*
+ * The option AVATAR_ARM_TWIST, whose pull acts on nearly straight arms:
+ * the straight arms above, and the wave clip as recorded and turned every
+ * 30 degrees, in Q5.26 against double.
+ */
+static void test_avatar_arm_twist(void **state)
+{
+	struct ikx_avatar_setup body = clip_body;
+	struct av_diff m = { 0 };
+
+	(void)state;
+	straight_arms("straight arms, arm-twist", AVATAR_ARM_TWIST);
+	body.options = AVATAR_ARM_TWIST;
+	for (int turn = 0; turn < 360; turn += 30)
+		avatar_against_double(&body, turn, &m);
+	print_diff("arm-twist, the clip turned by 0 to 330 degrees", &m);
 }
 
 /* a pose x y z qw qx qy qz given in a frame c (x y z qw qx qy qz), in the world */
@@ -1057,15 +1081,25 @@ static void test_avatar_head_bow(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_avatar_bow),	     cmocka_unit_test(test_avatar_clip),
-		cmocka_unit_test(test_avatar_clip_turned),   cmocka_unit_test(test_avatar_clip_bench_arm),
-		cmocka_unit_test(test_avatar_straight_arms), cmocka_unit_test(test_swivel_inside),
-		cmocka_unit_test(test_mul_div_sqrt),	     cmocka_unit_test(test_trig),
-		cmocka_unit_test(test_fk_jacobian),	     cmocka_unit_test(test_lsq),
-		cmocka_unit_test(test_random_reset),	     cmocka_unit_test(test_trajectory_warm),
-		cmocka_unit_test(test_matrix_and_left),	     cmocka_unit_test(test_paper_newton),
-		cmocka_unit_test(test_hopeless_input),	     cmocka_unit_test(test_avatar_roll),
-		cmocka_unit_test(test_avatar_lean),	     cmocka_unit_test(test_avatar_head_bow),
+		cmocka_unit_test(test_avatar_bow),
+		cmocka_unit_test(test_avatar_clip),
+		cmocka_unit_test(test_avatar_clip_turned),
+		cmocka_unit_test(test_avatar_clip_bench_arm),
+		cmocka_unit_test(test_avatar_straight_arms),
+		cmocka_unit_test(test_avatar_arm_twist),
+		cmocka_unit_test(test_swivel_inside),
+		cmocka_unit_test(test_mul_div_sqrt),
+		cmocka_unit_test(test_trig),
+		cmocka_unit_test(test_fk_jacobian),
+		cmocka_unit_test(test_lsq),
+		cmocka_unit_test(test_random_reset),
+		cmocka_unit_test(test_trajectory_warm),
+		cmocka_unit_test(test_matrix_and_left),
+		cmocka_unit_test(test_paper_newton),
+		cmocka_unit_test(test_hopeless_input),
+		cmocka_unit_test(test_avatar_roll),
+		cmocka_unit_test(test_avatar_lean),
+		cmocka_unit_test(test_avatar_head_bow),
 	};
 
 	return cmocka_run_group_tests(tests, NULL, NULL);

@@ -65,6 +65,11 @@
  *  - AVATAR_RAISE_ROLL: a raised arm's shoulder rises (4 cm times the sine
  *    of the shoulder-wrist line's elevation); the chest rolls by half the
  *    two shoulders' difference (one arm raised: the trunk bent away).
+ *  - AVATAR_ARM_TWIST (an option): with AVATAR_HAND_ELBOW, a nearly
+ *    straight arm's swivel (one turn with the forearm's pronation) is
+ *    pulled toward the upper arm's untwisted place, the hanging arm's
+ *    elbow axis carried along the shoulder-wrist line by the least
+ *    rotation.
  */
 #ifndef IK_AVATAR_H
 #define IK_AVATAR_H
@@ -88,6 +93,7 @@ extern "C" {
 #define AVATAR_BOW_HEAD 0x100
 #define AVATAR_LEAN 0x200
 #define AVATAR_RAISE_ROLL 0x400
+#define AVATAR_ARM_TWIST 0x800
 #define AVATAR_MODEL_DEFAULT                                                                                           \
 	(AVATAR_HAND_ELBOW | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_BOW | AVATAR_KEEP_BRANCH |                 \
 	 AVATAR_REACH_ROLL | AVATAR_BOW_HEAD | AVATAR_LEAN | AVATAR_RAISE_ROLL)

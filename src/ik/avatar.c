@@ -677,12 +677,42 @@ static bool goal_posture(const struct arm *a, const struct arm_goal *g, sc_t phi
 #define SIN_NATURAL SC_C(-0.5)
 
 /*
- * The least cost swivel of a goal: the wrist's and the natural place's.
- * Returns the least cost. (The cost has a single local least in every frame
- * of the motion-capture clips: an elbow that leaves the truth at a wave's
- * extremes is that least drifting, not a jump between two; docs/FIDELITY.md.)
+ * AVATAR_ARM_TWIST: on a nearly straight arm the swivel and the forearm's
+ * pronation are one turn about the shoulder-wrist line, and the wrist's cost
+ * alone puts all of it in the upper arm. The upper arm's twist is charged
+ * too: a pull of the elbow's axis toward the untwisted one, the hanging
+ * arm's (x, the elbow flexing forward) carried by the least rotation from
+ * down to the shoulder-wrist line u. That rotation takes x to
+ * (1 - uz - ux^2, -ux uy, ux (1 - uz)) / (1 - uz): the numerator is used,
+ * so the pull fades as the arm points up, where the untwisted axis is
+ * undefined. With the elbow's axis -(ax x v) (goal_posture_cs), the pull
+ * (1 - axis . n) is (1 - cos(phi - phi_n)) with (cos, sin) phi_n =
+ * (-n.d1, n.d0). Its weight is W_TWIST on a straight arm, falling to 0 as
+ * the circle's radius r reaches K_TWIST of the upper arm, where the elbow's
+ * place itself says the swivel. W_TWIST and K_TWIST were chosen on the CMU
+ * clips alone (docs/FIDELITY.md).
  */
-static sc_t goal_swivel(const struct arm *a, const struct arm_goal *g, sc_t *phi, sc_t *cp, sc_t *sp)
+#define W_TWIST SC_C(6)
+#define INV_K_TWIST SC_C(1.4285714285714286) /* K_TWIST = 0.7 */
+
+static void twist_pull(const struct arm_goal *g, struct trig2 *c)
+{
+	const struct vec3 *u = &g->ax;
+	sc_t w = SC_C(1) - sc_mul(g->uv, INV_K_TWIST), dz = SC_C(1) - u->z;
+	struct vec3 n = { dz - sc_mul(u->x, u->x), -sc_mul(u->x, u->y), sc_mul(u->x, dz) };
+
+	if (w > 0)
+		trig2_add_pull(c, sc_mul(W_TWIST, w), -v3_dot(&n, &g->d1), v3_dot(&n, &g->d0));
+}
+
+/*
+ * The least cost swivel of a goal: the wrist's and the natural place's
+ * (and the upper arm's twist, with twist). Returns the least cost. (The cost
+ * has a single local least in every frame of the motion-capture clips: an
+ * elbow that leaves the truth at a wave's extremes is that least drifting,
+ * not a jump between two; docs/FIDELITY.md.)
+ */
+static sc_t goal_swivel(const struct arm *a, const struct arm_goal *g, bool twist, sc_t *phi, sc_t *cp, sc_t *sp)
 {
 	struct trig2 c;
 	/* sin(tilt): the shoulder-wrist line's horizontal part (the chest frame is upright) */
@@ -690,6 +720,8 @@ static sc_t goal_swivel(const struct arm *a, const struct arm_goal *g, sc_t *phi
 
 	goal_wrist_cost(a, g, &c);
 	trig2_add_pull(&c, sc_mul(W_GRAVITY, sc_mul(tilt, sc_div(g->r, a->dims.arm))), COS_NATURAL, SIN_NATURAL);
+	if (twist)
+		twist_pull(g, &c);
 	return trig2_min(&c, phi, cp, sp);
 }
 
@@ -700,7 +732,7 @@ static sc_t goal_swivel(const struct arm *a, const struct arm_goal *g, sc_t *phi
  * is too close to the shoulder (the solver then starts from the previous
  * posture).
  */
-static bool hand_elbow_posture(const struct arm *a, const struct ik_target *t, bool first, sc_t prev_misfit,
+static bool hand_elbow_posture(const struct arm *a, const struct ik_target *t, bool twist, bool first, sc_t prev_misfit,
 			       sc_t *misfit, sc_t pref[ARM_DOF])
 {
 	struct arm_goal g;
@@ -709,7 +741,7 @@ static bool hand_elbow_posture(const struct arm *a, const struct ik_target *t, b
 	/* J1 at mid-range: what the shoulders do beyond the chest's yaw is the solver's to find */
 	if (!goal_init(a, t, SC_C(0), &g))
 		return false;
-	m = goal_swivel(a, &g, &phi, &cp, &sp);
+	m = goal_swivel(a, &g, twist, &phi, &cp, &sp);
 	if (!first && sc_isfinite(prev_misfit))
 		m = prev_misfit + sc_mul(MISFIT_RATE, m - prev_misfit);
 	*misfit = m;
@@ -725,7 +757,8 @@ static bool hand_elbow_posture(const struct arm *a, const struct ik_target *t, b
  * then narrows the best step down. Returns false if no J1 and swivel keep
  * J2..J5 inside their limits.
  */
-static bool reach_first(const struct arm *a, const struct ik_target *t, const sc_t *q1s, int n1, sc_t q[ARM_DOF])
+static bool reach_first(const struct arm *a, const struct ik_target *t, bool twist, const sc_t *q1s, int n1,
+			sc_t q[ARM_DOF])
 {
 	sc_t best_vw = SC_C(1e9), best_phi = 0, best_q1 = 0, cand[ARM_DOF], va, vw;
 	bool found = false;
@@ -737,7 +770,7 @@ static bool reach_first(const struct arm *a, const struct ik_target *t, const sc
 
 		if (!goal_init(a, t, q1s[i], &g) || !g.in_reach)
 			continue;
-		goal_swivel(a, &g, &phi0, &c0, &s0);
+		goal_swivel(a, &g, twist, &phi0, &c0, &s0);
 		for (k = 0; k < 24; k++) {
 			/* 0, +1, -1, +2, ... steps from the hand's swivel */
 			sc_t phi = phi0 + sc_mul(SC_C((k + 1) / 2 * (k & 1 ? 1 : -1)), STEP15);
@@ -911,6 +944,7 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 	const struct ik_opts *so = o;
 	struct ik_opts track;
 	unsigned flags;
+	bool twist = (av->body.model & AVATAR_ARM_TWIST) != 0;
 
 	out->hand_misfit[side] = prev ? prev->hand_misfit[side] : SC_C(0);
 	if ((av->body.model & AVATAR_HAND_ELBOW) && t->valid) {
@@ -919,8 +953,8 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 			ik_solve(a, kin, t, NULL, o, base, res);
 			pq = base;
 		}
-		if (hand_elbow_posture(a, t, !prev, prev ? prev->hand_misfit[side] : SC_C(0), &out->hand_misfit[side],
-				       pref))
+		if (hand_elbow_posture(a, t, twist, !prev, prev ? prev->hand_misfit[side] : SC_C(0),
+				       &out->hand_misfit[side], pref))
 			seed = pref;
 		else
 			seed = pq;
@@ -949,7 +983,7 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 		sc_t q2[ARM_DOF], q1s[4] = { q[0], pq ? pq[0] : SC_C(0), SC_C(0), sc_mul(q[0], SC_C(0.5)) };
 		struct ik_err e2;
 
-		if (reach_first(a, t, q1s, 4, q2)) {
+		if (reach_first(a, t, twist, q1s, 4, q2)) {
 			posture_err(a, t, q2, &e2);
 			if (e2.pos < res->err.pos) {
 				ik_q_copy(q, q2);

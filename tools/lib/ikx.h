@@ -33,6 +33,7 @@ struct ikx_result {
 struct ikx_avatar_setup {
 	double dims[4];	       /* S, A, F, H, metres (both arms) */
 	double head_offset[3]; /* head sensor from the chest origin, chest frame, metres */
+	unsigned options;      /* AVATAR_* options added to AVATAR_MODEL_DEFAULT */
 };
 
 /* one frame's sensor poses, world: x y z qw qx qy qz */
