@@ -73,7 +73,7 @@ static void usage(FILE *f)
 		   "  --left-arm     the left arm's own lengths (the right's are --dims)\n"
 		   "  --model        paper, default, or names joined by '+' (or taken away by '-'): hand-elbow,\n"
 		   "                 reach-first, yaw-hands, reach-chest, neck, bow, keep-branch, reach-roll,\n"
-		   "                 bow-head, lean, raise-roll, arm-twist (the\n"
+		   "                 bow-head, lean, raise-roll, arm-twist, yaw-reach (the\n"
 		   "                 avatar's choices, docs/IK.md), e.g. default-bow\n"
 		   "  --chest-truth  the chest from the CSV's true chest columns (X,Y,Z: the chain origin in\n"
 		   "                 the chest frame); --chest-part: all of it, its heading only, or upright\n");
@@ -450,7 +450,8 @@ static int parse_model(const char *s)
 		      { "bow-head", AVATAR_BOW_HEAD },
 		      { "lean", AVATAR_LEAN },
 		      { "raise-roll", AVATAR_RAISE_ROLL },
-		      { "arm-twist", AVATAR_ARM_TWIST } };
+		      { "arm-twist", AVATAR_ARM_TWIST },
+		      { "yaw-reach", AVATAR_YAW_REACH } };
 	unsigned m = 0;
 	bool add = true;
 
@@ -603,9 +604,10 @@ int main(int argc, char **argv)
 		case 'm':
 			model = parse_model(optarg);
 			if (model < 0) {
-				fprintf(stderr, "avatargw-eval: --model paper, default, or names joined by '+': "
-						"hand-elbow, reach-first, yaw-hands, reach-chest, neck, bow, "
-						"keep-branch, reach-roll, bow-head, lean, raise-roll, arm-twist\n");
+				fprintf(stderr,
+					"avatargw-eval: --model paper, default, or names joined by '+': "
+					"hand-elbow, reach-first, yaw-hands, reach-chest, neck, bow, "
+					"keep-branch, reach-roll, bow-head, lean, raise-roll, arm-twist, yaw-reach\n");
 				return 2;
 			}
 			break;

@@ -344,8 +344,8 @@ def plot_keyframes(kf, outdir):
 
 # model bits as avatargw-eval --model names them (include/ik/avatar.h); DEFAULT_BITS is AVATAR_MODEL_DEFAULT
 BITS = ["hand-elbow", "reach-first", "yaw-hands", "reach-chest", "neck", "bow", "keep-branch", "reach-roll",
-        "bow-head", "lean", "raise-roll", "arm-twist"]
-DEFAULT_BITS = ["hand-elbow", "yaw-hands", "reach-chest", "bow", "keep-branch", "reach-roll", "bow-head", "lean",
+        "bow-head", "lean", "raise-roll", "arm-twist", "yaw-reach"]
+DEFAULT_BITS = ["hand-elbow", "reach-first", "yaw-reach", "reach-chest", "bow", "keep-branch", "reach-roll", "bow-head", "lean",
                 "raise-roll"]
 # joint limits (degrees): the benchmark's (arm_default_limits), the rules that change them (joint, bound, value),
 # and the avatar's (avatar_default_limits)
@@ -356,6 +356,7 @@ AVATAR_LIMITS = [(-30, 30), (-170, 30), (-60, 120), (-90, 90), (-90, 60), (-90, 
 RULES = [("hand-elbow", "the elbow where the hand's orientation is plausible (hand-elbow cost, gravity pull)"),
          ("reach-first", "the hand on its sensor first when orientation and position conflict"),
          ("yaw-hands", "the chest's yaw pulled toward the hands' line"),
+         ("yaw-reach", "the chest's yaw turned toward a hand held forward (36.4° per arm length, as far as it is raised)"),
          ("reach-chest", "the chest moved toward a hand beyond reach"),
          ("neck", "a neck that bends with half the head's tilt"),
          ("bow", "a bow at the waist when a hand is off its sensor"),

@@ -29,7 +29,12 @@
  *    orientation as its limits allow (the paper's Newton iteration and our
  *    solver otherwise trade position for orientation). An option: the
  *    folds of docs/FIDELITY.md do not choose it.
- *  - AVATAR_YAW_HANDS: the chest's yaw is the head's, pulled toward the
+ *  - AVATAR_YAW_REACH: the chest's yaw is the head's turned toward a hand
+ *    held forward (a right hand forward turns the chest left, the shoulder
+ *    going with the arm): by 36.4 degrees per arm length of each hand's
+ *    forward reach from the shoulders, as far as the hand is raised (none
+ *    hanging, all from the shoulders' height up), right minus left.
+ *  - AVATAR_YAW_HANDS (an option): the chest's yaw is pulled toward the
  *    heading of the line from the left to the right hand when the two
  *    agree (the head turns more often than the chest).
  *  - AVATAR_REACH_CHEST: hand sensors beyond the straight arms' reach
@@ -94,9 +99,10 @@ extern "C" {
 #define AVATAR_LEAN 0x200
 #define AVATAR_RAISE_ROLL 0x400
 #define AVATAR_ARM_TWIST 0x800
+#define AVATAR_YAW_REACH 0x1000
 #define AVATAR_MODEL_DEFAULT                                                                                           \
-	(AVATAR_HAND_ELBOW | AVATAR_YAW_HANDS | AVATAR_REACH_CHEST | AVATAR_BOW | AVATAR_KEEP_BRANCH |                 \
-	 AVATAR_REACH_ROLL | AVATAR_BOW_HEAD | AVATAR_LEAN | AVATAR_RAISE_ROLL)
+	(AVATAR_HAND_ELBOW | AVATAR_REACH_FIRST | AVATAR_YAW_REACH | AVATAR_REACH_CHEST | AVATAR_BOW |                 \
+	 AVATAR_KEEP_BRANCH | AVATAR_REACH_ROLL | AVATAR_BOW_HEAD | AVATAR_LEAN | AVATAR_RAISE_ROLL)
 
 struct avatar_body {
 	struct arm_dims dims;	 /* the right arm (and the left one unless avatar_set_left_arm() says otherwise) */
@@ -156,7 +162,8 @@ void avatar_set_left_arm(struct avatar *av, sc_t arm, sc_t forearm, sc_t hand);
 sc_t avatar_head_yaw(const struct quat *head);
 /*
  * The chest frame in the world from the head sensor pose (and, with
- * AVATAR_YAW_HANDS, the hand sensors: NULL or non-finite ones are ignored);
+ * AVATAR_YAW_REACH and AVATAR_YAW_HANDS, the hand sensors: NULL or non-finite
+ * ones are ignored);
  * false if the head pose is not finite.
  */
 bool avatar_chest(const struct avatar *av, const struct dq *head, struct dq *chest, sc_t *yaw);

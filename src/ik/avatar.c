@@ -129,6 +129,59 @@ static void neck_offset(const struct vec3 *off, const struct quat *yaw, const st
 }
 
 /*
+ * AVATAR_YAW_REACH: a hand held forward turns the trunk toward it (the
+ * shoulder goes with the arm: a right hand forward turns the chest to the
+ * left). Each hand's forward reach from the chain origin the head places,
+ * in arm lengths (A + F + H, at most 2), counts as much as the hand is
+ * raised: not at all hanging (a length below the shoulders), fully from
+ * the shoulders' height up. The chest turns by REACH_TURN times the right
+ * hand's share minus the left's, about world z: 36.4 degrees per arm length,
+ * fitted on CMU motion alone (docs/FIDELITY.md). (cy, sy) is the head's
+ * heading; returns the turn in radians.
+ */
+#define REACH_TURN SC_C(0.6353)
+
+static sc_t reach_share(const struct dq *hand, const struct arm_dims *d, const struct vec3 *hp, const struct vec3 *ho,
+			sc_t cy, sc_t sy)
+{
+	struct vec3 p;
+	sc_t len = d->arm + d->forearm + d->hand, fwd, up;
+
+	if (!hand || !dq_is_finite(hand) || !(len > SC_C(0.05)))
+		return 0;
+	dq_translation(hand, &p);
+	/* the hand from the chain origin, head - Rz(yaw) head_offset, along the yawed y and z */
+	fwd = sc_mul(p.x - hp->x, -sy) + sc_mul(p.y - hp->y, cy) + ho->y;
+	if (!(fwd > 0))
+		return 0;
+	up = p.z - hp->z + ho->z;
+	return sc_mul(sc_min(sc_div(fwd, len), SC_C(2)), sc_clamp(SC_C(1) + sc_div(up, len), SC_C(0), SC_C(1)));
+}
+
+/*
+ * The half-angle rotation about z of the heading (cy, sy) = (cos y, sin y),
+ * a unit vector: (1 + cy, sy) over its norm while |y| <= 90 degrees, beyond
+ * that (|sy|, 1 - cy) with sy's sign on the second (the same direction),
+ * each norm at least sqrt 2. The first form alone leaves 1 + cy without
+ * bits near y = 180 degrees in fixed point: a rotation far from unit, 1 / n
+ * saturated, the chest a metre off (test_fixq, the clip turned around).
+ */
+static void heading_half(sc_t cy, sc_t sy, sc_t *w, sc_t *z)
+{
+	sc_t k;
+
+	if (cy >= 0) {
+		k = sc_div(SC_C(1), sc_sqrt(2 * (SC_C(1) + cy)));
+		*w = sc_mul(SC_C(1) + cy, k);
+		*z = sc_mul(sy, k);
+	} else {
+		k = sc_div(SC_C(1), sc_sqrt(2 * (SC_C(1) - cy)));
+		*w = sc_mul(sc_abs(sy), k);
+		*z = sc_mul(sy < 0 ? cy - SC_C(1) : SC_C(1) - cy, k);
+	}
+}
+
+/*
  * The chest's heading without an angle until the last: the head's twist
  * about z, (w, z) normalised, is the half-angle rotation itself; the hands'
  * heading is averaged in as unit vectors, and the mean's half-angle
@@ -175,6 +228,7 @@ static bool chest_place(const struct avatar *av, unsigned model, const struct dq
 	struct quat r, hr, rb;
 	struct vec3 hp, off, o, bent;
 	sc_t w, z, n, cy, sy, hx = 0, hy = 0, wt;
+	bool turned = false;
 
 	if (!dq_is_finite(head) || !quat_normalize(&head->r, &r)) {
 		dq_identity(chest);
@@ -198,6 +252,22 @@ static bool chest_place(const struct avatar *av, unsigned model, const struct dq
 	}
 	cy = sc_mul(w, w) - sc_mul(z, z);
 	sy = 2 * sc_mul(w, z);
+	dq_translation(head, &hp);
+	if (model & AVATAR_YAW_REACH) {
+		sc_t a = sc_mul(
+			     REACH_TURN,
+			     reach_share(rhand, &av->arm[ARM_RIGHT].dims, &hp, &av->body.head_offset, cy, sy) -
+				     reach_share(lhand, &av->arm[ARM_LEFT].dims, &hp, &av->body.head_offset, cy, sy)),
+		     s, c, x;
+
+		if (a != 0) {
+			sc_sincos(a, &s, &c);
+			x = sc_mul(cy, c) - sc_mul(sy, s);
+			sy = sc_mul(sy, c) + sc_mul(cy, s);
+			cy = x;
+			turned = true;
+		}
+	}
 	if ((model & AVATAR_YAW_HANDS) && (wt = hands_heading(lhand, rhand, cy, sy, &hx, &hy)) > 0) {
 		/* the weighted circular mean of the two headings */
 		sc_t mx = cy + sc_mul(wt, hx), my = sy + sc_mul(wt, hy), k;
@@ -207,29 +277,13 @@ static bool chest_place(const struct avatar *av, unsigned model, const struct dq
 			k = sc_div(SC_C(1), n);
 			cy = sc_mul(mx, k);
 			sy = sc_mul(my, k);
-			/*
-			 * The half angle of the heading (cy, sy) = (cos y, sin y):
-			 * (1 + cy, sy) over its norm while |y| <= 90 degrees, beyond
-			 * that (|sy|, 1 - cy) with sy's sign on the second (the same
-			 * direction), each norm at least sqrt 2. The first form alone
-			 * leaves 1 + cy without bits near y = 180 degrees in fixed
-			 * point: a rotation far from unit, 1 / n saturated, the chest
-			 * a metre off (test_fixq, the clip turned around).
-			 */
-			if (cy >= 0) {
-				k = sc_div(SC_C(1), sc_sqrt(2 * (SC_C(1) + cy)));
-				w = sc_mul(SC_C(1) + cy, k);
-				z = sc_mul(sy, k);
-			} else {
-				k = sc_div(SC_C(1), sc_sqrt(2 * (SC_C(1) - cy)));
-				w = sc_mul(sc_abs(sy), k);
-				z = sc_mul(sy < 0 ? cy - SC_C(1) : SC_C(1) - cy, k);
-			}
+			turned = true;
 		}
 	}
+	if (turned)
+		heading_half(cy, sy, &w, &z);
 	*yaw = 2 * sc_atan2(z, w);
 	r = (struct quat){ w, 0, 0, z };
-	dq_translation(head, &hp);
 	if ((model & AVATAR_BOW_HEAD) && head_bow(&r, &hr, &rb)) {
 		/* the trunk bowed about the head sensor, the neck as upright */
 		quat_rotate(&rb, &av->body.head_offset, &off);
