@@ -511,12 +511,13 @@ static void test_lean(void **state)
 		const int up = lean[i] < 0 ? ARM_RIGHT : ARM_LEFT;
 
 		leaning_person(&av, &hp, &off, lean[i], raised, hanging, &head, hand);
-		av.body.model = AVATAR_MODEL_DEFAULT & ~(unsigned)AVATAR_LEAN;
+		/* the bend itself: this person's chest faces where the head does (no turn toward the raised hand) */
+		av.body.model = AVATAR_MODEL_DEFAULT & ~(unsigned)(AVATAR_LEAN | AVATAR_YAW_REACH);
 		avatar_solve(&av, &ik_kin_dq, &o, &head, &hand[ARM_LEFT], &hand[ARM_RIGHT], NULL, &p);
 		print_message("lean %+.0f degrees, upright: raised hand %.3g mm off\n", lean[i],
 			      p.res[up].err.pos * 1e3);
 		assert_true(p.res[up].err.pos > 5e-3);
-		av.body.model = AVATAR_MODEL_DEFAULT;
+		av.body.model = AVATAR_MODEL_DEFAULT & ~(unsigned)AVATAR_YAW_REACH;
 		assert_lean_followed(&av, &o, &head, hand, lean[i]);
 	}
 }
@@ -914,7 +915,9 @@ static void test_track_compromise(void **state)
 	assert_true(worse <= held / 2);
 }
 
-/* AVATAR_YAW_HANDS: the chest turns toward the hands' line when it agrees with the head */
+/* AVATAR_YAW_HANDS (an option): the chest turns toward the hands' line when it agrees with the head */
+#define YAW_HANDS_MODEL ((AVATAR_MODEL_DEFAULT & ~(unsigned)AVATAR_YAW_REACH) | AVATAR_YAW_HANDS)
+
 static void test_yaw_hands(void **state)
 {
 	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.08 };
@@ -926,6 +929,7 @@ static void test_yaw_hands(void **state)
 
 	(void)state;
 	avatar_init(&av, &dims, &off, NULL);
+	av.body.model = YAW_HANDS_MODEL;
 	dq_from_rt(&id, &(struct vec3){ 0, 0, 1.6 }, &head);
 	/* hands 60 cm apart on a line turned 20 degrees: the chest halfway (equal weights) */
 	dq_from_rt(&id, &(struct vec3){ -0.3 * cos(0.349), -0.3 * sin(0.349), 1.0 }, &lh);
@@ -936,7 +940,7 @@ static void test_yaw_hands(void **state)
 	av.body.model = AVATAR_PAPER;
 	assert_true(avatar_chest_hands(&av, &head, &lh, &rh, &chest, &y));
 	assert_true(fabs(y) < 1e-12);
-	av.body.model = AVATAR_MODEL_DEFAULT;
+	av.body.model = YAW_HANDS_MODEL;
 	/* hands 20 cm apart, a line 80 degrees off, a lost hand: the head's yaw */
 	dq_from_rt(&id, &(struct vec3){ 0.1, 0, 1.0 }, &rh);
 	dq_from_rt(&id, &(struct vec3){ -0.1, 0, 1.0 }, &lh);
@@ -968,6 +972,7 @@ static void test_chest_heading_consistent(void **state)
 
 	(void)state;
 	avatar_init(&av, &dims, &off, NULL);
+	av.body.model = YAW_HANDS_MODEL;
 	quat_from_axis_angle(&(struct vec3){ 1, 0, 0 }, 0.3, &pitch);
 	for (i = 0; i < 36; i++) {
 		double hy = -M_PI + (i + 0.5) * (2 * M_PI / 36);
@@ -1012,6 +1017,63 @@ static void test_chest_heading_consistent(void **state)
 			assert_true(fabs(d) < 1e-12); /* 70 off: the head's */
 		prev = y;
 	}
+}
+
+/*
+ * AVATAR_YAW_REACH: a hand held forward turns the chest toward it, 36.4
+ * degrees per arm length of reach from the shoulders, times how far the hand
+ * is raised (none hanging a length below the shoulders, all from their
+ * height up); right minus left. The head looks straight ahead (turned 50
+ * degrees in the world) and its offset is straight up, so the reach is
+ * measured from the point below it.
+ */
+static double reach_yaw(struct avatar *av, const struct dq *head, double hy, double rf, double ru, double lf, double lu)
+{
+	const double len = 0.30 + 0.26 + 0.08, c = cos(hy), s = sin(hy);
+	const struct quat id = { 1, 0, 0, 0 };
+	struct dq lh, rh, chest;
+	sc_t y;
+
+	/* forward f and up u arm lengths from the chain origin (1.35 m), 0.2 m out to the side */
+	dq_from_rt(&id, &(struct vec3){ 0.2 * c - rf * len * s, 0.2 * s + rf * len * c, 1.35 + ru * len }, &rh);
+	dq_from_rt(&id, &(struct vec3){ -0.2 * c - lf * len * s, -0.2 * s + lf * len * c, 1.35 + lu * len }, &lh);
+	assert_true(avatar_chest_hands(av, head, &lh, &rh, &chest, &y));
+	/* a pure turn about z by the yaw it reports */
+	assert_true(fabs(2 * atan2(chest.r.z, chest.r.w) - y) < 1e-12 && chest.r.x == 0 && chest.r.y == 0);
+	return remainder(y - hy, 2 * M_PI) * 180 / M_PI;
+}
+
+static void test_yaw_reach(void **state)
+{
+	const struct arm_dims dims = { 0.18, 0.30, 0.26, 0.08 };
+	const struct vec3 off = { 0, 0, 0.25 };
+	const double hy = 50 * M_PI / 180, k = 36.4;
+	struct avatar av;
+	struct dq head;
+	struct quat hr;
+
+	(void)state;
+	avatar_init(&av, &dims, &off, NULL);
+	assert_true(av.body.model & AVATAR_YAW_REACH);
+	quat_from_axis_angle(&(struct vec3){ 0, 0, 1 }, hy, &hr);
+	dq_from_rt(&hr, &(struct vec3){ 0, 0, 1.6 }, &head);
+	/* the right hand a whole arm forward at the shoulders' height: the chest turned left by the whole turn */
+	assert_true(fabs(reach_yaw(&av, &head, hy, 1, 0, 0, -1) - k) < 0.01);
+	/* the left hand: to the right */
+	assert_true(fabs(reach_yaw(&av, &head, hy, 0, -1, 1, 0) + k) < 0.01);
+	/* half an arm forward, halfway up from hanging: a quarter */
+	assert_true(fabs(reach_yaw(&av, &head, hy, 0.5, -0.5, 0, -1) - k / 4) < 0.01);
+	/* raised above the shoulders: as at their height */
+	assert_true(fabs(reach_yaw(&av, &head, hy, 0.5, 0.5, 0, -1) - k / 2) < 0.01);
+	/* both forward alike, hands hanging (swinging forward), hands behind: the head's heading */
+	assert_true(fabs(reach_yaw(&av, &head, hy, 0.8, 0, 0.8, 0)) < 1e-9);
+	assert_true(fabs(reach_yaw(&av, &head, hy, 0.4, -1, 0, -1)) < 1e-9);
+	assert_true(fabs(reach_yaw(&av, &head, hy, -0.5, 0, -0.2, 0)) < 1e-9);
+	/* a hand far beyond reach counts as two arm lengths */
+	assert_true(fabs(reach_yaw(&av, &head, hy, 5, 0, 0, -1) - 2 * k) < 0.01);
+	/* the paper's avatar: the head's heading */
+	av.body.model = AVATAR_PAPER;
+	assert_true(fabs(reach_yaw(&av, &head, hy, 1, 0, 0, -1)) < 1e-9);
 }
 
 /*
@@ -1090,6 +1152,7 @@ int main(void)
 		cmocka_unit_test(test_track_compromise),
 		cmocka_unit_test(test_branch_held),
 		cmocka_unit_test(test_yaw_hands),
+		cmocka_unit_test(test_yaw_reach),
 		cmocka_unit_test(test_chest_heading_consistent),
 	};
 

@@ -900,8 +900,10 @@ enum { LEAN_N = 40 };
 static double leaning_agree(const char *what, const double head[3], const double raised[ARM_DOF],
 			    const double hanging[ARM_DOF], const double lean[LEAN_N], double *roll_max)
 {
+	/* the bend itself: this person's chest faces where the head does (no turn toward the raised hand) */
 	static const struct ikx_avatar_setup body = { .dims = { 0.18, 0.30, 0.26, 0.08 },
-						      .head_offset = { 0, 0, 0.25 } };
+						      .head_offset = { 0, 0, 0.25 },
+						      .without = AVATAR_YAW_REACH };
 	static struct ikx_avatar_frame in[LEAN_N];
 	static struct ikx_avatar_out od[LEAN_N], oq[LEAN_N];
 	double tol_d, tol_q, rot_d, rot_q, worst = 0;

@@ -183,7 +183,7 @@ void ikx_avatar_run(const struct ikx_avatar_setup *o, const struct ikx_avatar_fr
 	size_t i;
 
 	avatar_init(&av, &d, &off, NULL);
-	av.body.model |= o->options;
+	av.body.model = (av.body.model | o->options) & ~o->without;
 	ik_default_opts(&opts);
 	for (i = 0; i < n; i++) {
 		struct avatar_pose *cur = &pose[i & 1], *prev = i ? &pose[(i - 1) & 1] : NULL;

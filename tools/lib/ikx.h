@@ -34,6 +34,7 @@ struct ikx_avatar_setup {
 	double dims[4];	       /* S, A, F, H, metres (both arms) */
 	double head_offset[3]; /* head sensor from the chest origin, chest frame, metres */
 	unsigned options;      /* AVATAR_* options added to AVATAR_MODEL_DEFAULT */
+	unsigned without;      /* AVATAR_* choices taken from it */
 };
 
 /* one frame's sensor poses, world: x y z qw qx qy qz */
