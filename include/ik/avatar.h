@@ -27,8 +27,7 @@
  *    hand both the sensor's position and its orientation, the hand still
  *    goes to the sensor's position and the wrist turns as far toward the
  *    orientation as its limits allow (the paper's Newton iteration and our
- *    solver otherwise trade position for orientation). An option: the
- *    folds of docs/FIDELITY.md do not choose it.
+ *    solver otherwise trade position for orientation).
  *  - AVATAR_YAW_REACH: the chest's yaw is the head's turned toward a hand
  *    held forward (a right hand forward turns the chest left, the shoulder
  *    going with the arm): by 36.4 degrees per arm length of each hand's

@@ -213,7 +213,8 @@ class FoldsTest(unittest.TestCase):
         self.assertEqual(len(folds), 4)
         rules = self.res["rules"]
         for r in ("hand-elbow", "reach-first", "yaw-hands", "reach-chest", "neck", "bow", "keep-branch",
-                  "reach-roll", "bow-head", "lean", "raise-roll", "arm-twist", "j2-overhead", "j2-adduction", "wrist-thumb"):
+                  "reach-roll", "bow-head", "lean", "raise-roll", "arm-twist", "yaw-reach", "j2-overhead", "j2-adduction",
+                  "wrist-thumb"):
             self.assertIn(r, rules)
             d = rules[r]
             self.assertTrue(set(d["chosen"]) <= folds, r)
