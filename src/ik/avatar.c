@@ -154,8 +154,10 @@ static sc_t reach_share(const struct dq *hand, const struct arm_dims *d, const s
 	fwd = sc_mul(p.x - hp->x, -sy) + sc_mul(p.y - hp->y, cy) + ho->y;
 	if (!(fwd > 0))
 		return 0;
-	up = p.z - hp->z + ho->z;
-	return sc_mul(sc_min(sc_div(fwd, len), SC_C(2)), sc_clamp(SC_C(1) + sc_div(up, len), SC_C(0), SC_C(1)));
+	/* bounded before the divisions: a sensor far off saturates nothing in fixed point */
+	fwd = sc_min(fwd, 2 * len);
+	up = sc_clamp(p.z - hp->z + ho->z, -len, SC_C(0));
+	return sc_mul(sc_div(fwd, len), SC_C(1) + sc_div(up, len));
 }
 
 /*
