@@ -599,144 +599,152 @@ static void test_replay_nonfinite_analog(void **state)
 	unlink(path);
 }
 
-/* a recording of remote avatars only (a site without trackers): replayed as recorded, on its clock */
-static void test_replay_remote_only(void **state)
-{
-	static struct rec_buf r;
-	static struct config cfg;
-	static struct wire_describe d, dout;
-	char path[] = "/tmp/avatargw-test-recfile-XXXXXX";
-	struct tracker_clock now = { 1000000000000ull, 0 };
+/* a replay test of remote avatars: its recording, source and what the remote avatar published */
+struct remote_fx {
+	struct rec_buf r;
+	struct config cfg;
+	struct wire_describe d, dout;
+	char path[40];
+	struct tracker_clock now;
 	struct wire_frame out;
 	struct tracker t;
 	bool described, fresh;
+};
+
+static struct remote_fx *remote_fx(void)
+{
+	static struct remote_fx x;
+
+	memset(&x, 0, sizeof(x));
+	snprintf(x.path, sizeof(x.path), "/tmp/avatargw-test-recfile-XXXXXX");
+	x.now.mono_ns = 1000000000000ull;
+	return &x;
+}
+
+/* remote avatar 0 of the replay now (stale after 50 ms): whether it publishes, its frame in x->out */
+static bool remote_now(struct remote_fx *x)
+{
+	return x->t.drv->solved(&x->t, 0, x->now.mono_ns, 50000000, &x->out, &x->dout, &x->described, &x->fresh);
+}
+
+/* a recording of remote avatars only (a site without trackers): replayed as recorded, on its clock */
+static void test_replay_remote_only(void **state)
+{
+	struct remote_fx *x = remote_fx();
 	uint16_t id;
 
 	(void)state;
-	remote_start(&r, &d, 5000000);
+	remote_start(&x->r, &x->d, 5000000);
 	for (int i = 0; i < 10; i++)
-		put_remote_frame(&r, 5000000 + 10000000 * (uint64_t)i, 77 + (uint64_t)i, 0.1f * (float)i);
-	replay_open(&r, path, "loop = no\n", &cfg, &t);
-	assert_int_equal(t.drv->solved_count(&t), 1);
-	assert_string_equal(t.drv->solved_name(&t, 0, &id), "lab-a/person0");
+		put_remote_frame(&x->r, 5000000 + 10000000 * (uint64_t)i, 77 + (uint64_t)i, 0.1f * (float)i);
+	replay_open(&x->r, x->path, "loop = no\n", &x->cfg, &x->t);
+	assert_int_equal(x->t.drv->solved_count(&x->t), 1);
+	assert_string_equal(x->t.drv->solved_name(&x->t, 0, &id), "lab-a/person0");
 	assert_int_equal(id, 1000);
 	/* the first poll starts the clip: the DESCRIBE and the first frame (both at clip time 0) */
-	assert_int_equal(t.drv->poll(&t, &now), 0);
-	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
-	assert_true(described && fresh);
-	assert_string_equal(dout.avatar_name, "lab-a/person0");
-	assert_true(dout.site.present && dout.site.rtt_ms == 0.25f);
-	assert_true(out.h.sample_time_ns == 77 && out.joint[5] == 0.0f && (out.h.flags & WIRE_F_NEW_SAMPLE));
+	assert_int_equal(x->t.drv->poll(&x->t, &x->now), 0);
+	assert_true(remote_now(x));
+	assert_true(x->described && x->fresh);
+	assert_string_equal(x->dout.avatar_name, "lab-a/person0");
+	assert_true(x->dout.site.present && x->dout.site.rtt_ms == 0.25f);
+	assert_true(x->out.h.sample_time_ns == 77 && x->out.joint[5] == 0.0f && (x->out.h.flags & WIRE_F_NEW_SAMPLE));
 	/* 45 ms later: the frame recorded at 40 ms, joint angles as recorded */
-	now.mono_ns += 45000000;
-	t.drv->poll(&t, &now);
-	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
-	assert_true(!described && fresh);
-	assert_true(out.h.sample_time_ns == 81 && out.joint[5] == 0.4f);
-	assert_int_equal(out.sensor[0].state, WIRE_SENSOR_OK);
+	x->now.mono_ns += 45000000;
+	x->t.drv->poll(&x->t, &x->now);
+	assert_true(remote_now(x));
+	assert_true(!x->described && x->fresh);
+	assert_true(x->out.h.sample_time_ns == 81 && x->out.joint[5] == 0.4f);
+	assert_int_equal(x->out.sensor[0].state, WIRE_SENSOR_OK);
 	/* past the end: nothing new, STALE after the stale time */
-	now.mono_ns += 500000000;
-	t.drv->poll(&t, &now);
-	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
-	assert_int_equal(out.h.sample_time_ns, 86);
-	now.mono_ns += 60000000;
-	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
-	assert_false(fresh);
-	assert_true((out.h.flags & WIRE_F_STALE) && out.sensor[0].state == WIRE_SENSOR_STALE);
-	assert_int_equal(atomic_load(&t.st.state), TRACKER_ENDED);
-	replay_close(&t, &cfg, path);
+	x->now.mono_ns += 500000000;
+	x->t.drv->poll(&x->t, &x->now);
+	assert_true(remote_now(x));
+	assert_int_equal(x->out.h.sample_time_ns, 86);
+	x->now.mono_ns += 60000000;
+	assert_true(remote_now(x));
+	assert_false(x->fresh);
+	assert_true((x->out.h.flags & WIRE_F_STALE) && x->out.sensor[0].state == WIRE_SENSOR_STALE);
+	assert_int_equal(atomic_load(&x->t.st.state), TRACKER_ENDED);
+	replay_close(&x->t, &x->cfg, x->path);
 }
 
 /* a stepped replay plays the remote avatars too: at each instant, what was recorded up to its time */
 static void test_replay_remote_stepped(void **state)
 {
-	static struct rec_buf r;
-	static struct config cfg;
-	static struct wire_describe d, dout;
-	char path[] = "/tmp/avatargw-test-recfile-XXXXXX";
-	struct tracker_clock now = { 1000000000000ull, 0 };
-	struct wire_frame out;
-	struct tracker t;
-	bool described, fresh;
+	struct remote_fx *x = remote_fx();
 
 	(void)state;
 	/* instants every 10 ms from 1 ms, the remote avatar's frames 5 ms after each */
-	remote_start(&r, &d, 1000000);
+	remote_start(&x->r, &x->d, 1000000);
 	for (int i = 0; i < 6; i++) {
 		for (uint16_t s = 0; s < 3; s++)
-			put_sample(&r, 0, s, 1000000 + 10000000 * (uint64_t)i, false);
-		put_remote_frame(&r, 6000000 + 10000000 * (uint64_t)i, 77 + (uint64_t)i, 0.1f * (float)i);
+			put_sample(&x->r, 0, s, 1000000 + 10000000 * (uint64_t)i, false);
+		put_remote_frame(&x->r, 6000000 + 10000000 * (uint64_t)i, 77 + (uint64_t)i, 0.1f * (float)i);
 	}
-	replay_open(&r, path, "step = yes\nloop = no\n", &cfg, &t);
-	assert_int_equal(t.drv->solved_count(&t), 1);
+	replay_open(&x->r, x->path, "step = yes\nloop = no\n", &x->cfg, &x->t);
+	assert_int_equal(x->t.drv->solved_count(&x->t), 1);
 	/* the first instant: the DESCRIBE recorded with it, no frame yet */
-	assert_int_equal(t.drv->poll(&t, &now), 3);
-	assert_false(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	assert_int_equal(x->t.drv->poll(&x->t, &x->now), 3);
+	assert_false(remote_now(x));
 	/* no step, however long: nothing new */
-	now.mono_ns += 1000000000;
-	assert_int_equal(t.drv->poll(&t, &now), 0);
-	assert_false(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+	x->now.mono_ns += 1000000000;
+	assert_int_equal(x->t.drv->poll(&x->t, &x->now), 0);
+	assert_false(remote_now(x));
 	for (int k = 1; k < 6; k++) {
-		assert_int_equal(replay_step(&t, 1), 0);
-		now.mono_ns += 1000000;
-		assert_int_equal(t.drv->poll(&t, &now), 3);
-		assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
-		assert_true(fresh);
-		assert_true(out.h.sample_time_ns == 77 + (uint64_t)(k - 1) && out.joint[5] == 0.1f * (float)(k - 1));
+		assert_int_equal(replay_step(&x->t, 1), 0);
+		x->now.mono_ns += 1000000;
+		assert_int_equal(x->t.drv->poll(&x->t, &x->now), 3);
+		assert_true(remote_now(x));
+		assert_true(x->fresh);
+		assert_true(x->out.h.sample_time_ns == 77 + (uint64_t)(k - 1) &&
+			    x->out.joint[5] == 0.1f * (float)(k - 1));
 	}
 	/* the step past the last instant ends the source and plays the frame recorded after it */
-	assert_int_equal(replay_step(&t, 1), 0);
-	now.mono_ns += 1000000;
-	assert_int_equal(t.drv->poll(&t, &now), 0);
-	assert_int_equal(atomic_load(&t.st.state), TRACKER_ENDED);
-	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
-	assert_true(out.h.sample_time_ns == 82 && out.joint[5] == 0.5f);
-	replay_close(&t, &cfg, path);
+	assert_int_equal(replay_step(&x->t, 1), 0);
+	x->now.mono_ns += 1000000;
+	assert_int_equal(x->t.drv->poll(&x->t, &x->now), 0);
+	assert_int_equal(atomic_load(&x->t.st.state), TRACKER_ENDED);
+	assert_true(remote_now(x));
+	assert_true(x->out.h.sample_time_ns == 82 && x->out.joint[5] == 0.5f);
+	replay_close(&x->t, &x->cfg, x->path);
 }
 
 /* a remote avatar whose site left while recording (its DESCRIBE saying gone): no frames in the replay from
  * then on, as live, until a frame of it comes again (then its DESCRIBE at once) */
 static void test_replay_remote_departure(void **state)
 {
-	static struct rec_buf r;
-	static struct config cfg;
-	static struct wire_describe d, dout;
-	char path[] = "/tmp/avatargw-test-recfile-XXXXXX";
-	struct tracker_clock now = { 1000000000000ull, 0 };
-	struct wire_frame out;
-	struct tracker t;
+	struct remote_fx *x = remote_fx();
 	uint8_t msg[WIRE_MAX_MSG];
-	bool described, fresh;
 
 	(void)state;
-	remote_start(&r, &d, 1000000);
+	remote_start(&x->r, &x->d, 1000000);
 	for (int i = 0; i < 3; i++)
-		put_remote_frame(&r, 1000000 + 10000000 * (uint64_t)i, 77 + (uint64_t)i, 0);
-	d.site.state = WIRE_SITE_GONE; /* 25 ms: its site left */
-	put_remote(&r, 26000000, msg, wire_encode_describe(&d, msg));
-	d.site.state = WIRE_SITE_PRESENT;
-	put_remote_frame(&r, 101000000, 177, 0); /* 100 ms: back */
-	replay_open(&r, path, "loop = no\n", &cfg, &t);
-	t.drv->poll(&t, &now);
-	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
-	assert_true(described && out.h.sample_time_ns == 77);
-	now.mono_ns += 21000000;
-	t.drv->poll(&t, &now);
-	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
-	assert_true(fresh && !described && out.h.sample_time_ns == 79);
+		put_remote_frame(&x->r, 1000000 + 10000000 * (uint64_t)i, 77 + (uint64_t)i, 0);
+	x->d.site.state = WIRE_SITE_GONE; /* 25 ms: its site left */
+	put_remote(&x->r, 26000000, msg, wire_encode_describe(&x->d, msg));
+	x->d.site.state = WIRE_SITE_PRESENT;
+	put_remote_frame(&x->r, 101000000, 177, 0); /* 100 ms: back */
+	replay_open(&x->r, x->path, "loop = no\n", &x->cfg, &x->t);
+	x->t.drv->poll(&x->t, &x->now);
+	assert_true(remote_now(x));
+	assert_true(x->described && x->out.h.sample_time_ns == 77);
+	x->now.mono_ns += 21000000;
+	x->t.drv->poll(&x->t, &x->now);
+	assert_true(remote_now(x));
+	assert_true(x->fresh && !x->described && x->out.h.sample_time_ns == 79);
 	/* gone: nothing, not even stale frames */
 	for (int k = 0; k < 7; k++) {
-		now.mono_ns += 10000000;
-		t.drv->poll(&t, &now);
-		assert_false(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
+		x->now.mono_ns += 10000000;
+		x->t.drv->poll(&x->t, &x->now);
+		assert_false(remote_now(x));
 	}
 	/* back at 100 ms: its frame, and its DESCRIBE again */
-	now.mono_ns += 10000000;
-	t.drv->poll(&t, &now);
-	assert_true(t.drv->solved(&t, 0, now.mono_ns, 50000000, &out, &dout, &described, &fresh));
-	assert_true(fresh && described && out.h.sample_time_ns == 177);
-	assert_int_equal(dout.site.state, WIRE_SITE_PRESENT);
-	replay_close(&t, &cfg, path);
+	x->now.mono_ns += 10000000;
+	x->t.drv->poll(&x->t, &x->now);
+	assert_true(remote_now(x));
+	assert_true(x->fresh && x->described && x->out.h.sample_time_ns == 177);
+	assert_int_equal(x->dout.site.state, WIRE_SITE_PRESENT);
+	replay_close(&x->t, &x->cfg, x->path);
 }
 
 int main(void)
