@@ -131,6 +131,9 @@ if i:
     goal("instructions per avatar per cycle not above main's %d (%d, %+d)"
          % (i["baseline_per_avatar"], i["cycle_per_avatar"], i["cycle_per_avatar"] - i["baseline_per_avatar"]),
          i["cycle_per_avatar"] <= i["baseline_per_avatar"])
+    # the avatar's rules may spend up to 10 % over the cycle of 2026-11-27 after the layering (14 575: issue 19)
+    goal("the avatar's rules: instructions per avatar per cycle within 10 %% of 14575 (%d, %+.1f %%)"
+         % (i["cycle_per_avatar"], 100.0 * (i["cycle_per_avatar"] / 14575 - 1)), i["cycle_per_avatar"] <= 1.1 * 14575)
 goal("capacity from CPU time >= 2000 avatars per core at 240 Hz (%.0f)" % c["capacity_per_core"],
      c["capacity_per_core"] >= 2000)
 goal("loop latency, sample read -> sendto returned, one avatar, p99 <= 50 us: the loop's own, the host's "
