@@ -183,6 +183,19 @@ static void test_flystick(void **state)
 	/* the block count must match what the Flystick says it has */
 	assert_int_equal(feed(d, "6df2 1 1 [0 1.000 3 2][0 0 0][1 0 0 0 1 0 0 0 1][1]\n", &g), 0);
 	assert_int_equal(d->c.malformed, 1);
+	/* a button word that is no 32-bit integer (found by tests/fuzz/fuzz_dtrack.c: 7.8e88 made a long
+	 * overflow): that Flystick's record is malformed, the rest of the frame stands */
+	assert_int_equal(feed(d,
+			      "6df2 2 2 [0 1.000 6 0][0 0 0][1 0 0 0 1 0 0 0 1][7.8e88] "
+			      "[1 1.000 6 0][0 0 0][1 0 0 0 1 0 0 0 1][2]\n",
+			      &g),
+			 1);
+	assert_int_equal(g.s[0].buttons, 2);
+	assert_int_equal(d->c.malformed, 2);
+	assert_int_equal(feed(d, "6df2 1 1 [0 1.000 6 0][0 0 0][1 0 0 0 1 0 0 0 1][4294967296]\n", &g), 0);
+	assert_int_equal(feed(d, "6df2 1 1 [0 1.000 6 0][0 0 0][1 0 0 0 1 0 0 0 1][-1]\n", &g), 0);
+	assert_int_equal(feed(d, "6df2 1 1 [0 1.000 6 0][0 0 0][1 0 0 0 1 0 0 0 1][2.5]\n", &g), 0);
+	assert_int_equal(d->c.malformed, 5);
 	free(d);
 }
 

@@ -287,11 +287,13 @@ static int line_6df2(struct dtrack_codec_st *d, const char *s, uint64_t t_ns, de
 			d->untracked++;
 			continue;
 		}
-		if (!body_pose(loc, rot, &smp[i])) {
+		/* the first button word is a 32-bit integer (a Flystick has at most 32 buttons we keep) */
+		if (!body_pose(loc, rot, &smp[i]) ||
+		    (words && !(v[0] >= 0 && v[0] <= UINT32_MAX && v[0] == floor(v[0])))) {
 			d->c.malformed++;
 			continue;
 		}
-		smp[i].buttons = words ? (uint32_t)(int64_t)v[0] : 0;
+		smp[i].buttons = words ? (uint32_t)v[0] : 0;
 		if (nbt < 32)
 			smp[i].buttons &= (1u << nbt) - 1;
 		for (int k = 0; k < SENSOR_ANALOG_MAX; k++) {
@@ -362,7 +364,7 @@ static int dt_feed(void *st, const uint8_t *buf, size_t len, device_emit_fn *emi
 		} else if (!strncmp(s, "6dcal ", 6)) {
 			long n;
 
-			if (!get_int(s + 6, &n) || n < 0)
+			if (!get_int(s + 6, &n) || n < 0 || n > 1000000)
 				rc = -1;
 			else
 				d->calibrated = (int)n;
