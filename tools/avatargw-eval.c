@@ -5,7 +5,7 @@
  * frame, for tools/eval.py to score against ground truth.
  *
  *   avatargw-eval [--dims S,A,F,H] [--left-arm A,F,H] [--head-offset X,Y,Z] [--limits FILE]
- *       [--solver dq|matrix] [--reset] [--keyframes HZ [--interp METHOD]]
+ *       [--rest-pronation DEG] [--solver dq|matrix] [--reset] [--keyframes HZ [--interp METHOD]]
  *       [--person SOURCE/PREFIX] INPUT
  *
  * INPUT is a sensor CSV in the format of ../shared/mocap/README.md (columns
@@ -66,11 +66,12 @@ static const char *const fields[7] = { "x", "y", "z", "qw", "qx", "qy", "qz" };
 static void usage(FILE *f)
 {
 	fprintf(f, "usage: avatargw-eval [--dims S,A,F,H] [--head-offset X,Y,Z] [--limits FILE]\n"
-		   "       [--left-arm A,F,H] [--solver dq|matrix] [--reset] [--model MODEL]\n"
+		   "       [--left-arm A,F,H] [--rest-pronation DEG] [--solver dq|matrix] [--reset] [--model MODEL]\n"
 		   "       [--chest-truth X,Y,Z [--chest-part all|yaw|upright]]\n"
 		   "       [--keyframes HZ [--interp linear|catmull-rom|natural]]\n"
 		   "       [--person SOURCE/PREFIX] INPUT.csv|INPUT.agwrec\n"
 		   "  --left-arm     the left arm's own lengths (the right's are --dims)\n"
+		   "  --rest-pronation  the forearm's pronation at rest (J6, degrees; -30 unless given)\n"
 		   "  --model        paper, default, or names joined by '+' (or taken away by '-'): hand-elbow,\n"
 		   "                 reach-first, yaw-hands, reach-chest, neck, bow, keep-branch, reach-roll,\n"
 		   "                 bow-head, lean, raise-roll, arm-twist, yaw-reach (the\n"
@@ -520,6 +521,7 @@ int main(int argc, char **argv)
 		{ "model", required_argument, NULL, 'm' },
 		{ "left-arm", required_argument, NULL, 'L' },
 		{ "chest-part", required_argument, NULL, 'P' },
+		{ "rest-pronation", required_argument, NULL, 'R' },
 		{ "help", no_argument, NULL, 'h' },
 		{ NULL, 0, NULL, 0 },
 	};
@@ -528,7 +530,7 @@ int main(int argc, char **argv)
 	bool chest_truth = false;
 	enum chest_part part = CHEST_ALL;
 	int model = -1;
-	double left[3];
+	double left[3], rest_pron = NAN;
 	bool have_left = false;
 	const char *limits = NULL, *person = NULL, *path;
 	const struct ik_kin *kin = &ik_kin_dq;
@@ -544,6 +546,7 @@ int main(int argc, char **argv)
 	size_t n = 0;
 	unsigned char magic[8] = { 0 };
 	FILE *f;
+	char *end;
 	int opt, rc;
 
 	while ((opt = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
@@ -631,6 +634,13 @@ int main(int argc, char **argv)
 				return 2;
 			}
 			break;
+		case 'R':
+			rest_pron = strtod(optarg, &end);
+			if (end == optarg || *end || !(fabs(rest_pron) <= 90)) {
+				fprintf(stderr, "avatargw-eval: --rest-pronation wants degrees, -90 to 90\n");
+				return 2;
+			}
+			break;
 		case 'h':
 			usage(stdout);
 			return 0;
@@ -680,6 +690,8 @@ int main(int argc, char **argv)
 		av.body.model = (unsigned)model;
 	if (have_left)
 		avatar_set_left_arm(&av, left[0], left[1], left[2]);
+	if (!isnan(rest_pron))
+		avatar_set_rest_pronation(&av, rest_pron * (M_PI / 180));
 	ik_default_opts(&o);
 	print_header();
 	for (size_t i = 0; i < n; i++) {

@@ -108,11 +108,13 @@ struct avatar_body {
 	struct vec3 head_offset; /* head sensor from the chain origin, chest frame (paper: 0, 0, Neck) */
 	struct arm_limits lim;	 /* both arms (the left is mirrored) */
 	unsigned model;		 /* AVATAR_* choices, AVATAR_MODEL_DEFAULT after avatar_init() */
+	sc_t rest_pronation;	 /* J6 of a forearm at rest, radians (avatar_set_rest_pronation) */
 };
 
 struct avatar {
 	struct avatar_body body;
-	struct arm arm[2]; /* ARM_RIGHT, ARM_LEFT */
+	struct arm arm[2];     /* ARM_RIGHT, ARM_LEFT */
+	sc_t rest6_c, rest6_s; /* cosine and sine of body.rest_pronation */
 };
 
 /* One solved frame. */
@@ -133,6 +135,7 @@ struct avatar_pose {
 #define avatar_init SCN(avatar_init)
 #define avatar_default_limits SCN(avatar_default_limits)
 #define avatar_set_left_arm SCN(avatar_set_left_arm)
+#define avatar_set_rest_pronation SCN(avatar_set_rest_pronation)
 #define avatar_head_yaw SCN(avatar_head_yaw)
 #define avatar_chest SCN(avatar_chest)
 #define avatar_chest_hands SCN(avatar_chest_hands)
@@ -157,6 +160,12 @@ void avatar_init(struct avatar *av, const struct arm_dims *dims, const struct ve
 		 const struct arm_limits *lim);
 /* the left arm's own lengths, when the two arms differ (shoulder is shared: the chain origin is midway) */
 void avatar_set_left_arm(struct avatar *av, sc_t arm, sc_t forearm, sc_t hand);
+/*
+ * AVATAR_HAND_ELBOW's forearm at rest: the pronation (J6, radians; negative
+ * turns the thumb inward) the wrist's cost is centred on, -30 degrees after
+ * avatar_init(). People differ by about 20 degrees (docs/FIDELITY.md).
+ */
+void avatar_set_rest_pronation(struct avatar *av, sc_t j6);
 /* yaw of a rotation about world z (swing-twist); 0 when undefined (upside down) */
 sc_t avatar_head_yaw(const struct quat *head);
 /*

@@ -289,6 +289,15 @@ static const struct cfg_key avatar_keys[] = {
 	  .unit = "m",
 	  .doc = "head sensor from the chest centre, in the chest frame (x right, y forward, z up; the paper: 0 0 "
 		 "Neck)" },
+	{ .name = "rest_pronation",
+	  .kind = CFG_DOUBLE,
+	  CFG_AT(struct cfg_avatar, rest_pronation),
+	  .min = -90,
+	  .max = 90,
+	  .def = "-30",
+	  .unit = "deg",
+	  .doc = "the forearm's pronation at rest (J6; negative turns the thumb inward) that the elbow's place "
+		 "from the hand's orientation is centred on; people differ by about 20 degrees (docs/FIDELITY.md)" },
 	{ .name = "j1",
 	  .kind = CFG_RANGE,
 	  .off = offsetof(struct cfg_avatar, lo[0]),

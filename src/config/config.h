@@ -194,6 +194,7 @@ struct cfg_avatar {
 	struct cfg_sensor_ref sensor[3]; /* head, left hand, right hand */
 	double dims[4];			 /* shoulder, upper arm, forearm, hand, m */
 	double head_offset[3];		 /* m, chest frame */
+	double rest_pronation;		 /* deg */
 	double lo[8], hi[8];		 /* rad */
 	int solver;
 	int max_iter;

@@ -44,6 +44,7 @@ static void avatar_setup(struct gateway *g, struct gw_avatar *a, const struct cf
 	}
 	memset(body, 0, sizeof(*body));
 	avatar_init(body, &dims, &off, &lim);
+	avatar_set_rest_pronation(body, c->rest_pronation * (M_PI / 180));
 	/* avatars made by one section's `count` have one body: share it */
 	if (g->n_bodies && !memcmp(&g->bodies[g->n_bodies - 1], body, sizeof(*body)))
 		body = &g->bodies[g->n_bodies - 1];

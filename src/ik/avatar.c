@@ -26,6 +26,9 @@ void avatar_init(struct avatar *av, const struct arm_dims *dims, const struct ve
 	av->body.dims = *dims;
 	av->body.head_offset = *head_offset;
 	av->body.model = AVATAR_MODEL_DEFAULT;
+	av->body.rest_pronation = SC_C(-0.5235987755982988); /* -30 degrees: cos and sin below exactly */
+	av->rest6_c = SC_C(0.8660254037844387);
+	av->rest6_s = SC_C(-0.5);
 	if (lim)
 		av->body.lim = *lim;
 	else
@@ -39,6 +42,12 @@ void avatar_set_left_arm(struct avatar *av, sc_t arm, sc_t forearm, sc_t hand)
 	struct arm_dims d = { av->body.dims.shoulder, arm, forearm, hand };
 
 	arm_init(&av->arm[ARM_LEFT], ARM_LEFT, &d, &av->body.lim);
+}
+
+void avatar_set_rest_pronation(struct avatar *av, sc_t j6)
+{
+	av->body.rest_pronation = j6;
+	sc_sincos(j6, &av->rest6_s, &av->rest6_c);
 }
 
 sc_t avatar_head_yaw(const struct quat *head)
@@ -469,13 +478,19 @@ static bool goal_init(const struct arm *a, const struct ik_target *t, sc_t q1, s
  *   cos J7 (cos J6, sin J6) = ((x5 x f).Z, x5.Z)
  *
  * so the cost is k0 + k1 cos phi + k2 sin phi + k3 cos 2phi + k4 sin 2phi,
- * without one angle computed.
+ * without one angle computed. MU6 is the body's rest pronation
+ * (avatar_set_rest_pronation, -30 degrees unless set): the forearm at rest
+ * a little pronated.
  */
-#define W6 SC_C(3.2422778766)		 /* 2 / SIG6^2, SIG6 = 45 degrees about MU6 */
-#define W7 SC_C(2.7194094061)		 /* 1 / SIG7^2 - W6 / 2 - W8 / 2, SIG7 = 25 degrees */
-#define W8 SC_C(1.8237813055)		 /* 2 / SIG8^2, SIG8 = 60 degrees */
-#define COS_MU6 SC_C(0.8660254037844387) /* MU6 = -30 degrees: the forearm at rest, a little pronated */
-#define SIN_MU6 SC_C(-0.5)
+#define W6 SC_C(3.2422778766) /* 2 / SIG6^2, SIG6 = 45 degrees about MU6 */
+#define W7 SC_C(2.7194094061) /* 1 / SIG7^2 - W6 / 2 - W8 / 2, SIG7 = 25 degrees */
+#define W8 SC_C(1.8237813055) /* 2 / SIG8^2, SIG8 = 60 degrees */
+
+/* what the swivel is chosen with besides the target: MU6's cosine and sine, AVATAR_ARM_TWIST */
+struct wrist_prior {
+	sc_t c6, s6;
+	bool twist;
+};
 
 struct trig2 {
 	sc_t k[5]; /* k0 + k1 cos + k2 sin + k3 cos 2 + k4 sin 2 */
@@ -501,7 +516,8 @@ static void trig2_add_pull(struct trig2 *c, sc_t w, sc_t c0, sc_t s0)
 	c->k[2] -= sc_mul(w, s0);
 }
 
-static void goal_wrist_cost(const struct arm *a, const struct arm_goal *g, struct trig2 *c)
+static void goal_wrist_cost(const struct arm *a, const struct wrist_prior *wp, const struct arm_goal *g,
+			    struct trig2 *c)
 {
 	const sc_t F = a->dims.forearm, r = g->r;
 	struct vec3 Y = { g->R[0][1], g->R[1][1], g->R[2][1] }, Z = { g->R[0][2], g->R[1][2], g->R[2][2] };
@@ -512,9 +528,9 @@ static void goal_wrist_cost(const struct arm *a, const struct arm_goal *g, struc
 	sc_t z0 = sc_mul(Ki, aZ), z1 = -sc_mul(ri, d0Z), z2 = -sc_mul(ri, d1Z);
 	sc_t y0 = sc_mul(Ki, v3_dot(&g->ax, &Y)), y1 = -sc_mul(ri, v3_dot(&g->d0, &Y));
 	sc_t y2 = -sc_mul(ri, v3_dot(&g->d1, &Y));
-	sc_t p0 = -sc_mul(COS_MU6, sc_mul(ri, aZ));
-	sc_t p1 = -sc_mul(COS_MU6, sc_mul(Ki, d0Z)) - sc_mul(SIN_MU6, d1Z);
-	sc_t p2 = -sc_mul(COS_MU6, sc_mul(Ki, d1Z)) + sc_mul(SIN_MU6, d0Z);
+	sc_t p0 = -sc_mul(wp->c6, sc_mul(ri, aZ));
+	sc_t p1 = -sc_mul(wp->c6, sc_mul(Ki, d0Z)) - sc_mul(wp->s6, d1Z);
+	sc_t p2 = -sc_mul(wp->c6, sc_mul(Ki, d1Z)) + sc_mul(wp->s6, d0Z);
 
 	c->k[0] = sc_mul(W6, SC_C(1) - p0) + sc_mul(W8, SC_C(1) - y0);
 	c->k[1] = -sc_mul(W6, p1) - sc_mul(W8, y1);
@@ -768,15 +784,16 @@ static void twist_pull(const struct arm_goal *g, struct trig2 *c)
  * elbow that leaves the truth at a wave's extremes is that least drifting,
  * not a jump between two; docs/FIDELITY.md.)
  */
-static sc_t goal_swivel(const struct arm *a, const struct arm_goal *g, bool twist, sc_t *phi, sc_t *cp, sc_t *sp)
+static sc_t goal_swivel(const struct arm *a, const struct wrist_prior *wp, const struct arm_goal *g, sc_t *phi,
+			sc_t *cp, sc_t *sp)
 {
 	struct trig2 c;
 	/* sin(tilt): the shoulder-wrist line's horizontal part (the chest frame is upright) */
 	sc_t tilt = sc_sqrt(sc_mul(g->ax.x, g->ax.x) + sc_mul(g->ax.y, g->ax.y));
 
-	goal_wrist_cost(a, g, &c);
+	goal_wrist_cost(a, wp, g, &c);
 	trig2_add_pull(&c, sc_mul(W_GRAVITY, sc_mul(tilt, sc_div(g->r, a->dims.arm))), COS_NATURAL, SIN_NATURAL);
-	if (twist)
+	if (wp->twist)
 		twist_pull(g, &c);
 	return trig2_min(&c, phi, cp, sp);
 }
@@ -788,8 +805,8 @@ static sc_t goal_swivel(const struct arm *a, const struct arm_goal *g, bool twis
  * is too close to the shoulder (the solver then starts from the previous
  * posture).
  */
-static bool hand_elbow_posture(const struct arm *a, const struct ik_target *t, bool twist, bool first, sc_t prev_misfit,
-			       sc_t *misfit, sc_t pref[ARM_DOF])
+static bool hand_elbow_posture(const struct arm *a, const struct wrist_prior *wp, const struct ik_target *t, bool first,
+			       sc_t prev_misfit, sc_t *misfit, sc_t pref[ARM_DOF])
 {
 	struct arm_goal g;
 	sc_t va, vw, m, phi, cp, sp;
@@ -797,7 +814,7 @@ static bool hand_elbow_posture(const struct arm *a, const struct ik_target *t, b
 	/* J1 at mid-range: what the shoulders do beyond the chest's yaw is the solver's to find */
 	if (!goal_init(a, t, SC_C(0), &g))
 		return false;
-	m = goal_swivel(a, &g, twist, &phi, &cp, &sp);
+	m = goal_swivel(a, wp, &g, &phi, &cp, &sp);
 	if (!first && sc_isfinite(prev_misfit))
 		m = prev_misfit + sc_mul(MISFIT_RATE, m - prev_misfit);
 	*misfit = m;
@@ -813,8 +830,8 @@ static bool hand_elbow_posture(const struct arm *a, const struct ik_target *t, b
  * then narrows the best step down. Returns false if no J1 and swivel keep
  * J2..J5 inside their limits.
  */
-static bool reach_first(const struct arm *a, const struct ik_target *t, bool twist, const sc_t *q1s, int n1,
-			sc_t q[ARM_DOF])
+static bool reach_first(const struct arm *a, const struct wrist_prior *wp, const struct ik_target *t, const sc_t *q1s,
+			int n1, sc_t q[ARM_DOF])
 {
 	sc_t best_vw = SC_C(1e9), best_phi = 0, best_q1 = 0, cand[ARM_DOF], va, vw;
 	bool found = false;
@@ -826,7 +843,7 @@ static bool reach_first(const struct arm *a, const struct ik_target *t, bool twi
 
 		if (!goal_init(a, t, q1s[i], &g) || !g.in_reach)
 			continue;
-		goal_swivel(a, &g, twist, &phi0, &c0, &s0);
+		goal_swivel(a, wp, &g, &phi0, &c0, &s0);
 		for (k = 0; k < 24; k++) {
 			/* 0, +1, -1, +2, ... steps from the hand's swivel */
 			sc_t phi = phi0 + sc_mul(SC_C((k + 1) / 2 * (k & 1 ? 1 : -1)), STEP15);
@@ -1000,7 +1017,7 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 	const struct ik_opts *so = o;
 	struct ik_opts track;
 	unsigned flags;
-	bool twist = (av->body.model & AVATAR_ARM_TWIST) != 0;
+	const struct wrist_prior wp = { av->rest6_c, av->rest6_s, (av->body.model & AVATAR_ARM_TWIST) != 0 };
 
 	out->hand_misfit[side] = prev ? prev->hand_misfit[side] : SC_C(0);
 	if ((av->body.model & AVATAR_HAND_ELBOW) && t->valid) {
@@ -1009,7 +1026,7 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 			ik_solve(a, kin, t, NULL, o, base, res);
 			pq = base;
 		}
-		if (hand_elbow_posture(a, t, twist, !prev, prev ? prev->hand_misfit[side] : SC_C(0),
+		if (hand_elbow_posture(a, &wp, t, !prev, prev ? prev->hand_misfit[side] : SC_C(0),
 				       &out->hand_misfit[side], pref))
 			seed = pref;
 		else
@@ -1039,7 +1056,7 @@ unsigned avatar_arm_solve(const struct avatar *av, int side, const struct ik_kin
 		sc_t q2[ARM_DOF], q1s[4] = { q[0], pq ? pq[0] : SC_C(0), SC_C(0), sc_mul(q[0], SC_C(0.5)) };
 		struct ik_err e2;
 
-		if (reach_first(a, t, twist, q1s, 4, q2)) {
+		if (reach_first(a, &wp, t, q1s, 4, q2)) {
 			posture_err(a, t, q2, &e2);
 			if (e2.pos < res->err.pos) {
 				ik_q_copy(q, q2);
