@@ -677,6 +677,7 @@ static void test_values_avatar(void **state)
 						 "forearm = 0.27\n"
 						 "hand = 0.05\n"
 						 "head_offset = 0.01 -0.02 0.15\n"
+						 "rest_pronation = 12.5\n"
 						 "j1 = -10 11\n"
 						 "j2 = -80 20\n"
 						 "j3 = -50 110\n"
@@ -710,6 +711,7 @@ static void test_values_avatar(void **state)
 	assert_near(a->head_offset[0], 0.01, 0);
 	assert_near(a->head_offset[1], -0.02, 0);
 	assert_near(a->head_offset[2], 0.15, 0);
+	assert_near(a->rest_pronation, 12.5, 0);
 	for (int j = 0; j < 8; j++)
 		assert_range_deg(a, j, lim[j][0], lim[j][1]);
 	assert_int_equal(a->solver, CFG_SOLVER_MATRIX);
@@ -813,6 +815,7 @@ static void test_defaults(void **state)
 	assert_near(a->head_offset[0], 0.008, 0);
 	assert_near(a->head_offset[1], -0.0386, 0);
 	assert_near(a->head_offset[2], 0.0967, 0);
+	assert_near(a->rest_pronation, -30, 0);
 	for (int j = 0; j < 8; j++)
 		assert_range_deg(a, j, lim[j][0], lim[j][1]);
 	assert_int_equal(a->solver, CFG_SOLVER_DQ);
@@ -953,6 +956,8 @@ static void test_err_out_of_range(void **state)
 			"360", NULL);
 	expect_text_err(*state, "[avatar a]\nperson = s/p0\nhead_offset = 0 0 2\n[source s]\ntype = sim\n",
 			"e.conf:3: [avatar a] head_offset: 2 is out of range [-1, 1] m", NULL);
+	expect_text_err(*state, "[avatar a]\nperson = s/p0\nrest_pronation = -91\n[source s]\ntype = sim\n",
+			"e.conf:3: [avatar a] rest_pronation: -91 is out of range [-90, 90] deg", NULL);
 	expect_text_err(*state, "[avatar a]\nperson = s/p0\nid = 65536\n[source s]\ntype = sim\n",
 			"e.conf:3: [avatar a] id: '65536' is not a whole number in [0, 65535]", NULL);
 }

@@ -672,6 +672,56 @@ class BowTest(unittest.TestCase):
                 d.stop()
 
 
+class RestPronationTest(unittest.TestCase):
+    """the rest_pronation key reaches the avatar: a right arm hanging nearly straight, the hand's thumb turned 20
+    degrees inward from forward, is the same to the sensors whether the upper arm or the forearm made the turn. The
+    avatar told the forearm rests supinated (+20) gives the forearm less of it than the default (-30) does, so it
+    publishes the pronation higher and the elbow elsewhere, both hands on their sensors"""
+
+    def run_daemon(self, rest):
+        S, A, F, head_off = 0.1732, 0.2886, 0.1955, (0.008, -0.0386, 0.0967)
+        head, qh = (0.0, 0.0, 1.6), (1.0, 0.0, 0.0, 0.0)
+        chest = tuple(h - o for h, o in zip(head, head_off))
+        hands = {"r": (chest[0] + S, chest[1] + 0.08, chest[2] - 0.95 * (A + F)),
+                 "l": (chest[0] - S, chest[1] + 0.08, chest[2] - 0.95 * (A + F))}
+        down = (math.cos(-math.pi / 4), math.sin(-math.pi / 4), 0, 0)  # the hand's y down, its z (thumb) forward
+        roll = 20 * DEG
+        qr = qmul((math.cos(roll / 2), 0, 0, math.sin(roll / 2)), down)  # the right thumb turned inward
+        ql = qmul((math.cos(-roll / 2), 0, 0, math.sin(-roll / 2)), down)  # the left, mirrored
+        cols = ["frame", "t"] + ["%s_%s" % (w, k) for w in ("head", "lhand", "rhand")
+                                 for k in ("x", "y", "z", "qw", "qx", "qy", "qz")]
+        port = free_port()
+        with tempfile.TemporaryDirectory() as tmp:
+            clip = os.path.join(tmp, "hang.csv")
+            with open(clip, "w") as f:
+                f.write(",".join(cols) + "\n")
+                for i in range(120):
+                    row = [i, i / 60] + list(head) + list(qh) + list(hands["l"]) + list(ql) + list(hands["r"]) + list(qr)
+                    f.write(",".join("%.6f" % v if isinstance(v, float) else str(v) for v in row) + "\n")
+            conf = ("[daemon]\nrate = 120\n[source rp]\ntype = replay\nfile = %s\n[avatar a]\nperson = rp\n"
+                    "rest_pronation = %g\n[output u]\ntype = udp\naddress = 127.0.0.1\nport = %d\n" % (clip, rest, port))
+            d = Daemon(tmp, conf)
+            try:
+                fr = [m for _, m in dump(["--udp", "127.0.0.1:%d" % port], 30) if m["type"] == "frame"]
+            finally:
+                d.stop()
+        self.assertGreater(len(fr), 20)
+        for m in fr:
+            for s in ("r", "l"):
+                self.assertLess(math.dist(m["segments"][s + "_hand"]["p"], hands[s]), 1e-3)
+            # the left arm is the right one's mirror image
+            self.assertAlmostEqual(m["joints"]["l_pronation"], m["joints"]["r_pronation"], delta=1e-3)
+        last = fr[-1]
+        return last["joints"]["r_pronation"], last["segments"]["r_elbow"]["p"]
+
+    def test_rest_pronation_key(self):
+        j6_default, elbow_default = self.run_daemon(-30)
+        j6_supine, elbow_supine = self.run_daemon(20)
+        self.assertGreater(j6_supine - j6_default, 10 * DEG, "pronation %.1f and %.1f degrees" % (
+            j6_default / DEG, j6_supine / DEG))
+        self.assertGreater(math.dist(elbow_default, elbow_supine), 0.005)
+
+
 def read_until(proc, err, done, timeout=20):
     """proc's stderr appended to err until done(err), within timeout seconds; returns err"""
     import select

@@ -55,6 +55,25 @@ class EvalTest(unittest.TestCase):
             self.assertEqual(a["resid_over_1mm"], 0, side)
             self.assertTrue(math.isfinite(a["jitter"]) and a["jitter"] > 0)
 
+    def test_rest_pronation(self):
+        # the subject's forearm at rest, read from the truth (docs/FIDELITY.md: -35 degrees on this clip)
+        rp = self.clip["rest_pronation"]
+        self.assertTrue(-50 < rp < -20, rp)
+        for k in ("own_pronation_elbow", "both_oracles_elbow", "true_chest_elbow"):
+            self.assertEqual(len(self.clip[k]), 2 * 299, k)
+            self.assertTrue(all(math.isfinite(x) and 0 <= x < 30 for x in self.clip[k]), k)
+        self.assertEqual(sorted(self.clip["rest_sweep"]), ["-15", "-45", "0"])
+        # the tool takes the angle and refuses one no forearm has
+        tool = os.path.join(BUILD, "avatargw-eval")
+        clip = os.path.join(MOCAP, CLIP + ".csv")
+        a = subprocess.run([tool, "--rest-pronation", "20", clip], capture_output=True, text=True, timeout=60)
+        b = subprocess.run([tool, clip], capture_output=True, text=True, timeout=60)
+        self.assertEqual(a.returncode, 0, a.stderr)
+        self.assertNotEqual(a.stdout, b.stdout)
+        bad = subprocess.run([tool, "--rest-pronation", "100", clip], capture_output=True, text=True, timeout=60)
+        self.assertEqual(bad.returncode, 2)
+        self.assertIn("--rest-pronation wants degrees", bad.stderr)
+
     def test_model_choices_and_calibration(self):
         m = self.clip["models"]
         # the paper's avatar is measurably worse here than avatargw's
