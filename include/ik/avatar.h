@@ -163,7 +163,7 @@ void avatar_set_left_arm(struct avatar *av, sc_t arm, sc_t forearm, sc_t hand);
 /*
  * AVATAR_HAND_ELBOW's forearm at rest: the pronation (J6, radians; negative
  * turns the thumb inward) the wrist's cost is centred on, -30 degrees after
- * avatar_init(). People differ by about 20 degrees (docs/FIDELITY.md).
+ * avatar_init(). People differ by tens of degrees (docs/FIDELITY.md).
  */
 void avatar_set_rest_pronation(struct avatar *av, sc_t j6);
 /* yaw of a rotation about world z (swing-twist); 0 when undefined (upside down) */

@@ -297,7 +297,7 @@ static const struct cfg_key avatar_keys[] = {
 	  .def = "-30",
 	  .unit = "deg",
 	  .doc = "the forearm's pronation at rest (J6; negative turns the thumb inward) that the elbow's place "
-		 "from the hand's orientation is centred on; people differ by about 20 degrees (docs/FIDELITY.md)" },
+		 "from the hand's orientation is centred on; people differ by tens of degrees (docs/FIDELITY.md)" },
 	{ .name = "j1",
 	  .kind = CFG_RANGE,
 	  .off = offsetof(struct cfg_avatar, lo[0]),
