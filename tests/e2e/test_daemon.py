@@ -600,6 +600,23 @@ def qrot(q, v):
     return r[1:]
 
 
+def held_pose_daemon(tmp, head, qhead, lhand, ql, rhand, qr, avatar_keys=""):
+    """a daemon at 120 Hz replaying one pose held for 2 s (sensors: position, quaternion) to a UDP output;
+    returns the daemon and the output's port"""
+    cols = ["frame", "t"] + ["%s_%s" % (w, k) for w in ("head", "lhand", "rhand")
+                             for k in ("x", "y", "z", "qw", "qx", "qy", "qz")]
+    clip = os.path.join(tmp, "pose.csv")
+    with open(clip, "w") as f:
+        f.write(",".join(cols) + "\n")
+        for i in range(120):
+            row = [i, i / 60] + list(head) + list(qhead) + list(lhand) + list(ql) + list(rhand) + list(qr)
+            f.write(",".join("%.6f" % v if isinstance(v, float) else str(v) for v in row) + "\n")
+    port = free_port()
+    conf = ("[daemon]\nrate = 120\n[source rp]\ntype = replay\nfile = %s\n[avatar a]\nperson = rp\n%s"
+            "[output u]\ntype = udp\naddress = 127.0.0.1\nport = %d\n" % (clip, avatar_keys, port))
+    return Daemon(tmp, conf), port
+
+
 class BowTest(unittest.TestCase):
     """a person bowing 70 degrees at the waist, the arms hanging along the trunk, face up: from an upright
     chest, moved toward them as far as it goes, the hands stay 9 mm off their sensors against the
@@ -625,19 +642,8 @@ class BowTest(unittest.TestCase):
         for side, sx in (("l", -1), ("r", 1)):
             v = qrot(qc, (sx * (S + 0.03), -reach * math.sin(sweep), -reach * math.cos(sweep)))
             hands[side] = tuple(c + d for c, d in zip(chest, v))
-        cols = ["frame", "t"] + ["%s_%s" % (w, k) for w in ("head", "lhand", "rhand")
-                                 for k in ("x", "y", "z", "qw", "qx", "qy", "qz")]
-        port = free_port()
         with tempfile.TemporaryDirectory() as tmp:
-            clip = os.path.join(tmp, "bow.csv")
-            with open(clip, "w") as f:
-                f.write(",".join(cols) + "\n")
-                for i in range(120):
-                    row = [i, i / 60] + list(head) + list(qy) + list(hands["l"]) + list(qh) + list(hands["r"]) + list(qh)
-                    f.write(",".join("%.6f" % v if isinstance(v, float) else str(v) for v in row) + "\n")
-            conf = ("[daemon]\nrate = 120\n[source rp]\ntype = replay\nfile = %s\n[avatar bow]\nperson = rp\n"
-                    "[output u]\ntype = udp\naddress = 127.0.0.1\nport = %d\n" % (clip, port))
-            d = Daemon(tmp, conf)
+            d, port = held_pose_daemon(tmp, head, qy, hands["l"], qh, hands["r"], qh)
             try:
                 fr = [m for _, m in dump(["--udp", "127.0.0.1:%d" % port], 40) if m["type"] == "frame"]
                 self.assertGreater(len(fr), 30)
@@ -688,19 +694,8 @@ class RestPronationTest(unittest.TestCase):
         roll = 20 * DEG
         qr = qmul((math.cos(roll / 2), 0, 0, math.sin(roll / 2)), down)  # the right thumb turned inward
         ql = qmul((math.cos(-roll / 2), 0, 0, math.sin(-roll / 2)), down)  # the left, mirrored
-        cols = ["frame", "t"] + ["%s_%s" % (w, k) for w in ("head", "lhand", "rhand")
-                                 for k in ("x", "y", "z", "qw", "qx", "qy", "qz")]
-        port = free_port()
         with tempfile.TemporaryDirectory() as tmp:
-            clip = os.path.join(tmp, "hang.csv")
-            with open(clip, "w") as f:
-                f.write(",".join(cols) + "\n")
-                for i in range(120):
-                    row = [i, i / 60] + list(head) + list(qh) + list(hands["l"]) + list(ql) + list(hands["r"]) + list(qr)
-                    f.write(",".join("%.6f" % v if isinstance(v, float) else str(v) for v in row) + "\n")
-            conf = ("[daemon]\nrate = 120\n[source rp]\ntype = replay\nfile = %s\n[avatar a]\nperson = rp\n"
-                    "rest_pronation = %g\n[output u]\ntype = udp\naddress = 127.0.0.1\nport = %d\n" % (clip, rest, port))
-            d = Daemon(tmp, conf)
+            d, port = held_pose_daemon(tmp, head, qh, hands["l"], ql, hands["r"], qr, "rest_pronation = %g\n" % rest)
             try:
                 fr = [m for _, m in dump(["--udp", "127.0.0.1:%d" % port], 30) if m["type"] == "frame"]
             finally:
